@@ -1,0 +1,32 @@
+// vxf — mesh → voxel set (`surface` level set and `density` fog volume).
+#pragma once
+
+#include <vxf/core/Interrupter.h>
+#include <vxf/core/TriangleMesh.h>
+#include <vxf/core/VoxelSet.h>
+
+namespace vxf {
+
+struct VoxelizeOptions
+{
+    double voxelSize = 0.0; ///< world units per voxel; 0: derive from @c dim
+    int dim = 0;            ///< voxels along the longest side of the mesh bounds (if voxelSize is 0)
+    float bandWidth = 3.0f; ///< narrow band half width in voxels, each side of the surface (≥ 1)
+};
+
+/// The voxel size @a options ask for on @a mesh (validates them; throws vxf::UsageError).
+double resolveVoxelSize(const TriangleMesh& mesh, const VoxelizeOptions& options);
+
+/// Voxelize a closed triangle mesh with OpenVDB's mesh-to-volume.
+///
+/// Produces `surface`, a narrow-band level set (active voxels within bandWidth voxels of the
+/// surface on each side, inactive tiles of ±background elsewhere) and `density`, a fog
+/// volume: 1 inside (deep interior kept as active tiles, never voxelized), a smooth 0 → 1
+/// ramp across the inner band, inactive 0 outside. Voxel centres lie on the world lattice
+/// voxelSize·ℤ³; when the mesh lies far from the origin (over 2^16 voxels) the index space
+/// is re-centred on it so OpenVDB's float index-space coordinates keep sub-voxel precision.
+/// Results do not depend on the number of threads. Throws vxf::UsageError for bad options,
+/// vxf::Error for an empty mesh, vxf::Interrupted when cancelled.
+VoxelSet voxelize(const TriangleMesh& mesh, const VoxelizeOptions& options, Interrupter* interrupter = nullptr);
+
+} // namespace vxf

@@ -1,0 +1,190 @@
+#include <vxf/io/MeshFile.h>
+
+#include <vxf/core/Error.h>
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/IO/polygon_soup_io.h>
+#include <CGAL/Polygon_mesh_processing/border.h>
+#include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
+#include <CGAL/Polygon_mesh_processing/orientation.h>
+#include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
+#include <CGAL/Polygon_mesh_processing/repair_polygon_soup.h>
+#include <CGAL/Polygon_mesh_processing/self_intersections.h>
+#include <CGAL/Polygon_mesh_processing/triangulate_faces.h>
+#include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
+#include <CGAL/Surface_mesh.h>
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
+#include <filesystem>
+#include <fstream>
+
+namespace vxf {
+
+namespace {
+
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Point = Kernel::Point_3;
+using Mesh = CGAL::Surface_mesh<Point>;
+namespace PMP = CGAL::Polygon_mesh_processing;
+
+std::string lowerExtension(const std::string& path)
+{
+    std::string ext = std::filesystem::path(path).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+        [](unsigned char c) { return char(std::tolower(c)); });
+    return ext;
+}
+
+} // namespace
+
+const std::vector<std::string>& meshFileExtensions()
+{
+    static const std::vector<std::string> extensions = {".obj", ".ply", ".off", ".stl"};
+    return extensions;
+}
+
+TriangleMesh readMesh(const std::string& path, const MeshReadOptions& options, MeshReport* reportOut,
+    Interrupter* interrupter)
+{
+    MeshReport report;
+    const std::string ext = lowerExtension(path);
+    const auto& known = meshFileExtensions();
+    if (std::find(known.begin(), known.end(), ext) == known.end()) {
+        throw Error(fmt::format("{}: unsupported mesh format '{}' (expected one of .obj .ply .off .stl)",
+            path, ext));
+    }
+    if (!std::ifstream(path).good()) throw Error(fmt::format("{}: cannot open mesh file", path));
+
+    std::vector<Point> points;
+    std::vector<std::vector<std::size_t>> polygons;
+    {
+        InterruptStep step(interrupter, "reading mesh");
+        bool ok = false;
+        try {
+            ok = CGAL::IO::read_polygon_soup(path, points, polygons, CGAL::parameters::verbose(false));
+        } catch (const std::exception& e) {
+            throw Error(fmt::format("{}: cannot parse mesh: {}", path, e.what()));
+        }
+        if (!ok) throw Error(fmt::format("{}: cannot parse mesh (not a valid {} file)", path, ext));
+    }
+    report.inputPoints = points.size();
+    report.inputPolygons = polygons.size();
+    for (const auto& p : points) {
+        if (!std::isfinite(p.x()) || !std::isfinite(p.y()) || !std::isfinite(p.z())) {
+            throw Error(fmt::format("{}: a vertex has a non-finite coordinate", path));
+        }
+    }
+    for (const auto& polygon : polygons) {
+        for (std::size_t index : polygon) {
+            if (index >= points.size()) {
+                throw Error(fmt::format("{}: a face refers to vertex {} but there are only {}", path,
+                    index, points.size()));
+            }
+        }
+    }
+    checkInterrupt(interrupter);
+
+    // Repair: merge duplicate points, drop degenerate and duplicate polygons and unused points.
+    PMP::repair_polygon_soup(points, polygons);
+    report.mergedPoints = report.inputPoints - std::min(report.inputPoints, points.size());
+    report.removedPolygons = report.inputPolygons - std::min(report.inputPolygons, polygons.size());
+    if (polygons.empty()) {
+        throw Error(fmt::format("{}: the mesh has no usable faces ({} read, all degenerate)", path,
+            report.inputPolygons));
+    }
+    if (report.removedPolygons > 0) {
+        report.warnings.push_back(fmt::format(
+            "removed {} degenerate or duplicate faces; voxelization ignores them", report.removedPolygons));
+    }
+
+    // Consistent orientation; non-manifold points are split so the soup becomes a mesh.
+    const std::size_t before = points.size();
+    if (!PMP::orient_polygon_soup(points, polygons)) {
+        report.splitPoints = points.size() - before;
+        report.warnings.push_back(fmt::format(
+            "the mesh is not manifold: {} vertices were duplicated to orient it; the surface is "
+            "voxelized as given, and the interior is what no path from outside reaches",
+            report.splitPoints));
+    }
+    checkInterrupt(interrupter);
+
+    Mesh mesh;
+    PMP::polygon_soup_to_polygon_mesh(points, polygons, mesh);
+    PMP::triangulate_faces(mesh);
+
+    for (auto h : mesh.halfedges()) {
+        if (mesh.is_border(h)) ++report.borderEdges;
+    }
+    if (report.borderEdges > 0) {
+        std::vector<Mesh::Halfedge_index> loops;
+        PMP::extract_boundary_cycles(mesh, std::back_inserter(loops));
+        report.holes = loops.size();
+        if (options.fillHoles) {
+            InterruptStep step(interrupter, "filling holes");
+            for (auto h : loops) {
+                std::vector<Mesh::Face_index> patch;
+                PMP::triangulate_hole(mesh, h, std::back_inserter(patch));
+                if (!patch.empty()) ++report.holesFilled;
+                checkInterrupt(interrupter);
+            }
+            report.warnings.push_back(fmt::format(
+                "the mesh is open: {} holes ({} border edges); filled {} of them with flat "
+                "triangulations before voxelizing{}",
+                report.holes, report.borderEdges, report.holesFilled,
+                report.holesFilled < report.holes
+                    ? "; the interior may leak through the rest and is then left empty"
+                    : ""));
+        } else {
+            report.warnings.push_back(fmt::format(
+                "the mesh is open: {} holes ({} border edges), left open as asked; the interior "
+                "is what no path from outside reaches, so it leaks through holes wider than the band",
+                report.holes, report.borderEdges));
+        }
+    }
+
+    if (options.checkSelfIntersections) {
+        InterruptStep step(interrupter, "checking self-intersections");
+        report.selfIntersecting = PMP::does_self_intersect<CGAL::Parallel_if_available_tag>(mesh);
+        if (report.selfIntersecting) {
+            report.warnings.push_back(
+                "the mesh intersects itself; voxelization takes the union of the enclosed regions "
+                "(the interior is what no path from outside reaches)");
+        }
+    }
+
+    if (CGAL::is_closed(mesh)) {
+        if (!report.selfIntersecting && report.splitPoints == 0) {
+            PMP::orient_to_bound_a_volume(mesh);
+        } else if (!PMP::is_outward_oriented(mesh)) {
+            PMP::reverse_face_orientations(mesh);
+        }
+        report.outwardOriented = true;
+    }
+
+    TriangleMesh result;
+    result.points.reserve(mesh.number_of_vertices());
+    std::vector<openvdb::Index> remap(mesh.num_vertices(), 0);
+    for (auto v : mesh.vertices()) {
+        const Point& p = mesh.point(v);
+        remap[v.idx()] = openvdb::Index(result.points.size());
+        result.points.emplace_back(p.x(), p.y(), p.z());
+    }
+    result.triangles.reserve(mesh.number_of_faces());
+    for (auto f : mesh.faces()) {
+        openvdb::Vec3I tri;
+        int corner = 0;
+        for (auto v : CGAL::vertices_around_face(mesh.halfedge(f), mesh)) {
+            if (corner < 3) tri[corner] = remap[v.idx()];
+            ++corner;
+        }
+        if (corner == 3) result.triangles.push_back(tri);
+    }
+    report.triangles = result.triangles.size();
+    if (reportOut) *reportOut = std::move(report);
+    return result;
+}
+
+} // namespace vxf

@@ -1,0 +1,97 @@
+#include <vxf/io/VoxelSetFile.h>
+
+#include <vxf/core/GridRoles.h>
+#include <vxf/io/AtomicFile.h>
+
+#include <openvdb/io/File.h>
+
+#include <fmt/format.h>
+
+#include <filesystem>
+#include <mutex>
+
+namespace vxf {
+
+namespace {
+void initializeOpenVDB()
+{
+    static std::once_flag once;
+    std::call_once(once, [] { openvdb::initialize(); });
+}
+} // namespace
+
+VoxelSet readVoxelSet(const std::string& path)
+{
+    initializeOpenVDB();
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec)) {
+        throw Error(fmt::format("{}: no such file", path));
+    }
+    openvdb::GridPtrVecPtr grids;
+    openvdb::MetaMap::Ptr metadata;
+    try {
+        openvdb::io::File file(path);
+        file.open(/*delayLoad=*/false);
+        grids = file.getGrids();
+        metadata = file.getMetadata();
+        file.close();
+    } catch (const openvdb::Exception& e) {
+        throw Error(fmt::format("{}: not a readable OpenVDB file ({})", path, e.what()));
+    } catch (const std::exception& e) {
+        throw Error(fmt::format("{}: cannot read: {}", path, e.what()));
+    }
+
+    VoxelSet set;
+    openvdb::GridBase::Ptr reference;
+    for (const auto& grid : *grids) {
+        if (findGridRole(grid->getName())) {
+            reference = grid;
+            break;
+        }
+    }
+    if (!reference && !grids->empty()) reference = grids->front();
+    if (reference) set.setTransform(reference->transformPtr());
+    for (const auto& grid : *grids) {
+        if (grid->transform() == set.transform()) grid->setTransform(set.transformPtr());
+        set.putAsIs(grid);
+    }
+    if (metadata) set.metadata() = *metadata;
+    return set;
+}
+
+void writeVoxelSet(const std::string& path, const VoxelSet& set, const VoxelSetWriteOptions& options)
+{
+    initializeOpenVDB();
+    openvdb::GridCPtrVec grids;
+    for (const auto& grid : set.grids()) {
+        // Shallow copy: shares the tree, owns its metadata and save flags.
+        openvdb::GridBase::Ptr copy = grid->copyGrid();
+        if (const GridRole* role = findGridRole(grid->getName())) {
+            if (!copy->getMetadata<openvdb::StringMetadata>(kUnitsMetaKey)) {
+                copy->insertMeta(kUnitsMetaKey, openvdb::StringMetadata(role->units));
+            }
+        }
+        copy->setSaveFloatAsHalf(options.half);
+        grids.push_back(copy);
+    }
+    openvdb::MetaMap metadata = set.metadata();
+    metadata.insertMeta(kVersionMetaKey, openvdb::StringMetadata(versionString()));
+
+    writeAtomically(path, [&](const std::string& tmpPath) {
+        try {
+            openvdb::io::File file(tmpPath);
+            uint32_t compression = openvdb::io::COMPRESS_ACTIVE_MASK;
+            if (options.compress) {
+                compression |= openvdb::io::Archive::hasBloscCompression() ? openvdb::io::COMPRESS_BLOSC
+                                                                           : openvdb::io::COMPRESS_ZIP;
+            }
+            file.setCompression(compression);
+            file.write(grids, metadata);
+            file.close();
+        } catch (const openvdb::Exception& e) {
+            throw Error(fmt::format("{}: cannot write: {}", path, e.what()));
+        }
+    });
+}
+
+} // namespace vxf

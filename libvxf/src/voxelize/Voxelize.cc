@@ -1,0 +1,113 @@
+#include <vxf/voxelize/Voxelize.h>
+
+#include <openvdb/tools/LevelSetUtil.h>
+#include <openvdb/tools/MeshToVolume.h>
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+namespace vxf {
+
+double resolveVoxelSize(const TriangleMesh& mesh, const VoxelizeOptions& options)
+{
+    if (options.voxelSize != 0.0 && options.dim != 0) {
+        throw UsageError("give either voxel_size or dim, not both");
+    }
+    if (!(options.bandWidth >= 1.0f) || !std::isfinite(options.bandWidth)) {
+        throw UsageError(fmt::format("band must be at least 1 voxel, got {}", options.bandWidth));
+    }
+    if (mesh.triangles.empty()) throw Error("the mesh has no triangles");
+    const openvdb::BBoxd bounds = mesh.bounds();
+    const double extent = bounds.extents()[bounds.maxExtent()];
+    if (options.voxelSize != 0.0) {
+        if (!(options.voxelSize > 0.0) || !std::isfinite(options.voxelSize)) {
+            throw UsageError(fmt::format("voxel_size must be a positive number, got {}", options.voxelSize));
+        }
+        if (extent / options.voxelSize > double(1 << 20)) {
+            throw UsageError(fmt::format("voxel_size {} gives {:.0f} voxels along the mesh's longest side "
+                                         "(more than 2^20); use a larger voxel size",
+                options.voxelSize, extent / options.voxelSize));
+        }
+        return options.voxelSize;
+    }
+    if (options.dim <= 0) throw UsageError("give voxel_size or dim (a positive voxel count)");
+    if (options.dim > (1 << 20)) throw UsageError(fmt::format("dim {} is above the limit 2^20", options.dim));
+    if (!(extent > 0.0)) throw Error("the mesh is flat in every direction (zero extent); give voxel_size");
+    return extent / double(options.dim);
+}
+
+namespace {
+
+/// OpenVDB's mesh adapter over index-space points computed in double precision.
+struct IndexSpaceMesh
+{
+    const std::vector<openvdb::Vec3s>& points;
+    const std::vector<openvdb::Vec3I>& triangles;
+    size_t polygonCount() const { return triangles.size(); }
+    size_t pointCount() const { return points.size(); }
+    size_t vertexCount(size_t) const { return 3; }
+    void getIndexSpacePoint(size_t n, size_t v, openvdb::Vec3d& pos) const
+    {
+        pos = openvdb::Vec3d(points[triangles[n][int(v)]]);
+    }
+};
+
+} // namespace
+
+VoxelSet voxelize(const TriangleMesh& mesh, const VoxelizeOptions& options, Interrupter* interrupter)
+{
+    const double voxelSize = resolveVoxelSize(mesh, options);
+    for (const auto& t : mesh.triangles) {
+        for (int c = 0; c < 3; ++c) {
+            if (t[c] >= mesh.points.size()) throw Error(fmt::format("triangle refers to point {} of {}", t[c], mesh.points.size()));
+        }
+    }
+
+    // Index space: voxel centres on voxelSize·ℤ³. Far from the origin, shift the index origin
+    // by a whole number of voxels to the mesh so float index coordinates stay small.
+    const openvdb::BBoxd bounds = mesh.bounds();
+    openvdb::Vec3d shift(0.0);
+    const double farIndex = std::max(bounds.min().length(), bounds.max().length()) / voxelSize;
+    if (farIndex > double(1 << 16)) {
+        const openvdb::Vec3d centre = bounds.getCenter() / voxelSize;
+        shift = openvdb::Vec3d(std::round(centre[0]), std::round(centre[1]), std::round(centre[2])) * voxelSize;
+    }
+    auto xform = openvdb::math::Transform::createLinearTransform(voxelSize);
+    if (shift != openvdb::Vec3d(0.0)) xform->postTranslate(shift);
+
+    std::vector<openvdb::Vec3s> indexPoints(mesh.points.size());
+    for (size_t i = 0; i < mesh.points.size(); ++i) {
+        indexPoints[i] = openvdb::Vec3s(xform->worldToIndex(mesh.points[i]));
+    }
+
+    openvdb::FloatGrid::Ptr surface;
+    {
+        InterruptStep step(interrupter, "voxelizing");
+        openvdb::util::NullInterrupter none;
+        openvdb::util::NullInterrupter& progress = interrupter ? *interrupter : none;
+        surface = openvdb::tools::meshToVolume<openvdb::FloatGrid>(progress, IndexSpaceMesh{indexPoints, mesh.triangles},
+            *xform, options.bandWidth, options.bandWidth);
+        checkInterrupt(interrupter);
+    }
+    if (!surface) throw Interrupted();
+    surface->setName("surface");
+    surface->setGridClass(openvdb::GRID_LEVEL_SET);
+
+    openvdb::FloatGrid::Ptr density;
+    {
+        InterruptStep step(interrupter, "making density");
+        density = surface->deepCopy();
+        // Fog volume: 0 outside, ramp −φ/(band·dx) across the inner band, active tiles of 1 inside.
+        openvdb::tools::sdfToFogVolume(*density);
+        density->setName("density");
+        density->setGridClass(openvdb::GRID_FOG_VOLUME);
+    }
+
+    VoxelSet set(xform);
+    set.put(surface);
+    set.put(density);
+    return set;
+}
+
+} // namespace vxf

@@ -1,0 +1,118 @@
+#include "CliSupport.h"
+
+#include <vxf/core/Error.h>
+
+#include <openvdb/Exceptions.h>
+
+#include <fmt/format.h>
+
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <mutex>
+
+#include <unistd.h>
+
+namespace vxf::cli {
+
+namespace {
+std::string gTool = "vxf";
+std::string gCommand;
+std::atomic<bool> gInterrupted{false};
+std::mutex gDrawMutex;
+
+extern "C" void onSigint(int)
+{
+    if (gInterrupted.exchange(true)) std::_Exit(130); // second Ctrl-C: leave now
+}
+
+void printError(const std::string& message)
+{
+    std::string prefix = gTool + ": ";
+    if (!gCommand.empty() && gCommand != gTool) prefix += gCommand + ": ";
+    std::cerr << prefix << message << std::endl;
+}
+} // namespace
+
+const std::string& currentCommand() { return gCommand; }
+
+void warn(const std::string& message) { printError("warning: " + message); }
+
+int runMain(CLI::App& app, int argc, char** argv, const std::function<void()>& run)
+{
+    gTool = app.get_name();
+    gCommand = gTool;
+    std::signal(SIGINT, onSigint);
+    try {
+        try {
+            app.parse(argc, argv);
+        } catch (const CLI::Success& e) {
+            return app.exit(e);
+        } catch (const CLI::ParseError& e) {
+            for (const CLI::App* sub : app.get_subcommands()) gCommand = sub->get_name();
+            printError(e.what());
+            std::cerr << "run '" << gTool << (gCommand != gTool ? " " + gCommand : std::string()) << " --help' for usage\n";
+            return 2;
+        }
+        for (const CLI::App* sub : app.get_subcommands()) gCommand = sub->get_name();
+        if (run) run();
+        return 0;
+    } catch (const CLI::ParseError& e) { // raised from a subcommand callback
+        printError(e.what());
+        return 2;
+    } catch (const UsageError& e) {
+        printError(e.what());
+        return 2;
+    } catch (const Interrupted&) {
+        printError("interrupted; no output written");
+        return 130;
+    } catch (const Error& e) {
+        printError(e.what());
+        return 1;
+    } catch (const openvdb::Exception& e) {
+        printError(fmt::format("OpenVDB: {}", e.what()));
+        return 1;
+    } catch (const std::bad_alloc&) {
+        printError("out of memory");
+        return 1;
+    } catch (const std::exception& e) {
+        printError(e.what());
+        return 1;
+    }
+}
+
+TerminalProgress::TerminalProgress() : mEnabled(::isatty(STDERR_FILENO) == 1 && !std::getenv("CI")) {}
+
+void TerminalProgress::start(const char* name)
+{
+    std::lock_guard<std::mutex> lock(gDrawMutex);
+    mName = name ? name : "";
+    mLastPercent = -2;
+    if (mEnabled) std::fprintf(stderr, "\r\033[K  %s…", mName.c_str());
+}
+
+void TerminalProgress::end()
+{
+    std::lock_guard<std::mutex> lock(gDrawMutex);
+    if (mEnabled) std::fprintf(stderr, "\r\033[K");
+}
+
+bool TerminalProgress::wasInterrupted(int percent)
+{
+    if (mEnabled && percent >= 0 && percent != mLastPercent) {
+        std::unique_lock<std::mutex> lock(gDrawMutex, std::try_to_lock);
+        const auto now = std::chrono::steady_clock::now();
+        if (lock.owns_lock() && now - mLastDraw > std::chrono::milliseconds(100)) {
+            mLastDraw = now;
+            mLastPercent = percent;
+            const int filled = std::max(0, std::min(30, percent * 30 / 100));
+            std::fprintf(stderr, "\r\033[K  %-28s [%s%s] %3d%%", mName.c_str(), std::string(std::size_t(filled), '#').c_str(),
+                std::string(std::size_t(30 - filled), '.').c_str(), percent);
+        }
+    }
+    return gInterrupted.load();
+}
+
+} // namespace vxf::cli

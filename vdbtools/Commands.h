@@ -1,0 +1,51 @@
+// vxf — the subcommands of the `vxf` tool.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <memory>
+
+namespace vxf::cli {
+
+/// A subcommand: registers its options on construction, runs after a successful parse.
+class Command
+{
+public:
+    virtual ~Command() = default;
+    virtual void run() = 0;
+    bool selected() const { return mApp && mApp->parsed(); }
+
+protected:
+    CLI::App* mApp = nullptr;
+};
+
+std::unique_ptr<Command> makeVoxelizeCommand(CLI::App& parent);
+std::unique_ptr<Command> makeInfoCommand(CLI::App& parent);
+std::unique_ptr<Command> makeDemoCommand(CLI::App& parent);
+
+} // namespace vxf::cli
+
+#include <vxf/io/MeshFile.h>
+#include <vxf/io/VoxelSetFile.h>
+#include <vxf/voxelize/Voxelize.h>
+
+#include <string>
+
+namespace vxf::cli {
+
+/// What `vxf voxelize` does, shared with `vxf demo`.
+struct VoxelizeRequest
+{
+    std::string mesh;   ///< path, or a built-in name such as builtin:candle
+    std::string output; ///< .vdb path
+    VoxelizeOptions voxelize;
+    MeshReadOptions meshRead;
+    VoxelSetWriteOptions write;
+    bool quiet = false; ///< no summary
+};
+
+/// Read (or build) the mesh, voxelize, write the voxel set with provenance, print warnings
+/// and the summary.
+void voxelizeToFile(const VoxelizeRequest& request);
+
+} // namespace vxf::cli

@@ -1,0 +1,118 @@
+// `vxf info FILE`: like `vdb_print -l`, plus the vxf roles, stage and provenance.
+#include "CliSupport.h"
+#include "Commands.h"
+
+#include <vxf/core/GridRoles.h>
+#include <vxf/core/GridStats.h>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <iostream>
+
+namespace vxf::cli {
+
+namespace {
+
+nlohmann::json describe(const VoxelSet& set)
+{
+    nlohmann::json info;
+    nlohmann::json metadata = nlohmann::json::object();
+    for (auto it = set.metadata().beginMeta(); it != set.metadata().endMeta(); ++it) {
+        const std::string& key = it->first;
+        if (key == kParamsMetaKey) {
+            metadata[key] = nlohmann::json::parse(it->second->str(), nullptr, /*allow_exceptions=*/false);
+            if (metadata[key].is_discarded()) metadata[key] = it->second->str();
+        } else {
+            metadata[key] = it->second->str();
+        }
+    }
+    info["metadata"] = metadata;
+    info["grids"] = nlohmann::json::array();
+    for (const auto& grid : set.grids()) {
+        const GridStats s = gridStats(*grid);
+        const GridRole* role = findGridRole(grid->getName());
+        nlohmann::json g = {
+            {"name", grid->getName()},
+            {"value_type", grid->valueType()},
+            {"class", openvdb::GridBase::gridClassToString(grid->getGridClass())},
+            {"role", role ? role->name : ""},
+            {"active_voxels", s.activeVoxels},
+            {"leaf_nodes", s.leafNodes},
+            {"active_tiles", s.activeTiles},
+            {"memory_bytes", s.memoryBytes},
+            {"voxel_size", grid->voxelSize()[0]},
+            {"shares_transform", grid->transform() == set.transform()},
+        };
+        if (!s.activeBBox.empty()) {
+            g["bbox_min"] = {s.activeBBox.min().x(), s.activeBBox.min().y(), s.activeBBox.min().z()};
+            g["bbox_max"] = {s.activeBBox.max().x(), s.activeBBox.max().y(), s.activeBBox.max().z()};
+        }
+        nlohmann::json gridMeta = nlohmann::json::object();
+        for (auto it = grid->beginMeta(); it != grid->endMeta(); ++it) {
+            if (it->first.rfind("vxf:", 0) == 0) gridMeta[it->first] = it->second->str();
+        }
+        g["metadata"] = gridMeta;
+        info["grids"].push_back(g);
+    }
+    return info;
+}
+
+class InfoCommand : public Command
+{
+public:
+    explicit InfoCommand(CLI::App& parent)
+    {
+        mApp = parent.add_subcommand("info", "List the grids of .vdb files with their vxf roles, stage and provenance.");
+        mApp->add_option("files", mFiles, ".vdb files")->required();
+        mApp->add_flag("--json", mJson, "Print JSON instead of a table");
+    }
+
+    void run() override
+    {
+        for (const auto& path : mFiles) {
+            const VoxelSet set = readVoxelSet(path);
+            const nlohmann::json info = describe(set);
+            if (mJson) {
+                std::cout << info.dump(2) << "\n";
+                continue;
+            }
+            const std::string stage = set.stage();
+            std::cout << fmt::format("{}: {} grids{}\n", path, set.grids().size(),
+                stage.empty() ? " (no vxf provenance)" : fmt::format(", stage '{}'", stage));
+            for (const auto& [key, value] : info["metadata"].items()) {
+                std::cout << fmt::format("  {:<14} {}\n", key, value.is_string() ? value.get<std::string>() : value.dump());
+            }
+            std::cout << fmt::format("  {:<16} {:<6} {:<11} {:<15} {:>12} {:>8} {:>6}  {:<34} {:>10}  {}\n", "grid", "type",
+                "class", "role", "active", "leaves", "tiles", "active bbox (index)", "memory", "units");
+            for (const auto& g : info["grids"]) {
+                std::string bbox = "empty";
+                if (g.contains("bbox_min")) {
+                    bbox = fmt::format("[{},{},{}]..[{},{},{}]", g["bbox_min"][0].get<int>(), g["bbox_min"][1].get<int>(),
+                        g["bbox_min"][2].get<int>(), g["bbox_max"][0].get<int>(), g["bbox_max"][1].get<int>(),
+                        g["bbox_max"][2].get<int>());
+                }
+                const std::string role = g["role"].get<std::string>();
+                std::cout << fmt::format("  {:<16} {:<6} {:<11} {:<15} {:>12} {:>8} {:>6}  {:<34} {:>10}  {}{}\n",
+                    g["name"].get<std::string>(), g["value_type"].get<std::string>(), g["class"].get<std::string>(),
+                    role.empty() ? "(passed through)" : role, g["active_voxels"].get<std::uint64_t>(),
+                    g["leaf_nodes"].get<std::uint64_t>(), g["active_tiles"].get<std::uint64_t>(), bbox,
+                    formatBytes(g["memory_bytes"].get<std::uint64_t>()),
+                    g["metadata"].value(kUnitsMetaKey, std::string()),
+                    g["shares_transform"].get<bool>() ? "" : "  (own transform)");
+            }
+            std::cout << fmt::format("  voxel size {:.6g}, transform {}\n", set.transform().voxelSize()[0],
+                set.transform().baseMap()->type());
+        }
+    }
+
+private:
+    std::vector<std::string> mFiles;
+    bool mJson = false;
+};
+
+} // namespace
+
+std::unique_ptr<Command> makeInfoCommand(CLI::App& parent) { return std::make_unique<InfoCommand>(parent); }
+
+} // namespace vxf::cli

@@ -1,0 +1,24 @@
+// vxf — art-directable light transport in volumes. `vxf --help` lists the subcommands.
+#include "CliSupport.h"
+#include "Commands.h"
+
+#include <vxf/core/VoxelSet.h>
+
+int main(int argc, char** argv)
+{
+    using namespace vxf::cli;
+    CLI::App app{"vxf: voxelize meshes into OpenVDB voxel sets, light and scatter them, let artists edit the\n"
+                 "grids, render the glow. Every intermediate is a multi-grid .vdb file.",
+        "vxf"};
+    app.set_version_flag("--version", std::string("vxf ") + vxf::versionString());
+    app.require_subcommand(1);
+    std::vector<std::unique_ptr<Command>> commands;
+    commands.push_back(makeVoxelizeCommand(app));
+    commands.push_back(makeInfoCommand(app));
+    commands.push_back(makeDemoCommand(app));
+    return runMain(app, argc, argv, [&] {
+        for (auto& command : commands) {
+            if (command->selected()) command->run();
+        }
+    });
+}
