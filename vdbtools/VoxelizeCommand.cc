@@ -6,6 +6,7 @@
 #include <vxf/core/ProceduralMesh.h>
 
 #include <fmt/format.h>
+#include <tbb/task_group.h>
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
@@ -28,13 +29,29 @@ void voxelizeToFile(const VoxelizeRequest& request)
         throw UsageError(fmt::format("unknown built-in mesh '{}' (known: {})", request.mesh,
             fmt::join(builtinMeshNames(), ", ")));
     } else {
-        mesh = readMesh(request.mesh, request.meshRead, &report, &progress);
+        MeshReadOptions readOptions = request.meshRead;
+        readOptions.checkSelfIntersections = false; // overlapped with voxelization below
+        mesh = readMesh(request.mesh, readOptions, &report, &progress);
     }
     for (const auto& warning : report.warnings) warn(fmt::format("{}: {}", request.mesh, warning));
     const double meshSeconds = secondsSince(start);
 
+    // The self-intersection check only reports, so it runs beside the voxelization.
     const auto voxelizeStart = std::chrono::steady_clock::now();
-    VoxelSet set = voxelize(mesh, request.voxelize, &progress);
+    MeshReport intersections;
+    tbb::task_group checks;
+    if (request.meshRead.checkSelfIntersections && request.mesh.rfind("builtin:", 0) != 0) {
+        checks.run([&] { checkSelfIntersections(mesh, intersections); });
+    }
+    VoxelSet set;
+    try {
+        set = voxelize(mesh, request.voxelize, &progress);
+    } catch (...) {
+        checks.wait();
+        throw;
+    }
+    checks.wait();
+    for (const auto& warning : intersections.warnings) warn(fmt::format("{}: {}", request.mesh, warning));
     const double voxelizeSeconds = secondsSince(voxelizeStart);
 
     nlohmann::json params = {
@@ -71,8 +88,13 @@ void voxelizeToFile(const VoxelizeRequest& request)
     std::cout << fmt::format("  bounds        {} x {} x {} voxels; dense Vec3f grid of it: {}, this set in memory: {}\n",
         dim.x(), dim.y(), dim.z(), formatBytes(std::uint64_t(dim.x()) * dim.y() * dim.z() * 12), formatBytes(totalMemory));
     std::cout << fmt::format("  file          {}\n", formatBytes(std::filesystem::file_size(request.output)));
-    std::cout << fmt::format("  seconds       {:.3f} total: mesh {:.3f}, voxelize {:.3f}, write {:.3f}\n",
+    std::cout << fmt::format("  seconds       {:.3f} total: mesh {:.3f}, voxelize (+ self-intersection check) {:.3f}, write {:.3f}\n",
         secondsSince(start), meshSeconds, voxelizeSeconds, writeSeconds);
+    if (!report.stepSeconds.empty()) {
+        std::cout << "  mesh steps   ";
+        for (const auto& [step, seconds] : report.stepSeconds) std::cout << fmt::format(" {} {:.3f},", step, seconds);
+        std::cout << "\n";
+    }
 }
 
 namespace {

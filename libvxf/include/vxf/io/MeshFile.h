@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace vxf {
@@ -31,6 +32,7 @@ struct MeshReport
     bool outwardOriented = false;      ///< whether the result bounds its volume outward
     std::size_t triangles = 0;
     std::vector<std::string> warnings;
+    std::vector<std::pair<std::string, double>> stepSeconds; ///< wall time of each step, in order
 };
 
 /// Read a polygon soup from @a path (format from the extension: .obj .ply .off .stl),
@@ -40,6 +42,11 @@ struct MeshReport
 /// triangles. Never prints: findings go to @a report.
 TriangleMesh readMesh(const std::string& path, const MeshReadOptions& options = {},
     MeshReport* report = nullptr, Interrupter* interrupter = nullptr);
+
+/// Test @a mesh for intersecting faces; on a hit set report.selfIntersecting and add the
+/// warning. Parallel (TBB). Separate from readMesh() so callers can overlap it with other
+/// work (`vxf voxelize` runs it beside the voxelization).
+void checkSelfIntersections(const TriangleMesh& mesh, MeshReport& report);
 
 /// File extensions readMesh() accepts, lower case with the dot.
 const std::vector<std::string>& meshFileExtensions();
