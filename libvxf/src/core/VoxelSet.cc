@@ -8,7 +8,7 @@ const char* versionString() { return VXF_VERSION_STRING; }
 
 VoxelSet::VoxelSet() : mTransform(openvdb::math::Transform::createLinearTransform(1.0)) {}
 
-VoxelSet::VoxelSet(openvdb::math::Transform::Ptr transform) : mTransform(std::move(transform))
+VoxelSet::VoxelSet(openvdb::math::Transform::Ptr transform) : mTransform(std::move(transform)), mTransformGiven(true)
 {
     if (!mTransform) throw Error("voxel set: null transform");
 }
@@ -17,6 +17,7 @@ void VoxelSet::setTransform(openvdb::math::Transform::Ptr transform)
 {
     if (!transform) throw Error("voxel set: null transform");
     mTransform = std::move(transform);
+    mTransformGiven = true;
 }
 
 openvdb::GridBase::Ptr VoxelSet::find(const std::string& name) const
@@ -32,7 +33,7 @@ void VoxelSet::put(openvdb::GridBase::Ptr grid)
     if (!grid) throw Error("voxel set: null grid");
     if (grid->getName().empty()) throw Error("voxel set: grids must be named");
     if (grid->transform() != *mTransform) {
-        if (mGrids.empty()) { // the first grid defines the transform of an empty set
+        if (mGrids.empty() && !mTransformGiven) { // the first grid defines the transform
             mTransform = grid->transformPtr();
         } else {
             throw Error("grid '" + grid->getName() +

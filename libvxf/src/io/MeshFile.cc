@@ -194,6 +194,15 @@ TriangleMesh readMesh(const std::string& path, const MeshReadOptions& options, M
 
     // Repair: merge duplicate points, drop degenerate and duplicate polygons and unused points.
     PMP::repair_polygon_soup(points, polygons);
+    // Polygons whose points all lie on one line have no area (exact predicate).
+    polygons.erase(std::remove_if(polygons.begin(), polygons.end(),
+                       [&](const std::vector<std::size_t>& polygon) {
+                           for (std::size_t i = 2; i < polygon.size(); ++i) {
+                               if (!CGAL::collinear(points[polygon[0]], points[polygon[1]], points[polygon[i]])) return false;
+                           }
+                           return true;
+                       }),
+        polygons.end());
     report.mergedPoints = report.inputPoints - std::min(report.inputPoints, points.size());
     report.removedPolygons = report.inputPolygons - std::min(report.inputPolygons, polygons.size());
     if (polygons.empty()) {

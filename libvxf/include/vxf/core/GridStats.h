@@ -4,6 +4,7 @@
 #include <openvdb/Grid.h>
 
 #include <cstdint>
+#include <string>
 
 namespace vxf {
 

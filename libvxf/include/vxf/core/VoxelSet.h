@@ -29,8 +29,8 @@ public:
     VoxelSet();
     explicit VoxelSet(openvdb::math::Transform::Ptr transform);
 
-    /// The shared transform (index → world). Set by the constructor, by the first grid
-    /// added to an empty set, or by setTransform().
+    /// The shared transform (index → world): the one given to the constructor or
+    /// setTransform(), else that of the first grid put().
     const openvdb::math::Transform& transform() const { return *mTransform; }
     openvdb::math::Transform::Ptr transformPtr() const { return mTransform; }
     void setTransform(openvdb::math::Transform::Ptr transform);
@@ -47,8 +47,8 @@ public:
     typename GridT::Ptr get(const std::string& name) const;
 
     /// Add @a grid, replacing a grid of the same name (keeping its position).
-    /// The grid adopts the set's transform when it has an equivalent one; a grid with a
-    /// different transform throws vxf::Error (resample it first).
+    /// The grid adopts (shares) the set's transform when it has an equivalent one; a grid
+    /// with a different transform throws vxf::Error (resample it first).
     void put(openvdb::GridBase::Ptr grid);
 
     /// Add @a grid exactly as it is, with its own transform (for grids read from a file:
@@ -70,6 +70,7 @@ public:
 
 private:
     openvdb::math::Transform::Ptr mTransform;
+    bool mTransformGiven = false;
     openvdb::GridPtrVec mGrids;
     openvdb::MetaMap mMetadata;
 };

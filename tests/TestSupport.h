@@ -1,0 +1,52 @@
+// Helpers shared by the tests: temporary folders, running the real binaries, exact grid
+// comparison.
+#pragma once
+
+#include <openvdb/openvdb.h>
+
+#include <filesystem>
+#include <string>
+
+namespace vxf::test {
+
+/// A fresh empty folder under the system temp dir, removed on destruction.
+class TempDir
+{
+public:
+    TempDir();
+    ~TempDir();
+    std::string path(const std::string& name) const { return (mPath / name).string(); }
+    const std::filesystem::path& root() const { return mPath; }
+
+private:
+    std::filesystem::path mPath;
+};
+
+/// Result of running a command line through the shell.
+struct RunResult
+{
+    int status = -1;
+    std::string out, err;
+};
+
+/// Run @a commandLine (a shell command) and capture its exit status, stdout and stderr.
+RunResult run(const std::string& commandLine);
+
+/// Path of a built binary (vxf, vxf2vdb, vdb2vxf, bench/...).
+std::string binary(const std::string& name);
+
+/// Path of a file in the source tree.
+std::string source(const std::string& relative);
+
+/// Read a whole file.
+std::string slurp(const std::string& path);
+
+/// Write a whole file.
+void spit(const std::string& path, const std::string& text);
+
+/// Whether two grids are identical: type, class, background, transform, and every stored
+/// value and active state (tiles compared voxel by voxel, so pruning does not matter).
+/// On a difference, @a why says where.
+bool identicalGrids(const openvdb::GridBase& a, const openvdb::GridBase& b, std::string* why = nullptr);
+
+} // namespace vxf::test
