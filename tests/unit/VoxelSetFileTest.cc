@@ -139,7 +139,7 @@ TEST_CASE("grids vxf does not know pass through untouched", "[io][vdb]")
     CHECK(back.transform().voxelSize()[0] == Approx(0.1)); // the roles' transform, not piece_id's
 }
 
-TEST_CASE("--half stores floats as halves", "[io][vdb]")
+TEST_CASE("half-float storage (the --half flag)", "[io][vdb]")
 {
     TempDir dir;
     vxf::VoxelSetWriteOptions options;

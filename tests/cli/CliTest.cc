@@ -1,0 +1,210 @@
+// The real binaries on real files, as a user runs them.
+#include "TestSupport.h"
+
+#include <vxf/io/VoxelSetFile.h>
+
+#include <catch2/catch.hpp>
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+
+using vxf::test::binary;
+using vxf::test::run;
+using vxf::test::slurp;
+using vxf::test::source;
+using vxf::test::TempDir;
+
+namespace fs = std::filesystem;
+
+namespace {
+std::string quoted(const std::string& s) { return "'" + s + "'"; }
+
+std::string trimmed(std::string s)
+{
+    while (!s.empty() && (s.back() == '\n' || s.back() == '\r')) s.pop_back();
+    return s;
+}
+} // namespace
+
+TEST_CASE("every bad input in tests/regress gives its error and no output", "[cli][regress]")
+{
+    int cases = 0;
+    for (const auto& entry : fs::directory_iterator(source("tests/regress"))) {
+        const fs::path input = entry.path();
+        if (input.extension() == ".expect") continue;
+        const fs::path expectFile = fs::path(input).replace_extension(".expect");
+        REQUIRE(fs::exists(expectFile));
+        const std::string expected = trimmed(slurp(expectFile.string()));
+        TempDir dir;
+        const std::string output = dir.path("out.vdb");
+        const std::string command = input.extension() == ".vxf"
+            ? fmt::format("{} {} {}", binary("vxf2vdb"), quoted(input.string()), quoted(output))
+            : fmt::format("{} voxelize {} -o {} --dim 16", binary("vxf"), quoted(input.string()), quoted(output));
+        const auto result = run(command);
+        INFO(input.filename().string() << "\nstderr: " << result.err);
+        CHECK(result.status == 1);
+        CHECK(result.err.find(expected) != std::string::npos);
+        CHECK(result.err.find(input.extension() == ".vxf" ? "vxf2vdb: " : "vxf: voxelize: ") == 0);
+        CHECK_FALSE(fs::exists(output));
+        CHECK(fs::is_empty(dir.root())); // no temporary left behind either
+        ++cases;
+    }
+    CHECK(cases >= 25);
+}
+
+TEST_CASE("a failed conversion keeps the existing output file", "[cli][regress]")
+{
+    TempDir dir;
+    const std::string output = dir.path("keep.vdb");
+    REQUIRE(run(fmt::format("{} {} {}", binary("vxf2vdb"), source("tests/data/thesis_sample.vxf"), output)).status == 0);
+    const std::string before = slurp(output);
+    CHECK(run(fmt::format("{} {} {}", binary("vxf2vdb"), source("tests/regress/duplicate_voxel.vxf"), output)).status == 1);
+    CHECK(slurp(output) == before);
+}
+
+TEST_CASE("vxf voxelize writes a voxel set that OpenVDB's tools read", "[cli][voxelize]")
+{
+    TempDir dir;
+    const std::string output = dir.path("sphere.vdb");
+    const auto result = run(fmt::format("{} voxelize builtin:sphere -o {} --dim 48 --band 2", binary("vxf"), output));
+    INFO(result.err);
+    REQUIRE(result.status == 0);
+    CHECK(result.out.find("voxelized builtin:sphere") != std::string::npos);
+    CHECK(result.out.find("active voxels") != std::string::npos);
+    CHECK(result.out.find("seconds") != std::string::npos);
+
+    const auto print = run("vdb_print -l " + output);
+    REQUIRE(print.status == 0);
+    CHECK(print.out.find("Name: surface") != std::string::npos);
+    CHECK(print.out.find("class: level set") != std::string::npos);
+    CHECK(print.out.find("Name: density") != std::string::npos);
+    CHECK(print.out.find("class: fog volume") != std::string::npos);
+    CHECK(print.out.find("vxf:stage: voxelize") != std::string::npos);
+
+    const auto python = run("/usr/bin/python3 -c \"import pyopenvdb as vdb; grids, meta = vdb.readAll('" + output +
+                            "'); print(sorted((g.name, g.gridClass, g.activeVoxelCount() > 0) for g in grids)); "
+                            "print(meta['vxf:stage'])\"");
+    INFO(python.err);
+    REQUIRE(python.status == 0);
+    CHECK(python.out == "[('density', 'fog volume', True), ('surface', 'level set', True)]\nvoxelize\n");
+
+    const auto info = run(fmt::format("{} info --json {}", binary("vxf"), output));
+    REQUIRE(info.status == 0);
+    const auto json = nlohmann::json::parse(info.out);
+    CHECK(json["metadata"]["vxf:stage"] == "voxelize");
+    CHECK(json["metadata"]["vxf:params"]["dim"] == 48);
+    CHECK(json["metadata"]["vxf:params"]["band"] == 2.0);
+    CHECK(json["grids"].size() == 2);
+    const auto table = run(fmt::format("{} info {}", binary("vxf"), output));
+    CHECK(table.status == 0);
+    CHECK(table.out.find("stage 'voxelize'") != std::string::npos);
+    CHECK(table.out.find("world units") != std::string::npos);
+}
+
+TEST_CASE("vxf voxelize on a real open mesh warns and still voxelizes", "[cli][voxelize]")
+{
+    TempDir dir;
+    vxf::test::spit(dir.path("open.off"), "OFF\n8 5 0\n-1 -1 -1\n1 -1 -1\n-1 1 -1\n1 1 -1\n-1 -1 1\n1 -1 1\n-1 1 1\n1 1 1\n"
+                                          "4 0 4 6 2\n4 1 3 7 5\n4 0 1 5 4\n4 2 6 7 3\n4 0 2 3 1\n");
+    const auto result = run(fmt::format("{} voxelize {} -o {} --voxel-size 0.1", binary("vxf"), dir.path("open.off"), dir.path("o.vdb")));
+    CHECK(result.status == 0);
+    CHECK(result.err.find("vxf: voxelize: warning: ") == 0);
+    CHECK(result.err.find("the mesh is open: 1 holes") != std::string::npos);
+    const auto set = vxf::readVoxelSet(dir.path("o.vdb"));
+    CHECK(set.find("density")->activeVoxelCount() > 6000); // a filled 20^3 cube, not a leaky shell
+}
+
+TEST_CASE("command-line usage errors exit with status 2", "[cli]")
+{
+    TempDir dir;
+    const std::string vxf = binary("vxf");
+    const auto noOutput = run(vxf + " voxelize builtin:box --dim 8");
+    CHECK(noOutput.status == 2);
+    CHECK(noOutput.err.find("vxf: voxelize: --output is required") == 0);
+    const auto both = run(fmt::format("{} voxelize builtin:box -o {} --dim 8 --voxel-size 0.1", vxf, dir.path("x.vdb")));
+    CHECK(both.status == 2);
+    CHECK(both.err.find("excludes") != std::string::npos);
+    const auto neither = run(fmt::format("{} voxelize builtin:box -o {}", vxf, dir.path("x.vdb")));
+    CHECK(neither.status == 2);
+    CHECK(neither.err == "vxf: voxelize: give --voxel-size or --dim\n");
+    const auto unknown = run(fmt::format("{} voxelize builtin:teapot -o {} --dim 8", vxf, dir.path("x.vdb")));
+    CHECK(unknown.status == 2);
+    CHECK(unknown.err.find("unknown built-in mesh 'builtin:teapot'") != std::string::npos);
+    const auto badBand = run(fmt::format("{} voxelize builtin:box -o {} --dim 8 --band 0", vxf, dir.path("x.vdb")));
+    CHECK(badBand.status == 2);
+    CHECK(badBand.err.find("--band") != std::string::npos);
+    CHECK(run(vxf + " frobnicate").status == 2);
+    CHECK(run(vxf).status == 2);
+    CHECK_FALSE(fs::exists(dir.path("x.vdb")));
+
+    const auto help = run(vxf + " --help");
+    CHECK(help.status == 0);
+    for (const char* sub : {"voxelize", "info", "demo"}) CHECK(help.out.find(sub) != std::string::npos);
+    CHECK(run(vxf + " --version").out.find("vxf 0.") == 0);
+    CHECK(run(binary("vdb2vxf") + " --help").status == 0);
+
+    const auto missing = run(fmt::format("{} info {}", vxf, dir.path("none.vdb")));
+    CHECK(missing.status == 1);
+    CHECK(missing.err.find("none.vdb: no such file") != std::string::npos);
+}
+
+TEST_CASE("vxf2vdb and vdb2vxf round-trip real files", "[cli][convert]")
+{
+    TempDir dir;
+    const std::string sample = source("tests/data/thesis_sample.vxf");
+    REQUIRE(run(fmt::format("{} {} {}", binary("vxf2vdb"), sample, dir.path("a.vdb"))).status == 0);
+    REQUIRE(run(fmt::format("{} {} {}", binary("vdb2vxf"), dir.path("a.vdb"), dir.path("b.vxf"))).status == 0);
+    REQUIRE(run(fmt::format("{} {} {}", binary("vxf2vdb"), dir.path("b.vxf"), dir.path("b.vdb"))).status == 0);
+    REQUIRE(run(fmt::format("{} {} {}", binary("vdb2vxf"), dir.path("b.vdb"), dir.path("c.vxf"))).status == 0);
+    CHECK(slurp(dir.path("b.vxf")) == slurp(dir.path("c.vxf")));
+    const std::string text = slurp(dir.path("b.vxf"));
+    CHECK(text.find("size 4 4 2 0.25\nmin -0.5 -0.5 0\nmax 0.5 0.5 0.5\n") != std::string::npos);
+    // "3 0 0 0 0 0 0" (inactive, background value) carries nothing and is not written back.
+    CHECK(text.find("grid color vec3\ncount 7\n") != std::string::npos);
+    CHECK(text.find("2 2 1 1 0.333333 0.666667 1\n") != std::string::npos);
+    const auto a = vxf::readVoxelSet(dir.path("a.vdb"));
+    const auto b = vxf::readVoxelSet(dir.path("b.vdb"));
+    CHECK(vxf::test::identicalGrids(*a.find("color"), *b.find("color")));
+    CHECK(a.stage() == "convert");
+
+    // A voxelized mesh through text and back: same voxels, level-set interior restored.
+    REQUIRE(run(fmt::format("{} voxelize builtin:sphere -o {} --dim 24 -q", binary("vxf"), dir.path("s.vdb"))).status == 0);
+    const auto toText = run(fmt::format("{} {} {} --grid surface --grid density", binary("vdb2vxf"), dir.path("s.vdb"), dir.path("s.vxf")));
+    INFO(toText.err);
+    REQUIRE(toText.status == 0);
+    CHECK(toText.err.find("different active voxels") != std::string::npos);
+    REQUIRE(run(fmt::format("{} {} {}", binary("vxf2vdb"), dir.path("s.vxf"), dir.path("s2.vdb"))).status == 0);
+    const auto original = vxf::readVoxelSet(dir.path("s.vdb"));
+    const auto back = vxf::readVoxelSet(dir.path("s2.vdb"));
+    auto surface = back.get<openvdb::FloatGrid>("surface");
+    CHECK(surface->getGridClass() == openvdb::GRID_LEVEL_SET);
+    const openvdb::Coord centre = back.transform().worldToIndexCellCentered(openvdb::Vec3d(0.0));
+    CHECK(surface->tree().getValue(centre) < 0.0f); // inside, from the signed flood fill
+    // Same values at the same world positions.
+    auto originalSurface = original.get<openvdb::FloatGrid>("surface");
+    int compared = 0;
+    for (auto it = originalSurface->cbeginValueOn(); it; ++it, ++compared) {
+        const auto moved = back.transform().worldToIndexCellCentered(original.transform().indexToWorld(it.getCoord()));
+        if (surface->tree().getValue(moved) != *it) FAIL("surface value moved at " << it.getCoord());
+    }
+    CHECK(compared > 1000);
+
+    const auto badGrid = run(fmt::format("{} {} {} --grid nothing", binary("vdb2vxf"), dir.path("s.vdb"), dir.path("n.vxf")));
+    CHECK(badGrid.status == 1);
+    CHECK(badGrid.err == "vdb2vxf: no grid named 'nothing' to write\n");
+    CHECK_FALSE(fs::exists(dir.path("n.vxf")));
+}
+
+TEST_CASE("vxf demo runs the main job on the embedded scene", "[cli][demo]")
+{
+    TempDir dir;
+    const auto result = run(fmt::format("{} demo --out {}", binary("vxf"), dir.path("out")));
+    INFO(result.err);
+    REQUIRE(result.status == 0);
+    CHECK(result.out.find("voxelized builtin:candle") != std::string::npos);
+    const auto set = vxf::readVoxelSet(dir.path("out/demo.vdb"));
+    CHECK(set.find("surface"));
+    CHECK(set.find("density"));
+    CHECK(set.find("density")->baseTree().activeTileCount() > 0);
+}
