@@ -196,3 +196,29 @@ TEST_CASE("writing text refuses what it cannot represent", "[io][vxf]")
     rotated.put(g);
     CHECK_THROWS_WITH(vxf::writeVxfText(dir.path("r.vxf"), rotated), Catch::Contains("axis-aligned cubic voxels"));
 }
+
+TEST_CASE("the example in schemas/vxf-text.md reads as specified", "[io][vxf][schema]")
+{
+    const std::string spec = slurp(vxf::test::source("schemas/vxf-text.md"));
+    const auto start = spec.find("```\n# two grids");
+    REQUIRE(start != std::string::npos);
+    const auto end = spec.find("```", start + 3);
+    TempDir dir;
+    const vxf::VoxelSet set = readText(dir, spec.substr(start + 4, end - start - 4));
+    CHECK(set.get<openvdb::Vec3SGrid>("color")->activeVoxelCount() == 2);
+    CHECK(set.get<openvdb::FloatGrid>("density")->getGridClass() == openvdb::GRID_FOG_VOLUME);
+    CHECK(set.get<openvdb::FloatGrid>("density")->tree().getValue(openvdb::Coord(1, 0, 0)) == 0.5f);
+}
+
+TEST_CASE("number syntax of the spec", "[io][vxf]")
+{
+    TempDir dir;
+    const vxf::VoxelSet set = readText(dir, "size 2 2 2 1\nmin 0 0 0\nmax 2 2 2\n+1 0 1 1 .25 1E+10 -3e-7\n\t0 1 0 1 +2 -0 1.\n");
+    auto color = set.get<openvdb::Vec3SGrid>("color");
+    CHECK(color->tree().getValue(openvdb::Coord(1, 0, 1)) == openvdb::Vec3f(0.25f, 1e10f, -3e-7f));
+    CHECK(color->tree().getValue(openvdb::Coord(0, 1, 0)) == openvdb::Vec3f(2.0f, 0.0f, 1.0f));
+    CHECK_THROWS_WITH(readText(dir, "size 2 2 2 1\nmin 0 0 0\nmax 2 2 2\n0 0 0 1 0x10 0 0\n"),
+        Catch::EndsWith("in.vxf:4:9: expected a number for grid 'color' r, found '0x10'"));
+    CHECK_THROWS_WITH(readText(dir, "size 2 2 2 1\nmin 0 0 0\nmax 2 2 2\n0 0 0 1 1 Infinity 0\n"),
+        Catch::EndsWith("in.vxf:4:11: grid 'color' g is infinite; only finite numbers are allowed"));
+}

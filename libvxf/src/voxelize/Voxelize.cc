@@ -76,9 +76,13 @@ VoxelSet voxelize(const TriangleMesh& mesh, const VoxelizeOptions& options, Inte
     auto xform = openvdb::math::Transform::createLinearTransform(voxelSize);
     if (shift != openvdb::Vec3d(0.0)) xform->postTranslate(shift);
 
+    // Points relative to the shifted origin, rounded to float and mapped to index space as
+    // tools::meshToLevelSet does (so a mesh near the origin gives exactly its voxels).
+    const auto unshifted = openvdb::math::Transform::createLinearTransform(voxelSize);
     std::vector<openvdb::Vec3s> indexPoints(mesh.points.size());
     for (size_t i = 0; i < mesh.points.size(); ++i) {
-        indexPoints[i] = openvdb::Vec3s(xform->worldToIndex(mesh.points[i]));
+        const openvdb::Vec3s local(mesh.points[i] - shift);
+        indexPoints[i] = openvdb::Vec3s(unshifted->worldToIndex(openvdb::Vec3d(local)));
     }
 
     openvdb::FloatGrid::Ptr surface;
