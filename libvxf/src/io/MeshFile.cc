@@ -59,7 +59,7 @@ private:
 /// Whether the soup already is an oriented 2-manifold (possibly with boundary): every
 /// directed edge appears once, and the polygons around each vertex form a single fan.
 /// O(n log n) (CGAL's is_polygon_soup_a_polygon_mesh is ~15x slower on the bunny).
-/// @a borderEdges counts the directed edges without their reverse.
+/// @a borderEdges counts the border edges of a manifold soup (one per open fan).
 bool isOrientedManifoldSoup(std::size_t pointCount, const std::vector<std::vector<std::size_t>>& polygons,
     std::size_t& borderEdges)
 {
@@ -74,10 +74,6 @@ bool isOrientedManifoldSoup(std::size_t pointCount, const std::vector<std::vecto
     }
     std::sort(directed.begin(), directed.end());
     if (std::adjacent_find(directed.begin(), directed.end()) != directed.end()) return false;
-    for (const std::uint64_t edge : directed) {
-        const std::uint64_t reverse = (edge & 0xFFFFFFFFu) << 32 | edge >> 32;
-        if (!std::binary_search(directed.begin(), directed.end(), reverse)) ++borderEdges;
-    }
 
     // Corners grouped by vertex: (previous, next) vertex of each.
     for (std::size_t v = 0; v < pointCount; ++v) cornerStart[v + 1] += cornerStart[v];
@@ -97,8 +93,9 @@ bool isOrientedManifoldSoup(std::size_t pointCount, const std::vector<std::vecto
         auto start = begin; // a chain starts at a corner that no other corner leads to
         for (auto c = begin; c != end; ++c) {
             const bool hasPredecessor = std::any_of(begin, end, [&](const auto& o) { return o.first == c->second; });
-            if (!hasPredecessor) {
+            if (!hasPredecessor) { // an open fan: the edge to c's next vertex is a border
                 start = c;
+                ++borderEdges;
                 break;
             }
         }

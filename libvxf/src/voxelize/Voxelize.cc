@@ -37,24 +37,6 @@ double resolveVoxelSize(const TriangleMesh& mesh, const VoxelizeOptions& options
     return extent / double(options.dim);
 }
 
-namespace {
-
-/// OpenVDB's mesh adapter over index-space points computed in double precision.
-struct IndexSpaceMesh
-{
-    const std::vector<openvdb::Vec3s>& points;
-    const std::vector<openvdb::Vec3I>& triangles;
-    size_t polygonCount() const { return triangles.size(); }
-    size_t pointCount() const { return points.size(); }
-    size_t vertexCount(size_t) const { return 3; }
-    void getIndexSpacePoint(size_t n, size_t v, openvdb::Vec3d& pos) const
-    {
-        pos = openvdb::Vec3d(points[triangles[n][int(v)]]);
-    }
-};
-
-} // namespace
-
 VoxelSet voxelize(const TriangleMesh& mesh, const VoxelizeOptions& options, Interrupter* interrupter)
 {
     const double voxelSize = resolveVoxelSize(mesh, options);
@@ -90,8 +72,8 @@ VoxelSet voxelize(const TriangleMesh& mesh, const VoxelizeOptions& options, Inte
         InterruptStep step(interrupter, "voxelizing");
         openvdb::util::NullInterrupter none;
         openvdb::util::NullInterrupter& progress = interrupter ? *interrupter : none;
-        surface = openvdb::tools::meshToVolume<openvdb::FloatGrid>(progress, IndexSpaceMesh{indexPoints, mesh.triangles},
-            *xform, options.bandWidth, options.bandWidth);
+        const openvdb::tools::QuadAndTriangleDataAdapter<openvdb::Vec3s, openvdb::Vec3I> adapter(indexPoints, mesh.triangles);
+        surface = openvdb::tools::meshToVolume<openvdb::FloatGrid>(progress, adapter, *xform, options.bandWidth, options.bandWidth);
         checkInterrupt(interrupter);
     }
     if (!surface) throw Interrupted();
