@@ -456,6 +456,18 @@ VoxelSet readVxfText(const std::string& path, Interrupter* interrupter)
         if ((voxelCount & 0xFFFF) == 0 && fileSize > 0) {
             checkInterrupt(interrupter, int(100.0 * double(in.tellg()) / double(fileSize)));
         }
+        if ((voxelCount & 0xFFFFF) == 0) {
+            // Keep memory near the final grids': collapse the leaves completed so far (files in
+            // tree order, as vdb2vxf writes them, complete leaves one after another).
+            for (ColumnWriter& w : writers) {
+                if (w.boolAcc) w.boolAcc->clear();
+                if (w.floatAcc) w.floatAcc->clear();
+                if (w.vecAcc) w.vecAcc->clear();
+                w.grid->pruneGrid(0.0f);
+            }
+            seenAcc.clear();
+            seen.prune();
+        }
 
         // Next voxel line, skipping blank and comment lines.
         haveVoxelLine = false;
