@@ -6,6 +6,10 @@
 #include <catch2/catch.hpp>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
+#include <valijson/adapters/nlohmann_json_adapter.hpp>
+#include <valijson/schema.hpp>
+#include <valijson/schema_parser.hpp>
+#include <valijson/validator.hpp>
 
 #include <filesystem>
 
@@ -96,10 +100,52 @@ TEST_CASE("vxf voxelize writes a voxel set that OpenVDB's tools read", "[cli][vo
     CHECK(json["metadata"]["vxf:params"]["dim"] == 48);
     CHECK(json["metadata"]["vxf:params"]["band"] == 2.0);
     CHECK(json["grids"].size() == 2);
+    // The provenance of a real file against the metadata schema.
+    {
+        const nlohmann::json schemaJson = nlohmann::json::parse(slurp(source("schemas/vxf-metadata.schema.json")));
+        valijson::Schema schema;
+        valijson::SchemaParser parser;
+        valijson::adapters::NlohmannJsonAdapter schemaAdapter(schemaJson);
+        parser.populateSchema(schemaAdapter, schema);
+        valijson::Validator validator;
+        valijson::adapters::NlohmannJsonAdapter target(json["metadata"]);
+        CHECK(validator.validate(schema, target, nullptr));
+    }
     const auto table = run(fmt::format("{} info {}", binary("vxf"), output));
     CHECK(table.status == 0);
     CHECK(table.out.find("stage 'voxelize'") != std::string::npos);
     CHECK(table.out.find("world units") != std::string::npos);
+}
+
+TEST_CASE("files made by other tools (pyopenvdb) are read, listed and converted", "[cli][interop]")
+{
+    TempDir dir;
+    const std::string made = dir.path("houdini.vdb");
+    const auto python = run("/usr/bin/python3 -c \"import pyopenvdb as vdb\n"
+                            "d = vdb.FloatGrid(); d.name = 'density'; d.gridClass = vdb.GridClass.FOG_VOLUME\n"
+                            "d.transform = vdb.createLinearTransform(voxelSize=0.5)\n"
+                            "a = d.getAccessor(); a.setValueOn((-1, 0, 0), 1.0); a.setValueOn((-1, 0, 1), 0.5)\n"
+                            "a.setValueOn((-1, 1, 0), 0.25)\n"
+                            "v = vdb.Vec3SGrid(); v.name = 'vel'; v.transform = vdb.createLinearTransform(voxelSize=0.25)\n"
+                            "v.getAccessor().setValueOn((0, 0, 0), (1.0, 2.0, 3.0))\n"
+                            "vdb.write('" + made + "', grids=[d, v], metadata={'creator': 'pyopenvdb'})\"");
+    INFO(python.err);
+    REQUIRE(python.status == 0);
+    const auto info = run(fmt::format("{} info --json {}", binary("vxf"), made));
+    REQUIRE(info.status == 0);
+    const auto json = nlohmann::json::parse(info.out);
+    CHECK(json["metadata"]["creator"] == "pyopenvdb");
+    REQUIRE(json["grids"].size() == 2);
+    const auto table = run(fmt::format("{} info {}", binary("vxf"), made));
+    CHECK(table.out.find("(no vxf provenance)") != std::string::npos);
+    CHECK(table.out.find("(passed through)") != std::string::npos); // 'vel' has no vxf role
+    CHECK(table.out.find("(own transform)") != std::string::npos);  // nor the shared transform
+
+    const auto text = run(fmt::format("{} {} {}", binary("vdb2vxf"), made, dir.path("h.vxf")));
+    INFO(text.err);
+    REQUIRE(text.status == 0);
+    CHECK(text.err.find("skipped grid 'vel': its transform differs from the other grids'") != std::string::npos);
+    CHECK(slurp(dir.path("h.vxf")).find("grid density float class=fog_volume\ncount 3\n") != std::string::npos);
 }
 
 TEST_CASE("vxf voxelize on a real open mesh warns and still voxelizes", "[cli][voxelize]")
