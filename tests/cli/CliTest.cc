@@ -161,6 +161,43 @@ TEST_CASE("vxf voxelize on a real open mesh warns and still voxelizes", "[cli][v
     CHECK(set.find("density")->activeVoxelCount() > 6000); // a filled 20^3 cube, not a leaky shell
 }
 
+TEST_CASE("real meshes from Debian's libcgal-demo: the bunny and broken ones", "[cli][voxelize][real]")
+{
+    TempDir dir;
+    const std::string data = "/usr/share/doc/libcgal-dev/data.tar.gz";
+    REQUIRE(fs::exists(data)); // scripts/install-deps installs libcgal-demo
+    REQUIRE(run(fmt::format("tar -xzf {} -C {} data/meshes/bunny00.off data/meshes/elephant-with-holes.off "
+                            "data/meshes/cube-ouvert.off data/meshes/blobby_3cc.off",
+                    data, dir.root().string()))
+                .status == 0);
+    const auto mesh = [&](const char* name) { return dir.path(std::string("data/meshes/") + name); };
+
+    const auto bunny = run(fmt::format("{} voxelize {} -o {} --dim 64", binary("vxf"), mesh("bunny00.off"), dir.path("bunny.vdb")));
+    INFO(bunny.err);
+    REQUIRE(bunny.status == 0);
+    CHECK(bunny.err.empty()); // a clean closed mesh: no warnings
+    CHECK(bunny.out.find("(75408 triangles)") != std::string::npos);
+
+    const auto elephant = run(fmt::format("{} voxelize {} -o {} --dim 64", binary("vxf"), mesh("elephant-with-holes.off"), dir.path("e.vdb")));
+    INFO(elephant.err);
+    REQUIRE(elephant.status == 0);
+    CHECK(elephant.err.find("the mesh is open") != std::string::npos);
+    CHECK(elephant.err.find("filled") != std::string::npos);
+
+    // An open cube (one face missing): filled, so the interior is the whole cube, not a shell.
+    REQUIRE(run(fmt::format("{} voxelize {} -o {} --dim 32 -q", binary("vxf"), mesh("cube-ouvert.off"), dir.path("c.vdb"))).status == 0);
+    const auto cube = vxf::readVoxelSet(dir.path("c.vdb"));
+    const auto density = cube.get<openvdb::FloatGrid>("density");
+    const auto box = cube.find("surface")->evalActiveVoxelBoundingBox();
+    const openvdb::Coord centre((box.min().asVec3i() + box.max().asVec3i()) / 2);
+    CHECK(density->tree().getValue(centre) == 1.0f);
+
+    // Three components in one file.
+    const auto blobs = run(fmt::format("{} voxelize {} -o {} --dim 48 -q", binary("vxf"), mesh("blobby_3cc.off"), dir.path("b.vdb")));
+    INFO(blobs.err);
+    CHECK(blobs.status == 0);
+}
+
 TEST_CASE("command-line usage errors exit with status 2", "[cli]")
 {
     TempDir dir;
