@@ -1,0 +1,103 @@
+// vxf — scene files (schemas/scene.schema.json): objects, materials, lights, camera, settings.
+#pragma once
+
+#include <openvdb/Types.h>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace vxf {
+
+/// Participating medium coefficients per world unit (linear RGB), resolved from either
+/// sigma_a + sigma_s or albedo + mean free path.
+struct Material
+{
+    openvdb::Vec3d sigmaA{0.0}, sigmaS{0.0};
+    std::string gridsFile;            ///< optional .vdb with per-voxel coefficient grids ("" if none)
+    std::string sigmaAGrid, sigmaSGrid; ///< their names in gridsFile ("" if not given)
+
+    openvdb::Vec3d sigmaT() const { return sigmaA + sigmaS; }
+    /// sigma_s / sigma_t per channel (0 where sigma_t is 0).
+    openvdb::Vec3d albedo() const;
+    /// Whether any channel scatters (scattering passes are needed at all).
+    bool scatters() const { return sigmaS[0] > 0.0 || sigmaS[1] > 0.0 || sigmaS[2] > 0.0; }
+};
+
+struct SceneObject
+{
+    enum class Role { Medium, Occluder };
+    std::string name;
+    std::string mesh;              ///< resolved path (relative to the scene file) or builtin:NAME
+    openvdb::Mat4d objectToWorld;  ///< scale, then rotate x, y, z (degrees), then translate
+    Role role = Role::Medium;
+    std::optional<Material> material; ///< present for media
+};
+
+struct Light
+{
+    enum class Type { Point, Spot, Directional, Area, Volume, Environment };
+    enum class Falloff { InverseSquare, Linear, None };
+    enum class Shape { Rectangle, Disk, Sphere };
+    Type type = Type::Point;
+    std::string name;
+    openvdb::Vec3d color{1.0};
+    double intensity = 1.0;
+    Falloff falloff = Falloff::InverseSquare;
+    openvdb::Vec3d position{0.0};
+    openvdb::Vec3d direction{0.0, 0.0, -1.0}; ///< unit length; where the light shines
+    double coneAngleDegrees = 0.0, coneSoftnessDegrees = 0.0;
+    Shape shape = Shape::Rectangle;
+    double width = 1.0, height = 1.0, radius = 0.5;
+    int samples = 16;
+    std::string file, grid; ///< volume light grid / environment map (resolved path)
+
+    /// Radiant colour: color × intensity.
+    openvdb::Vec3d power() const { return color * intensity; }
+};
+
+struct Camera
+{
+    bool orthographic = false;
+    openvdb::Vec3d position{0.0, 0.0, 5.0}, lookAt{0.0}, up{0.0, 0.0, 1.0};
+    double fovDegrees = 40.0;
+    double width = 2.0; ///< orthographic view width
+};
+
+struct SceneSettings
+{
+    int dim = 128;
+    double voxelSize = 0.0; ///< when > 0 it wins over dim
+    double band = 3.0;
+    int passes = 16, directions = 64;
+    double step = 1.0, tolerance = 1e-3;
+    double scatterBand = 0.0; ///< 0: full resolution everywhere
+    int width = 640, height = 360, samples = 4, gatherDirections = 64;
+    bool gather = false, surface = true;
+    openvdb::Vec3d background{0.0};
+    std::vector<std::string> outputs{"image"};
+};
+
+struct Scene
+{
+    std::string path; ///< the file it was read from
+    std::vector<SceneObject> objects;
+    std::vector<Light> lights;
+    Camera camera;
+    SceneSettings settings;
+};
+
+/// Read a scene file: JSON syntax errors name the line and column, schema violations
+/// name the field (as a JSON pointer, e.g. /lights/1/cone_angle) and what was expected,
+/// and geometric nonsense (a zero direction, an up vector along the view) is refused.
+/// Relative mesh and grid paths are resolved against the scene file's folder.
+/// Throws vxf::InputError.
+Scene loadScene(const std::string& path);
+
+/// Parse scene JSON text; @a path names it in messages and anchors relative paths.
+Scene parseScene(const std::string& text, const std::string& path);
+
+/// The JSON Schema scenes are checked against (schemas/scene.schema.json, embedded).
+const std::string& sceneSchemaText();
+
+} // namespace vxf

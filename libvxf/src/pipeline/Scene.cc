@@ -1,0 +1,291 @@
+#include <vxf/pipeline/Scene.h>
+
+#include <vxf/core/Error.h>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <valijson/adapters/nlohmann_json_adapter.hpp>
+#include <valijson/schema.hpp>
+#include <valijson/schema_parser.hpp>
+#include <valijson/validator.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <sstream>
+
+namespace vxf {
+
+openvdb::Vec3d Material::albedo() const
+{
+    const openvdb::Vec3d t = sigmaT();
+    openvdb::Vec3d a(0.0);
+    for (int c = 0; c < 3; ++c) a[c] = t[c] > 0.0 ? sigmaS[c] / t[c] : 0.0;
+    return a;
+}
+
+namespace {
+
+using nlohmann::json;
+
+const valijson::Schema& sceneSchema()
+{
+    static const std::unique_ptr<valijson::Schema> schema = [] {
+        auto s = std::make_unique<valijson::Schema>();
+        const json document = json::parse(sceneSchemaText());
+        valijson::SchemaParser parser;
+        valijson::adapters::NlohmannJsonAdapter adapter(document);
+        parser.populateSchema(adapter, *s);
+        return s;
+    }();
+    return *schema;
+}
+
+/// valijson's context ["<root>", "[lights]", "[0]"] as a JSON pointer "/lights/0".
+std::string pointer(const std::vector<std::string>& context)
+{
+    std::string result;
+    for (const auto& part : context) {
+        if (part == "<root>") continue;
+        std::string key = part;
+        if (key.size() >= 2 && key.front() == '[' && key.back() == ']') key = key.substr(1, key.size() - 2);
+        if (key.size() >= 2 && key.front() == '"' && key.back() == '"') key = key.substr(1, key.size() - 2);
+        result += "/" + key;
+    }
+    return result.empty() ? "/" : result;
+}
+
+class SceneReader
+{
+public:
+    SceneReader(std::string path) : mPath(std::move(path)) {}
+
+    [[noreturn]] void fail(const std::string& where, const std::string& what) const
+    {
+        throw InputError(mPath, 0, 0, fmt::format("{}: {}", where, what));
+    }
+
+    openvdb::Vec3d vec3(const json& j) const { return {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()}; }
+
+    openvdb::Vec3d rgb(const json& j) const
+    {
+        if (j.is_number()) return openvdb::Vec3d(j.get<double>());
+        return vec3(j);
+    }
+
+    openvdb::Vec3d direction(const json& j, const std::string& where) const
+    {
+        const openvdb::Vec3d d = vec3(j);
+        const double length = d.length();
+        if (!(length > 1e-12) || !std::isfinite(length)) fail(where, "a direction must be a non-zero vector");
+        return d / length;
+    }
+
+    std::string resolvePath(const std::string& relative) const
+    {
+        if (relative.rfind("builtin:", 0) == 0) return relative;
+        const std::filesystem::path p(relative);
+        if (p.is_absolute()) return relative;
+        return (std::filesystem::path(mPath).parent_path() / p).lexically_normal().string();
+    }
+
+    openvdb::Mat4d transform(const json& j) const
+    {
+        openvdb::Mat4d m = openvdb::Mat4d::identity();
+        if (j.contains("scale")) {
+            const openvdb::Vec3d s = j["scale"].is_number() ? openvdb::Vec3d(j["scale"].get<double>()) : vec3(j["scale"]);
+            m.postScale(s);
+        }
+        if (j.contains("rotate")) {
+            const openvdb::Vec3d r = vec3(j["rotate"]) * (M_PI / 180.0);
+            m.postRotate(openvdb::math::X_AXIS, r[0]);
+            m.postRotate(openvdb::math::Y_AXIS, r[1]);
+            m.postRotate(openvdb::math::Z_AXIS, r[2]);
+        }
+        if (j.contains("translate")) m.postTranslate(vec3(j["translate"]));
+        return m;
+    }
+
+    Material material(const json& j, const std::string& where) const
+    {
+        Material m;
+        if (j.contains("sigma_a")) {
+            m.sigmaA = rgb(j["sigma_a"]);
+            m.sigmaS = rgb(j["sigma_s"]);
+        } else {
+            // sigma_t = 1/mfp, sigma_s = albedo sigma_t, sigma_a = sigma_t - sigma_s (>= 0 as albedo <= 1).
+            const openvdb::Vec3d albedo = rgb(j["albedo"]), mfp = rgb(j["mean_free_path"]);
+            for (int c = 0; c < 3; ++c) {
+                const double sigmaT = 1.0 / mfp[c];
+                if (!std::isfinite(sigmaT)) fail(where + "/mean_free_path", "too small: sigma_t = 1/mean_free_path overflows");
+                m.sigmaS[c] = albedo[c] * sigmaT;
+                m.sigmaA[c] = std::max(0.0, sigmaT - m.sigmaS[c]);
+            }
+        }
+        if (j.contains("grids")) {
+            const json& g = j["grids"];
+            m.gridsFile = resolvePath(g["file"].get<std::string>());
+            m.sigmaAGrid = g.value("sigma_a", std::string());
+            m.sigmaSGrid = g.value("sigma_s", std::string());
+            if (m.sigmaAGrid.empty() && m.sigmaSGrid.empty()) {
+                fail(where + "/grids", "name at least one of sigma_a and sigma_s");
+            }
+        }
+        return m;
+    }
+
+    Light light(const json& j, const std::string& where) const
+    {
+        static const std::map<std::string, Light::Type> types = {{"point", Light::Type::Point},
+            {"spot", Light::Type::Spot}, {"directional", Light::Type::Directional}, {"area", Light::Type::Area},
+            {"volume", Light::Type::Volume}, {"environment", Light::Type::Environment}};
+        Light l;
+        l.type = types.at(j["type"].get<std::string>());
+        l.name = j.value("name", fmt::format("{}{}", j["type"].get<std::string>(), where.substr(where.rfind('/') + 1)));
+        if (j.contains("color")) l.color = rgb(j["color"]);
+        l.intensity = j.value("intensity", 1.0);
+        const std::string falloff = j.value("falloff", std::string("inverse_square"));
+        l.falloff = falloff == "linear" ? Light::Falloff::Linear
+                    : falloff == "none" ? Light::Falloff::None
+                                        : Light::Falloff::InverseSquare;
+        if (j.contains("position")) l.position = vec3(j["position"]);
+        if (j.contains("direction")) l.direction = direction(j["direction"], where + "/direction");
+        l.coneAngleDegrees = j.value("cone_angle", 0.0);
+        l.coneSoftnessDegrees = j.value("cone_softness", 0.0);
+        if (l.coneSoftnessDegrees > l.coneAngleDegrees * 0.5 && l.type == Light::Type::Spot) {
+            fail(where + "/cone_softness", fmt::format("the soft edge ({} degrees) must fit inside half the cone ({} degrees)",
+                                               l.coneSoftnessDegrees, l.coneAngleDegrees * 0.5));
+        }
+        const std::string shape = j.value("shape", std::string("rectangle"));
+        l.shape = shape == "disk" ? Light::Shape::Disk : shape == "sphere" ? Light::Shape::Sphere : Light::Shape::Rectangle;
+        if (j.contains("size")) {
+            l.width = j["size"][0].get<double>();
+            l.height = j["size"][1].get<double>();
+        }
+        l.radius = j.value("radius", l.radius);
+        l.samples = j.value("samples", l.type == Light::Type::Environment ? 64 : 16);
+        if (j.contains("file")) l.file = resolvePath(j["file"].get<std::string>());
+        l.grid = j.value("grid", std::string());
+        return l;
+    }
+
+    Camera camera(const json& j) const
+    {
+        Camera c;
+        c.orthographic = j.value("type", std::string("perspective")) == "orthographic";
+        c.position = vec3(j["position"]);
+        c.lookAt = vec3(j["look_at"]);
+        if (j.contains("up")) c.up = vec3(j["up"]);
+        c.fovDegrees = j.value("fov", c.fovDegrees);
+        c.width = j.value("width", c.width);
+        const openvdb::Vec3d view = c.lookAt - c.position;
+        if (!(view.length() > 1e-12)) fail("/camera/look_at", "must differ from /camera/position");
+        if (!(c.up.length() > 1e-12)) fail("/camera/up", "must be a non-zero vector");
+        if (view.unit().cross(c.up.unit()).length() < 1e-6) fail("/camera/up", "must not point along the view direction");
+        return c;
+    }
+
+    const std::string mPath;
+};
+
+} // namespace
+
+Scene parseScene(const std::string& text, const std::string& path)
+{
+    json document;
+    try {
+        document = json::parse(text);
+    } catch (const json::parse_error& e) {
+        // Locate e.byte (1-based offset just past the error) as line:column.
+        std::size_t line = 1, column = 1;
+        for (std::size_t i = 0; i + 1 < e.byte && i < text.size(); ++i) {
+            if (text[i] == '\n') {
+                ++line;
+                column = 1;
+            } else {
+                ++column;
+            }
+        }
+        std::string what = e.what();
+        const auto colon = what.find(": ", what.find("parse error"));
+        if (colon != std::string::npos) what = what.substr(colon + 2);
+        throw InputError(path, line, column, "invalid JSON: " + what);
+    }
+
+    valijson::Validator validator;
+    valijson::ValidationResults results;
+    valijson::adapters::NlohmannJsonAdapter target(document);
+    if (!validator.validate(sceneSchema(), target, &results)) {
+        // Report the most specific violation (the deepest field), then the rest briefly.
+        valijson::ValidationResults::Error error, best;
+        std::size_t count = 0;
+        while (results.popError(error)) {
+            if (count++ == 0 || error.context.size() > best.context.size()) best = error;
+        }
+        throw InputError(path, 0, 0, fmt::format("{}: {} (checked against schemas/scene.schema.json)",
+                                         pointer(best.context), best.description));
+    }
+
+    SceneReader reader(path);
+    Scene scene;
+    scene.path = path;
+    for (std::size_t i = 0; i < document["objects"].size(); ++i) {
+        const json& o = document["objects"][i];
+        const std::string where = fmt::format("/objects/{}", i);
+        SceneObject object;
+        object.name = o.value("name", fmt::format("object{}", i));
+        object.mesh = reader.resolvePath(o["mesh"].get<std::string>());
+        object.objectToWorld = o.contains("transform") ? reader.transform(o["transform"]) : openvdb::Mat4d::identity();
+        object.role = o.value("role", std::string("medium")) == "occluder" ? SceneObject::Role::Occluder : SceneObject::Role::Medium;
+        if (o.contains("material")) object.material = reader.material(o["material"], where + "/material");
+        if (object.role == SceneObject::Role::Medium && !object.material) {
+            reader.fail(where, "a medium object needs a material (or set \"role\": \"occluder\")");
+        }
+        scene.objects.push_back(std::move(object));
+    }
+    for (std::size_t i = 0; i < document["lights"].size(); ++i) {
+        scene.lights.push_back(reader.light(document["lights"][i], fmt::format("/lights/{}", i)));
+    }
+    scene.camera = reader.camera(document["camera"]);
+
+    SceneSettings& s = scene.settings;
+    if (document.contains("voxelize")) {
+        const json& v = document["voxelize"];
+        s.dim = v.value("dim", s.dim);
+        s.voxelSize = v.value("voxel_size", 0.0);
+        s.band = v.value("band", s.band);
+    }
+    if (document.contains("scatter")) {
+        const json& v = document["scatter"];
+        s.passes = v.value("passes", s.passes);
+        s.directions = v.value("directions", s.directions);
+        s.step = v.value("step", s.step);
+        s.tolerance = v.value("tolerance", s.tolerance);
+        s.scatterBand = v.value("band", s.scatterBand);
+    }
+    if (document.contains("render")) {
+        const json& v = document["render"];
+        s.width = v.value("width", s.width);
+        s.height = v.value("height", s.height);
+        s.samples = v.value("samples", s.samples);
+        s.gather = v.value("mode", std::string("view")) == "gather";
+        s.gatherDirections = v.value("gather_directions", s.gatherDirections);
+        s.surface = v.value("surface", s.surface);
+        if (v.contains("background")) s.background = reader.rgb(v["background"]);
+    }
+    if (document.contains("outputs")) s.outputs = document["outputs"].get<std::vector<std::string>>();
+    return scene;
+}
+
+Scene loadScene(const std::string& path)
+{
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw Error(fmt::format("{}: cannot open scene file", path));
+    std::stringstream buffer;
+    buffer << in.rdbuf();
+    return parseScene(buffer.str(), path);
+}
+
+} // namespace vxf
