@@ -1,0 +1,51 @@
+// vxf — the participating medium of a voxel set: extinction and scattering per voxel.
+#pragma once
+
+#include <vxf/core/VoxelSet.h>
+#include <vxf/pipeline/Scene.h>
+
+#include <openvdb/tools/Interpolation.h>
+
+namespace vxf {
+
+/// The medium's coefficients (1/world unit, RGB) at any point, per DESIGN.md:
+/// σa(x) = density(x)·σa, σs(x) = density(x)·σs from the material, unless the voxel set
+/// has per-voxel `sigma_a` / `sigma_s` (Vec3f) grids, which replace them. Lookups are
+/// trilinear. Read-only and cheap to copy; give each thread its own Sampler.
+class Medium
+{
+public:
+    /// Uses `density` (required) and `sigma_a`, `sigma_s` (optional) from @a set.
+    Medium(const VoxelSet& set, const Material& material);
+
+    const openvdb::math::Transform& transform() const { return mDensity->transform(); }
+    double voxelSize() const { return mDensity->voxelSize()[0]; }
+    /// Index-space bounds of the medium (active density), empty when there is none.
+    const openvdb::CoordBBox& activeBounds() const { return mBounds; }
+    const openvdb::FloatGrid& density() const { return *mDensity; }
+    const Material& material() const { return mMaterial; }
+
+    /// Per-thread trilinear lookups.
+    class Sampler
+    {
+    public:
+        explicit Sampler(const Medium& medium);
+        /// σt at index-space position @a ijk (1/world unit).
+        openvdb::Vec3d sigmaT(const openvdb::Vec3d& ijk);
+        /// σs at index-space position @a ijk (1/world unit).
+        openvdb::Vec3d sigmaS(const openvdb::Vec3d& ijk);
+
+    private:
+        const Medium& mMedium;
+        openvdb::FloatGrid::ConstAccessor mDensity;
+        std::optional<openvdb::Vec3SGrid::ConstAccessor> mSigmaA, mSigmaS;
+    };
+
+private:
+    openvdb::FloatGrid::ConstPtr mDensity;
+    openvdb::Vec3SGrid::ConstPtr mSigmaA, mSigmaS;
+    Material mMaterial;
+    openvdb::CoordBBox mBounds;
+};
+
+} // namespace vxf

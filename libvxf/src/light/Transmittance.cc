@@ -1,0 +1,73 @@
+#include <vxf/light/Transmittance.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace vxf {
+
+namespace {
+
+/// Clip the ray origin + t·direction, t ∈ [t0, t1], to @a box (slab method); false if it misses.
+bool clip(const openvdb::BBoxd& box, const openvdb::Vec3d& origin, const openvdb::Vec3d& direction, double& t0, double& t1)
+{
+    for (int a = 0; a < 3; ++a) {
+        if (direction[a] == 0.0) {
+            if (origin[a] < box.min()[a] || origin[a] > box.max()[a]) return false;
+            continue;
+        }
+        const double inv = 1.0 / direction[a];
+        double near = (box.min()[a] - origin[a]) * inv, far = (box.max()[a] - origin[a]) * inv;
+        if (near > far) std::swap(near, far);
+        t0 = std::max(t0, near);
+        t1 = std::min(t1, far);
+    }
+    return t0 < t1;
+}
+
+openvdb::BBoxd marchBounds(const Medium& medium)
+{
+    // Trilinear lookups reach one voxel beyond the active voxels.
+    const openvdb::CoordBBox& b = medium.activeBounds();
+    return openvdb::BBoxd(b.min().asVec3d() - openvdb::Vec3d(1.0), b.max().asVec3d() + openvdb::Vec3d(1.0));
+}
+
+openvdb::Vec3d march(Medium::Sampler& sampler, const Medium& medium, const openvdb::Vec3d& origin,
+    const openvdb::Vec3d& unit, double t0, double t1, const MarchOptions& options)
+{
+    if (medium.activeBounds().empty() || !clip(marchBounds(medium), origin, unit, t0, t1)) return openvdb::Vec3d(1.0);
+    const double length = t1 - t0;
+    const int steps = std::max(1, int(std::ceil(length / std::max(options.step, 1e-3))));
+    const double h = length / steps;
+    const double hWorld = h * medium.voxelSize();
+    const double tauCutoff = -std::log(std::max(options.cutoff, std::numeric_limits<double>::min()));
+    // Beer-Lambert with σt constant over each step: τ += σt·h, T = exp(−τ).
+    openvdb::Vec3d tau(0.0);
+    for (int i = 0; i < steps; ++i) {
+        const openvdb::Vec3d sigmaT = sampler.sigmaT(origin + unit * (t0 + (i + 0.5) * h));
+        for (int c = 0; c < 3; ++c) tau[c] += std::max(0.0, sigmaT[c]) * hWorld;
+        if (std::min({tau[0], tau[1], tau[2]}) > tauCutoff) return openvdb::Vec3d(0.0);
+    }
+    return openvdb::Vec3d(std::exp(-tau[0]), std::exp(-tau[1]), std::exp(-tau[2]));
+}
+
+} // namespace
+
+openvdb::Vec3d transmittance(Medium::Sampler& sampler, const Medium& medium, const openvdb::Vec3d& fromIjk,
+    const openvdb::Vec3d& toIjk, const MarchOptions& options)
+{
+    const openvdb::Vec3d d = toIjk - fromIjk;
+    const double length = d.length();
+    if (!(length > 0.0)) return openvdb::Vec3d(1.0);
+    return march(sampler, medium, fromIjk, d / length, 0.0, length, options);
+}
+
+openvdb::Vec3d transmittanceToBoundary(Medium::Sampler& sampler, const Medium& medium, const openvdb::Vec3d& fromIjk,
+    const openvdb::Vec3d& direction, const MarchOptions& options)
+{
+    const double length = direction.length();
+    if (!(length > 0.0)) return openvdb::Vec3d(1.0);
+    return march(sampler, medium, fromIjk, direction / length, 0.0, std::numeric_limits<double>::max(), options);
+}
+
+} // namespace vxf

@@ -1,0 +1,166 @@
+#include <vxf/light/DirectLight.h>
+
+#include "TestSupport.h"
+
+#include <catch2/catch.hpp>
+#include <tbb/global_control.h>
+
+namespace {
+
+/// A box of density 1 (voxels in @a box), voxel size dx, all leaf voxels (no tiles).
+vxf::VoxelSet boxMedium(const openvdb::CoordBBox& box, double dx, bool tiles = false)
+{
+    vxf::VoxelSet set(openvdb::math::Transform::createLinearTransform(dx));
+    auto density = openvdb::FloatGrid::create(0.0f);
+    density->setName("density");
+    density->setTransform(set.transformPtr());
+    density->tree().fill(box, 1.0f, true);
+    if (!tiles) density->tree().voxelizeActiveTiles();
+    set.put(density);
+    return set;
+}
+
+vxf::Material material(double sigmaA, double sigmaS)
+{
+    vxf::Material m;
+    m.sigmaA = openvdb::Vec3d(sigmaA);
+    m.sigmaS = openvdb::Vec3d(sigmaS);
+    return m;
+}
+
+vxf::Light pointLight(const openvdb::Vec3d& p, double intensity)
+{
+    vxf::Light l;
+    l.type = vxf::Light::Type::Point;
+    l.name = "point";
+    l.position = p;
+    l.intensity = intensity;
+    return l;
+}
+
+} // namespace
+
+TEST_CASE("point light: I/r^2 in a thin medium", "[light][direct]")
+{
+    const vxf::VoxelSet set = boxMedium(openvdb::CoordBBox(openvdb::Coord(-20), openvdb::Coord(20)), 0.1);
+    const vxf::Medium medium(set, material(5e-7, 5e-7));
+    vxf::Medium::Sampler sampler(medium);
+    const vxf::Light light = pointLight(openvdb::Vec3d(0.0), 3.0);
+    for (const openvdb::Coord c : {openvdb::Coord(10, 0, 0), openvdb::Coord(3, -4, 12), openvdb::Coord(-20, 20, 1)}) {
+        const double r = c.asVec3d().length() * 0.1;
+        const openvdb::Vec3d phi = vxf::lightFluence(light, sampler, medium, c, {});
+        CHECK(phi.x() == Approx(3.0 / (r * r)).epsilon(1e-4));
+    }
+    // At the light's own position: finite (r is taken as half a voxel).
+    const openvdb::Vec3d atLight = vxf::lightFluence(light, sampler, medium, openvdb::Coord(0), {});
+    CHECK(std::isfinite(atLight.x()));
+    CHECK(atLight.x() == Approx(3.0 / (0.05 * 0.05)).epsilon(1e-4));
+}
+
+TEST_CASE("directional light: E exp(-sigma_t depth)", "[light][direct]")
+{
+    const double dx = 0.05;
+    const vxf::VoxelSet set = boxMedium(openvdb::CoordBBox(openvdb::Coord(0, -30, -30), openvdb::Coord(39, 30, 30)), dx);
+    const vxf::Medium medium(set, material(0.5, 1.5));
+    vxf::Medium::Sampler sampler(medium);
+    vxf::Light sun;
+    sun.type = vxf::Light::Type::Directional;
+    sun.direction = openvdb::Vec3d(1, 0, 0); // shining toward +x: enters at x = 0
+    sun.color = openvdb::Vec3d(1.0, 0.5, 0.25);
+    sun.intensity = 2.0;
+    for (int i : {0, 5, 17}) {
+        // Optical depth from voxel centre i back to the face: i voxels + the half-voxel ramp.
+        const double expected = 2.0 * std::exp(-2.0 * dx * (i + 0.5));
+        const openvdb::Vec3d phi = vxf::lightFluence(sun, sampler, medium, openvdb::Coord(i, 0, 0), {});
+        CHECK(phi.x() == Approx(expected).margin(1e-4));
+        CHECK(phi.z() == Approx(0.25 * expected).margin(1e-4));
+    }
+}
+
+TEST_CASE("environment light: 4 pi L with no extinction", "[light][direct]")
+{
+    const vxf::VoxelSet set = boxMedium(openvdb::CoordBBox(openvdb::Coord(-5), openvdb::Coord(5)), 0.1);
+    const vxf::Medium medium(set, material(0.0, 0.0));
+    vxf::Medium::Sampler sampler(medium);
+    vxf::Light sky;
+    sky.type = vxf::Light::Type::Environment;
+    sky.color = openvdb::Vec3d(0.5);
+    sky.samples = 32;
+    CHECK(vxf::lightFluence(sky, sampler, medium, openvdb::Coord(1, 2, 3), {}).x() == Approx(4.0 * M_PI * 0.5));
+    sky.file = "sky.exr";
+    CHECK_THROWS_AS(vxf::lightFluence(sky, sampler, medium, openvdb::Coord(0), {}), vxf::UsageError);
+}
+
+TEST_CASE("spot and area lights agree with their point-light limits", "[light][direct]")
+{
+    const vxf::VoxelSet set = boxMedium(openvdb::CoordBBox(openvdb::Coord(-20), openvdb::Coord(20)), 0.1);
+    const vxf::Medium medium(set, material(0.2, 0.3));
+    vxf::Medium::Sampler sampler(medium);
+    const vxf::Light point = pointLight(openvdb::Vec3d(0, 0, 3), 2.0);
+    vxf::Light spot = point;
+    spot.type = vxf::Light::Type::Spot;
+    spot.direction = openvdb::Vec3d(0, 0, -1);
+    spot.coneAngleDegrees = 60.0;
+    spot.coneSoftnessDegrees = 10.0;
+    const openvdb::Coord below(0, 0, 10), edge(16, 0, 0), outside(20, 0, 18);
+    CHECK(vxf::lightFluence(spot, sampler, medium, below, {}).x() ==
+          Approx(vxf::lightFluence(point, sampler, medium, below, {}).x()));
+    const double soft = vxf::lightFluence(spot, sampler, medium, edge, {}).x(); // ~28 degrees off axis: in the soft edge
+    CHECK(soft > 0.0);
+    CHECK(soft < vxf::lightFluence(point, sampler, medium, edge, {}).x());
+    CHECK(vxf::lightFluence(spot, sampler, medium, outside, {}).x() == 0.0);
+
+    // A small square facing the voxel, far away, acts as a point of intensity L A.
+    vxf::Light area;
+    area.type = vxf::Light::Type::Area;
+    area.shape = vxf::Light::Shape::Rectangle;
+    area.position = openvdb::Vec3d(0, 0, 3);
+    area.direction = openvdb::Vec3d(0, 0, -1);
+    area.width = area.height = 0.02;
+    area.intensity = 2.0 / (0.02 * 0.02);
+    area.samples = 16;
+    CHECK(vxf::lightFluence(area, sampler, medium, below, {}).x() ==
+          Approx(vxf::lightFluence(point, sampler, medium, below, {}).x()).epsilon(1e-3));
+    // One-sided: nothing behind it.
+    area.direction = openvdb::Vec3d(0, 0, 1);
+    CHECK(vxf::lightFluence(area, sampler, medium, below, {}).x() == 0.0);
+}
+
+TEST_CASE("the light stage writes direct and scatter_source on the medium's topology", "[light][direct]")
+{
+    vxf::VoxelSet set = boxMedium(openvdb::CoordBBox(openvdb::Coord(-64), openvdb::Coord(63)), 0.02, /*tiles=*/true);
+    const vxf::Material m = material(0.5, 2.0);
+    const vxf::Medium medium(set, m);
+    vxf::Light dark = pointLight(openvdb::Vec3d(0.0), 0.0);
+    dark.name = "off";
+    const std::vector<vxf::Light> lights = {pointLight(openvdb::Vec3d(0, 0, 2), 1.0), dark};
+    const auto report = vxf::computeDirectLight(set, medium, lights);
+    REQUIRE(report.lights.size() == 2);
+    CHECK_FALSE(report.lights[0].skipped);
+    CHECK(report.lights[0].fluenceSum.x() > 0.0);
+    CHECK(report.lights[1].skipped);
+    CHECK(report.lights[1].why == "zero colour or intensity");
+
+    auto direct = set.get<openvdb::Vec3SGrid>("direct");
+    auto source = set.get<openvdb::Vec3SGrid>("scatter_source");
+    const auto density = set.get<openvdb::FloatGrid>("density");
+    CHECK(direct->activeVoxelCount() == density->activeVoxelCount());
+    CHECK(direct->tree().activeTileCount() > 0); // the deep interior stays tiles
+    // J0 = sigma_s phi / 4 pi at a leaf voxel.
+    const openvdb::Coord c(0, 0, 60);
+    CHECK(source->tree().getValue(c).x() == Approx(2.0 * direct->tree().getValue(c).x() / (4.0 * M_PI)).epsilon(1e-6));
+    bool finite = true;
+    for (auto it = direct->cbeginValueOn(); it; ++it) finite = finite && std::isfinite((*it)[0]) && (*it)[0] >= 0.0f;
+    CHECK(finite);
+
+    // Identical with 1 and 2 threads.
+    vxf::VoxelSet one = boxMedium(openvdb::CoordBBox(openvdb::Coord(-64), openvdb::Coord(63)), 0.02, true);
+    {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+        vxf::computeDirectLight(one, vxf::Medium(one, m), lights);
+    }
+    std::string why;
+    CHECK(vxf::test::identicalGrids(*one.find("direct"), *direct, &why));
+    INFO(why);
+    CHECK(vxf::test::identicalGrids(*one.find("scatter_source"), *source, &why));
+}

@@ -1,0 +1,104 @@
+#include <vxf/light/Transmittance.h>
+
+#include <catch2/catch.hpp>
+
+namespace {
+
+/// A slab of density 1: voxels x in [0, n), |y|, |z| <= 20; voxel size dx.
+vxf::VoxelSet slab(int n, double dx)
+{
+    vxf::VoxelSet set(openvdb::math::Transform::createLinearTransform(dx));
+    auto density = openvdb::FloatGrid::create(0.0f);
+    density->setName("density");
+    density->setTransform(set.transformPtr());
+    density->tree().fill(openvdb::CoordBBox(openvdb::Coord(0, -20, -20), openvdb::Coord(n - 1, 20, 20)), 1.0f, true);
+    density->tree().voxelizeActiveTiles();
+    set.put(density);
+    return set;
+}
+
+vxf::Material material(double sigmaA, double sigmaS)
+{
+    vxf::Material m;
+    m.sigmaA = openvdb::Vec3d(sigmaA);
+    m.sigmaS = openvdb::Vec3d(sigmaS);
+    return m;
+}
+
+} // namespace
+
+TEST_CASE("slab transmittance is exp(-sigma_t d)", "[light][transmittance]")
+{
+    const double dx = 0.05;
+    const int n = 20; // d = n dx = 1
+    const vxf::VoxelSet set = slab(n, dx);
+    for (double sigmaT : {0.1, 1.0, 2.5, 6.0}) {
+        const vxf::Medium medium(set, material(0.25 * sigmaT, 0.75 * sigmaT));
+        vxf::Medium::Sampler sampler(medium);
+        // From 10 voxels before to 10 voxels after: the trilinear density integrates to n dx.
+        const openvdb::Vec3d t = vxf::transmittance(sampler, medium, openvdb::Vec3d(-10, 0, 0), openvdb::Vec3d(n + 9, 0, 0), {});
+        INFO("sigma_t " << sigmaT);
+        CHECK(t.x() == Approx(std::exp(-sigmaT * n * dx)).margin(1e-4));
+        CHECK(t.x() == t.z());
+        // Reversed direction: the same.
+        const openvdb::Vec3d back = vxf::transmittance(sampler, medium, openvdb::Vec3d(n + 9, 0, 0), openvdb::Vec3d(-10, 0, 0), {});
+        CHECK(back.x() == Approx(t.x()).margin(1e-12));
+    }
+}
+
+TEST_CASE("transmittance stays finite and in [0,1] at extreme coefficients", "[light][transmittance][stability]")
+{
+    const vxf::VoxelSet set = slab(20, 0.05);
+    for (double sigmaT : {0.0, 1e-6, 1e6}) {
+        const vxf::Medium medium(set, material(sigmaT, 0.0));
+        vxf::Medium::Sampler sampler(medium);
+        const openvdb::Vec3d t = vxf::transmittance(sampler, medium, openvdb::Vec3d(-10, 0, 0), openvdb::Vec3d(30, 0, 0), {});
+        INFO("sigma_t " << sigmaT);
+        CHECK(std::isfinite(t.x()));
+        CHECK(t.x() >= 0.0);
+        CHECK(t.x() <= 1.0);
+        if (sigmaT == 0.0) CHECK(t.x() == 1.0);
+        if (sigmaT == 1e-6) CHECK(t.x() == Approx(std::exp(-1e-6)).epsilon(1e-9));
+        if (sigmaT == 1e6) CHECK(t.x() == 0.0);
+    }
+    // Outside the medium entirely, and a zero-length segment.
+    const vxf::Medium medium(set, material(1.0, 1.0));
+    vxf::Medium::Sampler sampler(medium);
+    CHECK(vxf::transmittance(sampler, medium, openvdb::Vec3d(-50, 0, 0), openvdb::Vec3d(-40, 5, 0), {}) == openvdb::Vec3d(1.0));
+    CHECK(vxf::transmittance(sampler, medium, openvdb::Vec3d(3, 0, 0), openvdb::Vec3d(3, 0, 0), {}) == openvdb::Vec3d(1.0));
+}
+
+TEST_CASE("negative artist coefficients never amplify light", "[light][transmittance][stability]")
+{
+    vxf::VoxelSet set = slab(20, 0.05);
+    auto sigmaA = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
+    sigmaA->setName("sigma_a");
+    sigmaA->setTransform(set.transformPtr());
+    sigmaA->tree().fill(openvdb::CoordBBox(openvdb::Coord(0, -20, -20), openvdb::Coord(19, 20, 20)), openvdb::Vec3f(-5.0f, 1.0f, 0.0f), true);
+    set.put(sigmaA);
+    const vxf::Medium medium(set, material(0.0, 0.0));
+    vxf::Medium::Sampler sampler(medium);
+    const openvdb::Vec3d t = vxf::transmittance(sampler, medium, openvdb::Vec3d(-10, 0, 0), openvdb::Vec3d(29, 0, 0), {});
+    CHECK(t.x() == 1.0); // sigma_t < 0 counts as 0
+    CHECK(t.y() == Approx(std::exp(-1.0)).margin(1e-4));
+    CHECK(t.z() == 1.0);
+}
+
+TEST_CASE("transmittance to the boundary through a concave gap counts only the medium", "[light][transmittance]")
+{
+    // Two slabs of 10 voxels with a 20-voxel gap between them: the gap adds nothing.
+    vxf::VoxelSet set(openvdb::math::Transform::createLinearTransform(0.1));
+    auto density = openvdb::FloatGrid::create(0.0f);
+    density->setName("density");
+    density->setTransform(set.transformPtr());
+    density->tree().fill(openvdb::CoordBBox(openvdb::Coord(0, -8, -8), openvdb::Coord(9, 8, 8)), 1.0f, true);
+    density->tree().fill(openvdb::CoordBBox(openvdb::Coord(30, -8, -8), openvdb::Coord(39, 8, 8)), 1.0f, true);
+    set.put(density);
+    const vxf::Medium medium(set, material(1.0, 0.0));
+    vxf::Medium::Sampler sampler(medium);
+    // From the centre of voxel 5 toward +x: centres 5..9 (4 voxels) + the half-voxel ramp out,
+    // then the second slab: ramp in + centres 30..39 + ramp out = 10 voxels. The gap adds 0.
+    const double expected = std::exp(-1.0 * 0.1 * (4.0 + 0.5 + 10.0));
+    const openvdb::Vec3d t = vxf::transmittanceToBoundary(sampler, medium, openvdb::Vec3d(5, 0, 0), openvdb::Vec3d(1, 0, 0), {});
+    CHECK(t.x() == Approx(expected).margin(1e-4));
+}
