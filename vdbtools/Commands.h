@@ -22,6 +22,7 @@ protected:
 std::unique_ptr<Command> makeVoxelizeCommand(CLI::App& parent);
 std::unique_ptr<Command> makeInfoCommand(CLI::App& parent);
 std::unique_ptr<Command> makeDemoCommand(CLI::App& parent);
+std::unique_ptr<Command> makeLightCommand(CLI::App& parent);
 
 } // namespace vxf::cli
 

@@ -291,3 +291,35 @@ TEST_CASE("vxf demo runs the main job on the embedded scene", "[cli][demo]")
     CHECK(set.find("density"));
     CHECK(set.find("density")->baseTree().activeTileCount() > 0);
 }
+
+TEST_CASE("vxf light lights a voxel set from a scene file", "[cli][light]")
+{
+    TempDir dir;
+    REQUIRE(run(fmt::format("{} voxelize builtin:sphere -o {} --dim 24 -q", binary("vxf"), dir.path("s.vdb"))).status == 0);
+    vxf::test::spit(dir.path("scene.json"), R"({
+  "objects": [{"mesh": "builtin:sphere", "material": {"albedo": 0.9, "mean_free_path": 0.2}}],
+  "lights": [{"name": "key", "type": "point", "position": [0, 0, 2], "intensity": 4},
+             {"name": "off", "type": "directional", "direction": [0, 0, -1], "intensity": 0}],
+  "camera": {"position": [0, -4, 0], "look_at": [0, 0, 0]}
+})");
+    const auto lit = run(fmt::format("{} light {} --scene {} -o {}", binary("vxf"), dir.path("s.vdb"), dir.path("scene.json"), dir.path("l.vdb")));
+    INFO(lit.err);
+    REQUIRE(lit.status == 0);
+    CHECK(lit.out.find("off              skipped: zero colour or intensity") != std::string::npos);
+    const auto set = vxf::readVoxelSet(dir.path("l.vdb"));
+    CHECK(set.stage() == "light");
+    auto direct = set.get<openvdb::Vec3SGrid>("direct");
+    CHECK(direct->activeVoxelCount() == set.find("density")->activeVoxelCount());
+    // Brighter near the light (top) than on the far side (bottom).
+    const auto top = set.transform().worldToIndexCellCentered(openvdb::Vec3d(0, 0, 0.95));
+    const auto bottom = set.transform().worldToIndexCellCentered(openvdb::Vec3d(0, 0, -0.95));
+    CHECK(direct->tree().getValue(top).x() > 100.0f * direct->tree().getValue(bottom).x());
+    CHECK(set.find("surface")); // the input grids are carried along
+
+    // A bad scene names the file and the field; nothing is written.
+    vxf::test::spit(dir.path("bad.json"), R"({"objects": [{"mesh": "builtin:sphere"}], "lights": [], "camera": {"position": [0, -4, 0]}})");
+    const auto bad = run(fmt::format("{} light {} --scene {} -o {}", binary("vxf"), dir.path("s.vdb"), dir.path("bad.json"), dir.path("x.vdb")));
+    CHECK(bad.status == 1);
+    CHECK(bad.err.find("bad.json: /camera: Missing required property 'look_at'") != std::string::npos);
+    CHECK_FALSE(fs::exists(dir.path("x.vdb")));
+}

@@ -1,0 +1,90 @@
+// `vxf light IN.vdb --scene S.json -o OUT.vdb [--step H]`
+#include "CliSupport.h"
+#include "Commands.h"
+
+#include <vxf/core/GridStats.h>
+#include <vxf/light/DirectLight.h>
+#include <vxf/pipeline/Scene.h>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <iostream>
+
+namespace vxf::cli {
+
+namespace {
+
+/// The material of the scene's one medium (several media arrive with multi-object voxelization).
+const Material& sceneMaterial(const Scene& scene)
+{
+    const SceneObject* medium = nullptr;
+    for (const auto& object : scene.objects) {
+        if (object.role != SceneObject::Role::Medium) continue;
+        if (medium) {
+            throw UsageError(fmt::format("{}: objects '{}' and '{}' are both media; one medium per voxel set for now",
+                scene.path, medium->name, object.name));
+        }
+        medium = &object;
+    }
+    if (!medium) throw UsageError(fmt::format("{}: no object is a medium", scene.path));
+    return *medium->material;
+}
+
+class LightCommand : public Command
+{
+public:
+    explicit LightCommand(CLI::App& parent)
+    {
+        mApp = parent.add_subcommand("light",
+            "Light a voxel set: `direct` (fluence from the scene's lights through the medium, Beer-Lambert) and "
+            "`scatter_source` (sigma_s direct / 4 pi + volume-light emission).");
+        mApp->add_option("input", mInput, "Voxel set with `density` (from vxf voxelize)")->required();
+        mApp->add_option("--scene", mScene, "Scene file (schemas/scene.schema.json): material and lights")->required();
+        mApp->add_option("-o,--output", mOutput, "Output .vdb (all input grids + direct + scatter_source)")->required();
+        mApp->add_option("--step", mOptions.march.step, "March step in voxels (default 0.5)")->check(CLI::Range(0.01, 64.0));
+        mApp->add_option("--cutoff", mOptions.march.cutoff, "Stop marching below this transmittance (default 1e-4)")
+            ->check(CLI::Range(0.0, 0.5));
+        mApp->add_flag("--half", mWrite.half, "Store floats as 16-bit halves");
+        mApp->add_flag("-q,--quiet", mQuiet, "No summary");
+    }
+
+    void run() override
+    {
+        TerminalProgress progress;
+        const auto start = std::chrono::steady_clock::now();
+        const Scene scene = loadScene(mScene);
+        VoxelSet set = readVoxelSet(mInput);
+        const Medium medium(set, sceneMaterial(scene));
+        const DirectLightReport report = computeDirectLight(set, medium, scene.lights, mOptions, &progress);
+        nlohmann::json params = {{"command", "light"}, {"input", mInput}, {"scene", mScene}, {"step", mOptions.march.step},
+            {"cutoff", mOptions.march.cutoff}};
+        set.setProvenance("light", params.dump());
+        writeVoxelSet(mOutput, set, mWrite);
+        if (mQuiet) return;
+        std::cout << fmt::format("lit {} -> {} ({} active voxels)\n", mInput, mOutput, gridStats(*set.find("direct")).activeVoxels);
+        for (const auto& light : report.lights) {
+            if (light.skipped) {
+                std::cout << fmt::format("  {:<16} skipped: {}\n", light.name, light.why);
+            } else if (!light.why.empty()) {
+                std::cout << fmt::format("  {:<16} {}\n", light.name, light.why);
+            } else {
+                std::cout << fmt::format("  {:<16} sum of fluence over voxels ({:.4g}, {:.4g}, {:.4g})\n", light.name,
+                    light.fluenceSum[0], light.fluenceSum[1], light.fluenceSum[2]);
+            }
+        }
+        std::cout << fmt::format("  seconds       {:.3f}\n", secondsSince(start));
+    }
+
+private:
+    std::string mInput, mScene, mOutput;
+    DirectLightOptions mOptions;
+    VoxelSetWriteOptions mWrite;
+    bool mQuiet = false;
+};
+
+} // namespace
+
+std::unique_ptr<Command> makeLightCommand(CLI::App& parent) { return std::make_unique<LightCommand>(parent); }
+
+} // namespace vxf::cli
