@@ -23,12 +23,14 @@ std::unique_ptr<Command> makeVoxelizeCommand(CLI::App& parent);
 std::unique_ptr<Command> makeInfoCommand(CLI::App& parent);
 std::unique_ptr<Command> makeDemoCommand(CLI::App& parent);
 std::unique_ptr<Command> makeLightCommand(CLI::App& parent);
+std::unique_ptr<Command> makeScatterCommand(CLI::App& parent);
 
 } // namespace vxf::cli
 
 #include <vxf/io/MeshFile.h>
 #include <vxf/io/VoxelSetFile.h>
 #include <vxf/voxelize/Voxelize.h>
+#include <vxf/pipeline/Scene.h>
 
 #include <string>
 
@@ -44,6 +46,10 @@ struct VoxelizeRequest
     VoxelSetWriteOptions write;
     bool quiet = false; ///< no summary
 };
+
+/// The material of the scene's one medium (several media arrive with multi-object
+/// voxelization); throws vxf::UsageError when there is none or more than one.
+const Material& sceneMaterial(const Scene& scene);
 
 /// Read (or build) the mesh, voxelize, write the voxel set with provenance, print warnings
 /// and the summary.

@@ -13,9 +13,6 @@
 
 namespace vxf::cli {
 
-namespace {
-
-/// The material of the scene's one medium (several media arrive with multi-object voxelization).
 const Material& sceneMaterial(const Scene& scene)
 {
     const SceneObject* medium = nullptr;
@@ -30,6 +27,8 @@ const Material& sceneMaterial(const Scene& scene)
     if (!medium) throw UsageError(fmt::format("{}: no object is a medium", scene.path));
     return *medium->material;
 }
+
+namespace {
 
 class LightCommand : public Command
 {
@@ -55,11 +54,13 @@ public:
         const auto start = std::chrono::steady_clock::now();
         const Scene scene = loadScene(mScene);
         VoxelSet set = readVoxelSet(mInput);
-        const Medium medium(set, sceneMaterial(scene));
+        const Material& material = sceneMaterial(scene);
+        const Medium medium(set, material);
         const DirectLightReport report = computeDirectLight(set, medium, scene.lights, mOptions, &progress);
         nlohmann::json params = {{"command", "light"}, {"input", mInput}, {"scene", mScene}, {"step", mOptions.march.step},
             {"cutoff", mOptions.march.cutoff}};
         set.setProvenance("light", params.dump());
+        recordMaterial(set, material);
         writeVoxelSet(mOutput, set, mWrite);
         if (mQuiet) return;
         std::cout << fmt::format("lit {} -> {} ({} active voxels)\n", mInput, mOutput, gridStats(*set.find("direct")).activeVoxels);

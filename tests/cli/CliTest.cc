@@ -315,6 +315,24 @@ TEST_CASE("vxf light lights a voxel set from a scene file", "[cli][light]")
     const auto bottom = set.transform().worldToIndexCellCentered(openvdb::Vec3d(0, 0, -0.95));
     CHECK(direct->tree().getValue(top).x() > 100.0f * direct->tree().getValue(bottom).x());
     CHECK(set.find("surface")); // the input grids are carried along
+    CHECK(set.metadata().metaValue<std::string>("vxf:material").find("sigma_s") != std::string::npos);
+
+    // Scatter from the file alone (the material travels in its metadata).
+    const auto scattered = run(fmt::format("{} scatter {} -o {} --passes 3 --directions 16 --keep-passes --tolerance 0",
+        binary("vxf"), dir.path("l.vdb"), dir.path("s2.vdb")));
+    INFO(scattered.err);
+    REQUIRE(scattered.status == 0);
+    CHECK(scattered.out.find("3 passes (reached 3 passes)") != std::string::npos);
+    const auto lit2 = vxf::readVoxelSet(dir.path("s2.vdb"));
+    CHECK(lit2.stage() == "scatter");
+    for (const char* name : {"scatter_pass_1", "scatter_pass_2", "scatter_pass_3", "scatter", "illumination"}) {
+        INFO(name);
+        CHECK(lit2.find(name));
+    }
+    const auto notLit = run(fmt::format("{} scatter {} -o {}", binary("vxf"), dir.path("s.vdb"), dir.path("y.vdb")));
+    CHECK(notLit.status == 1);
+    CHECK(notLit.err.find("records no material") != std::string::npos);
+    CHECK_FALSE(fs::exists(dir.path("y.vdb")));
 
     // A bad scene names the file and the field; nothing is written.
     vxf::test::spit(dir.path("bad.json"), R"({"objects": [{"mesh": "builtin:sphere"}], "lights": [], "camera": {"position": [0, -4, 0]}})");

@@ -1,6 +1,7 @@
 #include <vxf/light/Medium.h>
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 namespace vxf {
 
@@ -44,6 +45,30 @@ openvdb::Vec3d Medium::Sampler::sigmaT(const openvdb::Vec3d& ijk)
     const openvdb::Vec3d a = mSigmaA ? openvdb::Vec3d(openvdb::tools::BoxSampler::sample(*mSigmaA, ijk)) : mMedium.mMaterial.sigmaA * d;
     const openvdb::Vec3d s = mSigmaS ? openvdb::Vec3d(openvdb::tools::BoxSampler::sample(*mSigmaS, ijk)) : mMedium.mMaterial.sigmaS * d;
     return a + s;
+}
+
+void recordMaterial(VoxelSet& set, const Material& material)
+{
+    const auto rgb = [](const openvdb::Vec3d& v) { return nlohmann::json::array({v[0], v[1], v[2]}); };
+    const nlohmann::json j = {{"sigma_a", rgb(material.sigmaA)}, {"sigma_s", rgb(material.sigmaS)}};
+    set.metadata().insertMeta(kMaterialMetaKey, openvdb::StringMetadata(j.dump()));
+}
+
+Material recordedMaterial(const VoxelSet& set)
+{
+    auto meta = set.metadata().getMetadata<openvdb::StringMetadata>(kMaterialMetaKey);
+    if (!meta) throw Error(fmt::format("the voxel set records no material ('{}' metadata); run vxf light first or give --scene", kMaterialMetaKey));
+    const auto j = nlohmann::json::parse(meta->value(), nullptr, false);
+    Material m;
+    try {
+        for (int c = 0; c < 3; ++c) {
+            m.sigmaA[c] = j.at("sigma_a").at(std::size_t(c)).get<double>();
+            m.sigmaS[c] = j.at("sigma_s").at(std::size_t(c)).get<double>();
+        }
+    } catch (const nlohmann::json::exception&) {
+        throw Error(fmt::format("malformed '{}' metadata: {}", kMaterialMetaKey, meta->value()));
+    }
+    return m;
 }
 
 } // namespace vxf

@@ -48,4 +48,14 @@ private:
     openvdb::CoordBBox mBounds;
 };
 
+/// File metadata key recording the material a set was lit with (JSON {"sigma_a": [r,g,b],
+/// "sigma_s": [r,g,b]}), so later stages read it from the file itself.
+inline constexpr const char* kMaterialMetaKey = "vxf:material";
+
+/// Record @a material in @a set's file metadata.
+void recordMaterial(VoxelSet& set, const Material& material);
+
+/// The material recorded in @a set (throws vxf::Error naming the key when absent).
+Material recordedMaterial(const VoxelSet& set);
+
 } // namespace vxf

@@ -1,0 +1,48 @@
+// vxf — the scatter stage: source iteration over passes, with early stopping.
+#pragma once
+
+#include <vxf/scatter/ScatterPass.h>
+
+#include <vxf/core/VoxelSet.h>
+
+#include <string>
+#include <vector>
+
+namespace vxf {
+
+struct ScatterOptions
+{
+    int passes = 16;          ///< at most this many passes
+    double tolerance = 1e-3;  ///< stop when a pass adds less than this fraction of the sum so far (0: never)
+    bool keepPasses = false;  ///< keep each pass as `scatter_pass_K`
+    int fromPass = 0;         ///< continue from `scatter_pass_K` (0: from `scatter_source`)
+    ScatterPassOptions pass;
+};
+
+struct ScatterReport
+{
+    struct Pass
+    {
+        int index = 0;                ///< K of φ_K
+        openvdb::Vec3d energy{0.0};   ///< Σ over voxels of φ_K (tiles weighted by their voxels)
+        double ratio = 0.0;           ///< energy (max channel) relative to the previous pass
+        double seconds = 0.0;
+    };
+    std::vector<Pass> passes;
+    std::string stopReason;
+};
+
+/// Σ over active values of a Vec3f grid, active tiles weighted by their voxel count.
+openvdb::Vec3d gridEnergy(const openvdb::Vec3SGrid& grid);
+
+/// Run scattering passes on @a set: J_k = σs·φ_k/(4π) feeds pass k+1 (J_0 is `scatter_source`,
+/// read from the set, so an artist may have edited it). Writes `scatter` = Σ_{k≥1} φ_k and,
+/// when the set has `direct`, `illumination` = direct + scatter; with keepPasses also
+/// `scatter_pass_K`. With fromPass = K the iteration restarts from `scatter_pass_K` (as edited)
+/// and the sum from `scatter_pass_1..K`. Stops after options.passes, or when a pass adds
+/// less than the tolerance, or at once when the medium does not scatter (σs = 0: `scatter`
+/// is 0). Topology: that of `scatter_source`. Throws vxf::Error naming a missing grid.
+ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions& options = {},
+    Interrupter* interrupter = nullptr);
+
+} // namespace vxf

@@ -1,0 +1,27 @@
+// vxf — one scattering pass (source iteration): fluence gathered from a source grid.
+#pragma once
+
+#include <vxf/core/Interrupter.h>
+#include <vxf/light/Medium.h>
+
+namespace vxf {
+
+struct ScatterPassOptions
+{
+    int directions = 64;        ///< spherical Fibonacci directions per voxel (weights 4π/N)
+    double step = 1.0;          ///< march step in voxels
+    double cutoff = 1e-4;       ///< a march stops when the transmittance of every channel is below this
+    bool rotatePerVoxel = true; ///< rotate the direction set per voxel (deterministic hash): noise, not banding
+};
+
+/// The gather kernel: φ(x) = Σ_i (4π/N) ∫_0^{d_i} T(x, x+tω_i) J(x+tω_i) dt, rays stopping at
+/// the medium's bounds (index-matched boundary). Each march step integrates analytically with
+/// σt and J constant over it: ΔL = T·J·(1 − e^{−σt h})/σt (→ T·J·h as σt → 0), T ·= e^{−σt h};
+/// exact for any σt ≥ 0, never divides by zero, never NaN. Output: a Vec3f grid named
+/// "fluence" on @a source's topology (active tiles evaluated at their centre). Parallel over
+/// leaves and tiles; every voxel is computed alone, so results do not depend on the thread count.
+/// Cost: active voxels × directions × steps per ray (about −ln(cutoff)/(σt·dx·step) in thick media).
+openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGrid& source,
+    const ScatterPassOptions& options = {}, Interrupter* interrupter = nullptr);
+
+} // namespace vxf

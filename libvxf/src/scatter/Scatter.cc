@@ -1,0 +1,119 @@
+#include <vxf/scatter/Scatter.h>
+
+#include <openvdb/tools/Composite.h>
+#include <openvdb/tree/LeafManager.h>
+
+#include <fmt/format.h>
+
+#include <chrono>
+
+namespace vxf {
+
+openvdb::Vec3d gridEnergy(const openvdb::Vec3SGrid& grid)
+{
+    openvdb::Vec3d sum(0.0);
+    for (auto it = grid.cbeginValueOn(); it; ++it) {
+        sum += openvdb::Vec3d(*it) * double(it.getVoxelCount());
+    }
+    return sum;
+}
+
+namespace {
+
+double maxChannel(const openvdb::Vec3d& v) { return std::max({v[0], v[1], v[2]}); }
+
+/// J = σs·φ/(4π) on φ's topology.
+openvdb::Vec3SGrid::Ptr sourceFromFluence(const Medium& medium, const openvdb::Vec3SGrid& phi)
+{
+    auto j = phi.deepCopy();
+    j->setName("scatter_source");
+    openvdb::tree::LeafManager<openvdb::Vec3STree> leaves(j->tree());
+    leaves.foreach([&](openvdb::Vec3STree::LeafNodeType& leaf, std::size_t) {
+        Medium::Sampler sampler(medium);
+        for (auto it = leaf.beginValueOn(); it; ++it) {
+            it.setValue(openvdb::Vec3f(sampler.sigmaS(it.getCoord().asVec3d()) * openvdb::Vec3d(*it) / (4.0 * M_PI)));
+        }
+    });
+    Medium::Sampler sampler(medium);
+    for (auto it = j->tree().beginValueOn(); it; ++it) {
+        if (!it.isTileValue()) continue;
+        openvdb::CoordBBox box;
+        it.getBoundingBox(box);
+        const openvdb::Coord centre = box.min() + openvdb::Coord(box.dim().x() / 2);
+        it.setValue(openvdb::Vec3f(sampler.sigmaS(centre.asVec3d()) * openvdb::Vec3d(*it) / (4.0 * M_PI)));
+    }
+    return j;
+}
+
+openvdb::Vec3SGrid::Ptr named(openvdb::Vec3SGrid::Ptr grid, const std::string& name)
+{
+    grid->setName(name);
+    return grid;
+}
+
+} // namespace
+
+ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions& options, Interrupter* interrupter)
+{
+    ScatterReport report;
+    openvdb::Vec3SGrid::Ptr sum, j;
+    int k = options.fromPass;
+    if (k == 0) {
+        j = set.get<openvdb::Vec3SGrid>("scatter_source");
+        sum = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
+        sum->setTransform(j->transformPtr());
+        sum->tree().topologyUnion(j->tree());
+    } else {
+        sum = set.get<openvdb::Vec3SGrid>("scatter_pass_1")->deepCopy();
+        for (int p = 2; p <= k; ++p) {
+            auto pass = set.get<openvdb::Vec3SGrid>(fmt::format("scatter_pass_{}", p))->deepCopy();
+            openvdb::tools::compSum(*sum, *pass);
+        }
+        j = sourceFromFluence(medium, *set.get<openvdb::Vec3SGrid>(fmt::format("scatter_pass_{}", k)));
+    }
+
+    const bool scatters = maxChannel(medium.material().sigmaS) > 0.0 || set.find("sigma_s");
+    double previous = 0.0;
+    if (!scatters) {
+        report.stopReason = "the medium does not scatter (sigma_s = 0)";
+    } else {
+        for (int pass = 0; pass < options.passes; ++pass) {
+            const auto start = std::chrono::steady_clock::now();
+            auto phi = scatterPass(medium, *j, options.pass, interrupter);
+            ++k;
+            ScatterReport::Pass info;
+            info.index = k;
+            info.energy = gridEnergy(*phi);
+            info.ratio = previous > 0.0 ? maxChannel(info.energy) / previous : 0.0;
+            previous = maxChannel(info.energy);
+            if (options.keepPasses) set.put(named(phi->deepCopy(), fmt::format("scatter_pass_{}", k)));
+            j = sourceFromFluence(medium, *phi);
+            openvdb::tools::compSum(*sum, *phi);
+            info.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            report.passes.push_back(info);
+            const double total = maxChannel(gridEnergy(*sum));
+            if (total <= 0.0) {
+                report.stopReason = "the source is zero";
+                break;
+            }
+            if (options.tolerance > 0.0 && previous < options.tolerance * total) {
+                report.stopReason = fmt::format("pass {} added {:.2g} of the total, below the tolerance {:.2g}", k,
+                    previous / total, options.tolerance);
+                break;
+            }
+        }
+        if (report.stopReason.empty()) report.stopReason = fmt::format("reached {} passes", options.passes);
+    }
+
+    sum->setName("scatter");
+    set.put(sum);
+    if (auto direct = set.find("direct")) {
+        auto illumination = openvdb::gridPtrCast<openvdb::Vec3SGrid>(direct)->deepCopy();
+        auto addend = sum->deepCopy();
+        openvdb::tools::compSum(*illumination, *addend);
+        set.put(named(illumination, "illumination"));
+    }
+    return report;
+}
+
+} // namespace vxf

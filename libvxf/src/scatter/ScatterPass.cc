@@ -1,0 +1,152 @@
+#include <vxf/scatter/ScatterPass.h>
+
+#include <vxf/core/SphericalFibonacci.h>
+
+#include <openvdb/math/Mat3.h>
+#include <openvdb/tree/LeafManager.h>
+
+#include <tbb/parallel_for.h>
+
+#include <atomic>
+#include <cmath>
+#include <limits>
+
+namespace vxf {
+
+namespace {
+
+std::uint64_t mix(std::uint64_t h)
+{
+    h ^= h >> 31;
+    h *= 0xBF58476D1CE4E5B9ull;
+    h ^= h >> 29;
+    h *= 0x94D049BB133111EBull;
+    h ^= h >> 32;
+    return h;
+}
+
+/// A uniformly random rotation (Shoemake's quaternion method) seeded by the voxel.
+openvdb::Mat3d voxelRotation(const openvdb::Coord& c)
+{
+    std::uint64_t h = mix(std::uint64_t(std::uint32_t(c[0])) * 73856093ull ^ std::uint64_t(std::uint32_t(c[1])) * 19349663ull ^
+                          std::uint64_t(std::uint32_t(c[2])) * 83492791ull ^ 0x5CA77E2ull);
+    double u[3];
+    for (double& v : u) {
+        h = mix(h + 0x9E3779B97F4A7C15ull);
+        v = double(h >> 11) * (1.0 / 9007199254740992.0);
+    }
+    const double a = std::sqrt(1.0 - u[0]), b = std::sqrt(u[0]);
+    const double w = a * std::sin(2 * M_PI * u[1]), x = a * std::cos(2 * M_PI * u[1]);
+    const double y = b * std::sin(2 * M_PI * u[2]), z = b * std::cos(2 * M_PI * u[2]);
+    return openvdb::Mat3d(1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w),
+        2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w),
+        2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y));
+}
+
+/// Entry and exit distances of a ray in a box (slab method); false when it misses.
+bool clip(const openvdb::BBoxd& box, const openvdb::Vec3d& o, const openvdb::Vec3d& d, double& t1)
+{
+    double t0 = 0.0;
+    t1 = std::numeric_limits<double>::max();
+    for (int a = 0; a < 3; ++a) {
+        if (d[a] == 0.0) {
+            if (o[a] < box.min()[a] || o[a] > box.max()[a]) return false;
+            continue;
+        }
+        double n = (box.min()[a] - o[a]) / d[a], f = (box.max()[a] - o[a]) / d[a];
+        if (n > f) std::swap(n, f);
+        t0 = std::max(t0, n);
+        t1 = std::min(t1, f);
+    }
+    return t0 < t1;
+}
+
+} // namespace
+
+openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGrid& source,
+    const ScatterPassOptions& options, Interrupter* interrupter)
+{
+    InterruptStep step(interrupter, "scattering");
+    auto fluence = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
+    fluence->setName("fluence");
+    fluence->setTransform(source.transformPtr()->copy());
+    fluence->tree().topologyUnion(source.tree());
+    if (options.directions < 1) return fluence;
+
+    const std::vector<openvdb::Vec3d> directions = sphericalFibonacci(options.directions);
+    const double weight = 4.0 * M_PI / double(directions.size());
+    const double dx = medium.voxelSize();
+    const double h = std::max(options.step, 1e-3);
+    const double tauCutoff = -std::log(std::max(options.cutoff, std::numeric_limits<double>::min()));
+    const openvdb::CoordBBox& active = medium.activeBounds();
+    const openvdb::BBoxd bounds(active.min().asVec3d() - openvdb::Vec3d(1.0), active.max().asVec3d() + openvdb::Vec3d(1.0));
+
+    // φ(x) at one index-space point.
+    const auto gather = [&](Medium::Sampler& sampler, openvdb::Vec3SGrid::ConstAccessor& j, const openvdb::Coord& c) {
+        const openvdb::Vec3d x = c.asVec3d();
+        const openvdb::Mat3d rotation = options.rotatePerVoxel ? voxelRotation(c) : openvdb::Mat3d::identity();
+        openvdb::Vec3d phi(0.0);
+        for (const openvdb::Vec3d& d0 : directions) {
+            const openvdb::Vec3d d = rotation * d0;
+            double tExit;
+            if (active.empty() || !clip(bounds, x, d, tExit)) continue;
+            openvdb::Vec3d radiance(0.0), T(1.0), tau(0.0);
+            const int steps = std::max(1, int(std::ceil(tExit / h)));
+            const double hi = tExit / steps, hWorld = hi * dx;
+            for (int i = 0; i < steps; ++i) {
+                const openvdb::Vec3d p = x + d * ((i + 0.5) * hi);
+                const openvdb::Vec3d sigmaT = sampler.sigmaT(p);
+                const openvdb::Vec3d J(openvdb::tools::BoxSampler::sample(j, p));
+                // ΔL = T·J·(1 − e^{−σt h})/σt; T ·= e^{−σt h}.
+                for (int ch = 0; ch < 3; ++ch) {
+                    const double s = std::max(0.0, sigmaT[ch]);
+                    const double od = s * hWorld;
+                    const double segment = od > 1e-8 ? -std::expm1(-od) / s : hWorld * (1.0 - 0.5 * od);
+                    radiance[ch] += T[ch] * J[ch] * segment;
+                    T[ch] *= std::exp(-od);
+                    tau[ch] += od;
+                }
+                if (std::min({tau[0], tau[1], tau[2]}) > tauCutoff) break;
+            }
+            phi += radiance;
+        }
+        phi *= weight;
+        for (int ch = 0; ch < 3; ++ch) {
+            if (!std::isfinite(phi[ch])) phi[ch] = 0.0; // never let NaN/Inf into a grid
+        }
+        return openvdb::Vec3f(phi);
+    };
+
+    openvdb::tree::LeafManager<openvdb::Vec3STree> leaves(fluence->tree());
+    std::vector<openvdb::CoordBBox> tiles;
+    for (auto it = fluence->tree().cbeginValueOn(); it; ++it) {
+        if (it.isTileValue()) {
+            openvdb::CoordBBox box;
+            it.getBoundingBox(box);
+            tiles.push_back(box);
+        }
+    }
+    const std::size_t leafCount = leaves.leafCount(), total = leafCount + tiles.size();
+    std::vector<openvdb::Vec3f> tileValues(tiles.size());
+    std::atomic<std::size_t> done{0};
+    std::atomic<bool> cancelled{false};
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, total, 1), [&](const tbb::blocked_range<std::size_t>& range) {
+        Medium::Sampler sampler(medium);
+        auto j = source.getConstAccessor();
+        for (std::size_t item = range.begin(); item != range.end() && !cancelled; ++item) {
+            if (item < leafCount) {
+                for (auto it = leaves.leaf(item).beginValueOn(); it; ++it) it.setValue(gather(sampler, j, it.getCoord()));
+            } else {
+                const openvdb::CoordBBox& box = tiles[item - leafCount];
+                tileValues[item - leafCount] = gather(sampler, j, box.min() + openvdb::Coord(box.dim().x() / 2));
+            }
+            const std::size_t finished = ++done;
+            if (interrupter && interrupter->wasInterrupted(int(100 * finished / std::max<std::size_t>(total, 1)))) cancelled = true;
+        }
+    });
+    if (cancelled) throw Interrupted();
+    for (std::size_t t = 0; t < tiles.size(); ++t) fluence->tree().fill(tiles[t], tileValues[t], true);
+    return fluence;
+}
+
+} // namespace vxf

@@ -1,0 +1,138 @@
+#include <vxf/scatter/Scatter.h>
+
+#include "TestSupport.h"
+
+#include <catch2/catch.hpp>
+#include <tbb/global_control.h>
+
+namespace {
+
+/// A homogeneous sphere of radius 1 (voxel size 1/16), direct = phi0 everywhere and
+/// scatter_source = sigma_s phi0 / 4 pi, as the light stage would write for uniform light.
+vxf::VoxelSet uniformSphere(const vxf::Material& m, double phi0)
+{
+    const double dx = 1.0 / 16.0;
+    vxf::VoxelSet set(openvdb::math::Transform::createLinearTransform(dx));
+    auto density = openvdb::FloatGrid::create(0.0f);
+    density->setName("density");
+    density->setTransform(set.transformPtr());
+    auto direct = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
+    direct->setName("direct");
+    direct->setTransform(set.transformPtr());
+    auto source = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
+    source->setName("scatter_source");
+    source->setTransform(set.transformPtr());
+    for (int i = -16; i <= 16; ++i)
+        for (int j = -16; j <= 16; ++j)
+            for (int k = -16; k <= 16; ++k) {
+                const openvdb::Coord c(i, j, k);
+                if (c.asVec3d().length() * dx > 1.0) continue;
+                density->tree().setValueOn(c, 1.0f);
+                direct->tree().setValueOn(c, openvdb::Vec3f(float(phi0)));
+                source->tree().setValueOn(c, openvdb::Vec3f(m.sigmaS * phi0 / (4.0 * M_PI)));
+            }
+    set.put(density);
+    set.put(direct);
+    set.put(source);
+    return set;
+}
+
+vxf::Material withAlbedo(double sigmaT, double albedo)
+{
+    vxf::Material m;
+    m.sigmaS = openvdb::Vec3d(albedo * sigmaT);
+    m.sigmaA = openvdb::Vec3d(sigmaT - albedo * sigmaT);
+    return m;
+}
+
+} // namespace
+
+TEST_CASE("in a large homogeneous medium each pass scales by the albedo", "[scatter]")
+{
+    const vxf::Material m = withAlbedo(20.0, 0.9); // sigma_t R = 20: the centre does not see the boundary
+    vxf::VoxelSet set = uniformSphere(m, 1.0);
+    const vxf::Medium medium(set, m);
+    vxf::ScatterOptions options;
+    options.passes = 4;
+    options.tolerance = 0.0;
+    options.keepPasses = true;
+    const auto report = vxf::scatter(set, medium, options);
+    REQUIRE(report.passes.size() == 4);
+    const openvdb::Coord centre(0);
+    double expected = 0.0, power = 1.0;
+    for (int k = 1; k <= 4; ++k) {
+        power *= 0.9;
+        expected += power;
+        const float pass = set.get<openvdb::Vec3SGrid>("scatter_pass_" + std::to_string(k))->tree().getValue(centre).x();
+        INFO("pass " << k);
+        CHECK(pass == Approx(power).epsilon(0.02));
+    }
+    CHECK(set.get<openvdb::Vec3SGrid>("scatter")->tree().getValue(centre).x() == Approx(expected).epsilon(0.02));
+    CHECK(set.get<openvdb::Vec3SGrid>("illumination")->tree().getValue(centre).x() == Approx(1.0 + expected).epsilon(0.02));
+    // No pass adds energy.
+    for (std::size_t p = 1; p < report.passes.size(); ++p) CHECK(report.passes[p].ratio <= 0.9 + 1e-6);
+}
+
+TEST_CASE("albedo near 1 stays finite and bounded; tolerance stops the passes", "[scatter][stability]")
+{
+    const vxf::Material m = withAlbedo(8.0, 0.9999);
+    vxf::VoxelSet set = uniformSphere(m, 1.0);
+    const vxf::Medium medium(set, m);
+    vxf::ScatterOptions options;
+    options.passes = 6;
+    options.tolerance = 0.2;
+    options.pass.directions = 24;
+    const auto report = vxf::scatter(set, medium, options);
+    CHECK(report.passes.size() < 6);
+    CHECK(report.stopReason.find("below the tolerance") != std::string::npos);
+    for (std::size_t p = 1; p < report.passes.size(); ++p) CHECK(report.passes[p].ratio <= 1.0);
+    bool bounded = true;
+    for (auto it = set.get<openvdb::Vec3SGrid>("scatter")->cbeginValueOn(); it; ++it) {
+        bounded = bounded && std::isfinite((*it)[0]) && (*it)[0] >= 0.0f && (*it)[0] <= 6.0f;
+    }
+    CHECK(bounded);
+}
+
+TEST_CASE("no scattering when sigma_s is zero", "[scatter]")
+{
+    const vxf::Material m = withAlbedo(5.0, 0.0);
+    vxf::VoxelSet set = uniformSphere(m, 1.0);
+    const auto report = vxf::scatter(set, vxf::Medium(set, m));
+    CHECK(report.passes.empty());
+    CHECK(report.stopReason == "the medium does not scatter (sigma_s = 0)");
+    CHECK(vxf::gridEnergy(*set.get<openvdb::Vec3SGrid>("scatter")) == openvdb::Vec3d(0.0));
+}
+
+TEST_CASE("continuing from a kept pass equals running straight through, for any thread count", "[scatter]")
+{
+    const vxf::Material m = withAlbedo(6.0, 0.8);
+    vxf::ScatterOptions three;
+    three.passes = 3;
+    three.tolerance = 0.0;
+    three.keepPasses = true;
+    three.pass.directions = 16;
+    vxf::VoxelSet straight = uniformSphere(m, 1.0);
+    vxf::scatter(straight, vxf::Medium(straight, m), three);
+
+    vxf::VoxelSet resumed = uniformSphere(m, 1.0);
+    {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+        vxf::ScatterOptions two = three;
+        two.passes = 2;
+        vxf::scatter(resumed, vxf::Medium(resumed, m), two);
+        vxf::ScatterOptions one = three;
+        one.passes = 1;
+        one.fromPass = 2;
+        vxf::scatter(resumed, vxf::Medium(resumed, m), one);
+    }
+    std::string why;
+    CHECK(vxf::test::identicalGrids(*straight.find("scatter_pass_3"), *resumed.find("scatter_pass_3"), &why));
+    INFO(why);
+    const auto a = straight.get<openvdb::Vec3SGrid>("scatter")->tree().getValue(openvdb::Coord(3, 1, 2));
+    const auto b = resumed.get<openvdb::Vec3SGrid>("scatter")->tree().getValue(openvdb::Coord(3, 1, 2));
+    CHECK(a.x() == Approx(b.x()).epsilon(1e-6));
+
+    vxf::ScatterOptions missing;
+    missing.fromPass = 5;
+    CHECK_THROWS_WITH(vxf::scatter(resumed, vxf::Medium(resumed, m), missing), "no grid named 'scatter_pass_4' in the voxel set");
+}

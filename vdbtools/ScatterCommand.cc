@@ -1,0 +1,80 @@
+// `vxf scatter IN.vdb -o OUT.vdb [--passes N] [--directions D] [--step H] [--tolerance E] [--keep-passes] [--from-pass K]`
+#include "CliSupport.h"
+#include "Commands.h"
+
+#include <vxf/light/Medium.h>
+#include <vxf/scatter/Scatter.h>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <iostream>
+
+namespace vxf::cli {
+
+namespace {
+
+class ScatterCommand : public Command
+{
+public:
+    explicit ScatterCommand(CLI::App& parent)
+    {
+        mApp = parent.add_subcommand("scatter",
+            "Scatter the light through the medium in passes (source iteration): `scatter` (sum of the passes), "
+            "`illumination` (direct + scatter), `scatter_pass_K` on request. Reads `scatter_source` (or a kept pass) from "
+            "the file, so edited grids are honoured.");
+        mApp->add_option("input", mInput, "Voxel set from vxf light (density, direct, scatter_source)")->required();
+        mApp->add_option("-o,--output", mOutput, "Output .vdb")->required();
+        mApp->add_option("--passes", mOptions.passes, "At most this many passes (default 16)")->check(CLI::Range(0, 10000));
+        mApp->add_option("--directions", mOptions.pass.directions, "Directions per voxel (default 64)")->check(CLI::Range(1, 65536));
+        mApp->add_option("--step", mOptions.pass.step, "March step in voxels (default 1)")->check(CLI::Range(0.01, 64.0));
+        mApp->add_option("--tolerance", mOptions.tolerance,
+               "Stop when a pass adds less than this fraction of the sum so far (default 1e-3; 0: never)")
+            ->check(CLI::Range(0.0, 1.0));
+        mApp->add_flag("--keep-passes", mOptions.keepPasses, "Keep each pass as scatter_pass_K");
+        mApp->add_option("--from-pass", mOptions.fromPass, "Continue from scatter_pass_K (as edited) instead of scatter_source")
+            ->check(CLI::Range(1, 10000));
+        mApp->add_option("--scene", mScene, "Take the material from this scene instead of the file's vxf:material");
+        mApp->add_flag("--fixed-directions", [this](std::int64_t) { mOptions.pass.rotatePerVoxel = false; },
+            "Use the same direction set at every voxel (banding instead of noise)");
+        mApp->add_flag("--half", mWrite.half, "Store floats as 16-bit halves");
+        mApp->add_flag("-q,--quiet", mQuiet, "No report");
+    }
+
+    void run() override
+    {
+        TerminalProgress progress;
+        const auto start = std::chrono::steady_clock::now();
+        VoxelSet set = readVoxelSet(mInput);
+        const Material material = mScene.empty() ? recordedMaterial(set) : sceneMaterial(loadScene(mScene));
+        const Medium medium(set, material);
+        const ScatterReport report = scatter(set, medium, mOptions, &progress);
+        nlohmann::json params = {{"command", "scatter"}, {"input", mInput}, {"passes", mOptions.passes},
+            {"directions", mOptions.pass.directions}, {"step", mOptions.pass.step}, {"tolerance", mOptions.tolerance},
+            {"keep_passes", mOptions.keepPasses}, {"from_pass", mOptions.fromPass},
+            {"rotate_per_voxel", mOptions.pass.rotatePerVoxel}, {"passes_run", report.passes.size()}};
+        set.setProvenance("scatter", params.dump());
+        recordMaterial(set, material);
+        writeVoxelSet(mOutput, set, mWrite);
+        if (mQuiet) return;
+        std::cout << fmt::format("scattered {} -> {}: {} passes ({})\n", mInput, mOutput, report.passes.size(), report.stopReason);
+        std::cout << "  pass   energy (sum of fluence over voxels, r g b)        ratio   seconds\n";
+        for (const auto& p : report.passes) {
+            std::cout << fmt::format("  {:>4}   {:>12.5g} {:>12.5g} {:>12.5g}   {:>7.4f}   {:>7.3f}\n", p.index, p.energy[0],
+                p.energy[1], p.energy[2], p.ratio, p.seconds);
+        }
+        std::cout << fmt::format("  seconds total {:.3f}\n", secondsSince(start));
+    }
+
+private:
+    std::string mInput, mOutput, mScene;
+    ScatterOptions mOptions;
+    VoxelSetWriteOptions mWrite;
+    bool mQuiet = false;
+};
+
+} // namespace
+
+std::unique_ptr<Command> makeScatterCommand(CLI::App& parent) { return std::make_unique<ScatterCommand>(parent); }
+
+} // namespace vxf::cli
