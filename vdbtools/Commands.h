@@ -24,6 +24,7 @@ std::unique_ptr<Command> makeInfoCommand(CLI::App& parent);
 std::unique_ptr<Command> makeDemoCommand(CLI::App& parent);
 std::unique_ptr<Command> makeLightCommand(CLI::App& parent);
 std::unique_ptr<Command> makeScatterCommand(CLI::App& parent);
+std::unique_ptr<Command> makeRenderCommand(CLI::App& parent);
 
 } // namespace vxf::cli
 
@@ -31,6 +32,7 @@ std::unique_ptr<Command> makeScatterCommand(CLI::App& parent);
 #include <vxf/io/VoxelSetFile.h>
 #include <vxf/voxelize/Voxelize.h>
 #include <vxf/pipeline/Scene.h>
+#include <vxf/render/Render.h>
 
 #include <string>
 
@@ -50,6 +52,12 @@ struct VoxelizeRequest
 /// The material of the scene's one medium (several media arrive with multi-object
 /// voxelization); throws vxf::UsageError when there is none or more than one.
 const Material& sceneMaterial(const Scene& scene);
+
+/// Render options from a scene's settings.
+RenderOptions renderOptionsFrom(const SceneSettings& settings);
+
+/// The embedded default scene (examples/candle.json, compiled in).
+const std::string& demoSceneText();
 
 /// Read (or build) the mesh, voxelize, write the voxel set with provenance, print warnings
 /// and the summary.

@@ -31,6 +31,8 @@ public:
         mApp->add_option("--tolerance", mOptions.tolerance,
                "Stop when a pass adds less than this fraction of the sum so far (default 1e-3; 0: never)")
             ->check(CLI::Range(0.0, 1.0));
+        mApp->add_flag("--extrapolate", mOptions.extrapolateTail,
+            "After the last pass add the geometric tail phi_K r/(1-r), r = phi_K/phi_(K-1) per voxel");
         mApp->add_flag("--keep-passes", mOptions.keepPasses, "Keep each pass as scatter_pass_K");
         mApp->add_option("--from-pass", mOptions.fromPass, "Continue from scatter_pass_K (as edited) instead of scatter_source")
             ->check(CLI::Range(1, 10000));
@@ -51,7 +53,7 @@ public:
         const ScatterReport report = scatter(set, medium, mOptions, &progress);
         nlohmann::json params = {{"command", "scatter"}, {"input", mInput}, {"passes", mOptions.passes},
             {"directions", mOptions.pass.directions}, {"step", mOptions.pass.step}, {"tolerance", mOptions.tolerance},
-            {"keep_passes", mOptions.keepPasses}, {"from_pass", mOptions.fromPass},
+            {"keep_passes", mOptions.keepPasses}, {"extrapolate", mOptions.extrapolateTail}, {"from_pass", mOptions.fromPass},
             {"rotate_per_voxel", mOptions.pass.rotatePerVoxel}, {"passes_run", report.passes.size()}};
         set.setProvenance("scatter", params.dump());
         recordMaterial(set, material);

@@ -134,7 +134,9 @@ TEST_CASE("the light stage writes direct and scatter_source on the medium's topo
     vxf::Light dark = pointLight(openvdb::Vec3d(0.0), 0.0);
     dark.name = "off";
     const std::vector<vxf::Light> lights = {pointLight(openvdb::Vec3d(0, 0, 2), 1.0), dark};
-    const auto report = vxf::computeDirectLight(set, medium, lights);
+    vxf::DirectLightOptions coarse;
+    coarse.coarseTiles = true;
+    const auto report = vxf::computeDirectLight(set, medium, lights, coarse);
     REQUIRE(report.lights.size() == 2);
     CHECK_FALSE(report.lights[0].skipped);
     CHECK(report.lights[0].fluenceSum.x() > 0.0);
@@ -144,8 +146,14 @@ TEST_CASE("the light stage writes direct and scatter_source on the medium's topo
     auto direct = set.get<openvdb::Vec3SGrid>("direct");
     auto source = set.get<openvdb::Vec3SGrid>("scatter_source");
     const auto density = set.get<openvdb::FloatGrid>("density");
-    CHECK(direct->activeVoxelCount() == density->activeVoxelCount());
-    CHECK(direct->tree().activeTileCount() > 0); // the deep interior stays tiles
+    CHECK(direct->activeVoxelCount() > density->activeVoxelCount()); // one voxel beyond the medium
+    CHECK(direct->tree().activeTileCount() > 0); // with coarseTiles the deep interior stays tiles
+    {
+        vxf::VoxelSet fine = boxMedium(openvdb::CoordBBox(openvdb::Coord(-64), openvdb::Coord(63)), 0.02, true);
+        vxf::computeDirectLight(fine, vxf::Medium(fine, m), {lights[0]});
+        CHECK(fine.find("direct")->baseTree().activeTileCount() == 0); // full resolution by default
+        CHECK(fine.find("direct")->activeVoxelCount() == 130ull * 130 * 130); // 128^3 + one voxel around
+    }
     // J0 = sigma_s phi / 4 pi at a leaf voxel.
     const openvdb::Coord c(0, 0, 60);
     CHECK(source->tree().getValue(c).x() == Approx(2.0 * direct->tree().getValue(c).x() / (4.0 * M_PI)).epsilon(1e-6));
@@ -157,7 +165,7 @@ TEST_CASE("the light stage writes direct and scatter_source on the medium's topo
     vxf::VoxelSet one = boxMedium(openvdb::CoordBBox(openvdb::Coord(-64), openvdb::Coord(63)), 0.02, true);
     {
         tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
-        vxf::computeDirectLight(one, vxf::Medium(one, m), lights);
+        vxf::computeDirectLight(one, vxf::Medium(one, m), lights, coarse);
     }
     std::string why;
     CHECK(vxf::test::identicalGrids(*one.find("direct"), *direct, &why));

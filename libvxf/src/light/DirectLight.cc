@@ -3,6 +3,7 @@
 #include <vxf/core/SphericalFibonacci.h>
 #include <vxf/io/VoxelSetFile.h>
 
+#include <openvdb/tools/Morphology.h>
 #include <openvdb/tree/LeafManager.h>
 
 #include <fmt/format.h>
@@ -190,6 +191,16 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
     source->setTransform(density.transformPtr()->copy());
     source->tree().topologyUnion(density.tree());
     source->setName("scatter_source");
+    if (!options.coarseTiles) {
+        direct->tree().voxelizeActiveTiles();
+        source->tree().voxelizeActiveTiles();
+    }
+    // One voxel beyond the medium (26-neighbourhood): trilinear lookups of φ near the surface
+    // then blend real values, not the background 0 (which would dim the outermost half voxel).
+    for (auto* grid : {direct.get(), source.get()}) {
+        openvdb::tools::dilateActiveValues(grid->tree(), 1, openvdb::tools::NN_FACE_EDGE_VERTEX,
+            options.coarseTiles ? openvdb::tools::PRESERVE_TILES : openvdb::tools::IGNORE_TILES);
+    }
 
     // Work items: leaf voxels (per leaf) and active tiles (value at the tile centre).
     openvdb::tree::LeafManager<openvdb::Vec3STree> leaves(direct->tree());

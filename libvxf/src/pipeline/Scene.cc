@@ -263,6 +263,7 @@ Scene parseScene(const std::string& text, const std::string& path)
         s.directions = v.value("directions", s.directions);
         s.step = v.value("step", s.step);
         s.tolerance = v.value("tolerance", s.tolerance);
+        s.extrapolate = v.value("extrapolate", s.extrapolate);
         s.scatterBand = v.value("band", s.scatterBand);
     }
     if (document.contains("render")) {

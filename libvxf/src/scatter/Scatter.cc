@@ -1,11 +1,13 @@
 #include <vxf/scatter/Scatter.h>
 
 #include <openvdb/tools/Composite.h>
+#include <openvdb/tools/ValueTransformer.h>
 #include <openvdb/tree/LeafManager.h>
 
 #include <fmt/format.h>
 
 #include <chrono>
+#include <optional>
 
 namespace vxf {
 
@@ -77,6 +79,7 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
     if (!scatters) {
         report.stopReason = "the medium does not scatter (sigma_s = 0)";
     } else {
+        openvdb::Vec3SGrid::Ptr last, beforeLast;
         for (int pass = 0; pass < options.passes; ++pass) {
             const auto start = std::chrono::steady_clock::now();
             auto phi = scatterPass(medium, *j, options.pass, interrupter);
@@ -88,6 +91,10 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
             previous = maxChannel(info.energy);
             if (options.keepPasses) set.put(named(phi->deepCopy(), fmt::format("scatter_pass_{}", k)));
             j = sourceFromFluence(medium, *phi);
+            if (options.extrapolateTail) {
+                beforeLast = last;
+                last = phi->deepCopy();
+            }
             openvdb::tools::compSum(*sum, *phi);
             info.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
             report.passes.push_back(info);
@@ -103,6 +110,28 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
             }
         }
         if (report.stopReason.empty()) report.stopReason = fmt::format("reached {} passes", options.passes);
+        if (options.extrapolateTail && last && beforeLast) {
+            // Σ_{k>K} φ_k ≈ φ_K (r + r² + …) = φ_K r/(1−r), with r = φ_K/φ_{K−1} per voxel and
+            // channel (regions near the boundary decay faster) capped by the global energy
+            // ratio of the last two passes (≤ 0.99). Where passes still grow (light still
+            // arriving) the local ratio is no estimate of the tail; the cap keeps it bounded.
+            // (A voxel whose own settled ratio exceeds the global one is underestimated.)
+            const double global = std::min(0.99, std::max(0.0, report.passes.back().ratio));
+            report.tailFactor = global / (1.0 - global);
+            auto previous = beforeLast->getConstAccessor();
+            const float cap = float(global);
+            openvdb::tools::foreach(last->beginValueOn(), [&previous, cap](const openvdb::Vec3STree::ValueOnIter& it) {
+                const openvdb::Vec3f before = previous.getValue(it.getCoord());
+                openvdb::Vec3f tail = *it;
+                for (int c = 0; c < 3; ++c) {
+                    const float r = before[c] > 0.0f ? std::clamp(tail[c] / before[c], 0.0f, cap) : cap;
+                    tail[c] *= r / (1.0f - r);
+                }
+                it.setValue(tail);
+            }, /*threaded=*/false);
+            openvdb::tools::compSum(*sum, *last);
+            report.stopReason += fmt::format("; geometric tail extrapolated per voxel (global ratio {:.4f})", global);
+        }
     }
 
     sum->setName("scatter");

@@ -13,6 +13,10 @@ namespace vxf {
 struct DirectLightOptions
 {
     MarchOptions march;
+    /// Evaluate active tiles of `density` once at their centre (coarse, the tree's own
+    /// resolution) instead of voxel by voxel. Only for media so thick that the deep interior
+    /// never shows; thinner media show the tiles as blocks.
+    bool coarseTiles = false;
 };
 
 struct DirectLightReport
@@ -37,9 +41,11 @@ openvdb::Vec3d lightFluence(const Light& light, Medium::Sampler& sampler, const 
     const openvdb::Coord& voxel, const MarchOptions& options);
 
 /// The light stage. Adds to @a set:
-/// - `direct` (Vec3f): φ0 = Σ lights, at every active voxel of `density` (active tiles get
-///   the value at their centre: the tree's own coarse resolution deep inside), same topology;
-/// - `scatter_source` (Vec3f): J0 = σs·φ0/(4π) + the emission of volume lights, same topology.
+/// - `direct` (Vec3f): φ0 = Σ lights, at every active voxel of `density` (active tiles are
+///   voxelized, or with coarseTiles evaluated once at their centre), and one voxel beyond
+///   (so trilinear lookups at the surface blend real values);
+/// - `scatter_source` (Vec3f): J0 = σs·φ0/(4π) + the emission of volume lights, same topology
+///   (0 outside the medium, where σs is 0).
 /// Lights with zero power are skipped and reported. Parallel over leaf nodes (TBB);
 /// each voxel is computed on its own, so results do not depend on the number of threads.
 /// Throws vxf::UsageError for light settings it cannot honour (environment maps, for now).

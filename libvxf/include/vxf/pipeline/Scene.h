@@ -71,6 +71,7 @@ struct SceneSettings
     double band = 3.0;
     int passes = 16, directions = 64;
     double step = 1.0, tolerance = 1e-3;
+    bool extrapolate = false;
     double scatterBand = 0.0; ///< 0: full resolution everywhere
     int width = 640, height = 360, samples = 4, gatherDirections = 64;
     bool gather = false, surface = true;

@@ -16,6 +16,10 @@ struct ScatterOptions
     double tolerance = 1e-3;  ///< stop when a pass adds less than this fraction of the sum so far (0: never)
     bool keepPasses = false;  ///< keep each pass as `scatter_pass_K`
     int fromPass = 0;         ///< continue from `scatter_pass_K` (0: from `scatter_source`)
+    /// After the last pass, add the geometric tail of the series: φ_K·r/(1−r) with
+    /// r = φ_K/φ_{K−1} per voxel and channel, capped by the global energy ratio of the last
+    /// two passes (itself ≤ 0.99). Makes albedo ≈ 1 converge in few passes.
+    bool extrapolateTail = false;
     ScatterPassOptions pass;
 };
 
@@ -30,6 +34,7 @@ struct ScatterReport
     };
     std::vector<Pass> passes;
     std::string stopReason;
+    double tailFactor = 0.0; ///< r/(1−r) of the global energy ratio (0: no extrapolation); per voxel it varies
 };
 
 /// Σ over active values of a Vec3f grid, active tiles weighted by their voxel count.

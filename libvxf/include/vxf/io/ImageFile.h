@@ -1,0 +1,18 @@
+// vxf — writing rendered images: multi-layer OpenEXR and an sRGB PNG preview.
+#pragma once
+
+#include <vxf/render/Render.h>
+
+#include <string>
+
+namespace vxf {
+
+/// Write @a image as OpenEXR (atomically): R G B A (combined + alpha), direct.R/G/B,
+/// scatter.R/G/B, depth.Z, normal.X/Y/Z; 32-bit float, or 16-bit half when @a half.
+void writeExr(const std::string& path, const RenderedImage& image, bool half = false);
+
+/// Write the combined layer as an 8-bit sRGB PNG (atomically), scaled by @a exposure
+/// (2^stops) and clamped to [0,1].
+void writePng(const std::string& path, const RenderedImage& image, double exposureStops = 0.0);
+
+} // namespace vxf

@@ -1,0 +1,229 @@
+#include <vxf/render/Render.h>
+
+#include <openvdb/tools/RayIntersector.h>
+
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
+
+#include <atomic>
+#include <cmath>
+#include <limits>
+
+namespace vxf {
+
+namespace {
+
+double hash01(std::uint64_t a, std::uint64_t b)
+{
+    std::uint64_t h = a * 0x9E3779B97F4A7C15ull ^ (b + 0x632BE59BD9B4E019ull) * 0xBF58476D1CE4E5B9ull;
+    h ^= h >> 31;
+    h *= 0x94D049BB133111EBull;
+    h ^= h >> 29;
+    return double(h >> 11) * (1.0 / 9007199254740992.0);
+}
+
+/// Radiance gathered along one ray through the medium, per layer.
+struct Gathered
+{
+    openvdb::Vec3d direct{0.0}, scatter{0.0}, transmittance{1.0};
+    bool touched = false; ///< the march met any medium
+};
+
+class Marcher
+{
+public:
+    Marcher(const VoxelSet& set, const Medium& medium, const RenderOptions& options)
+        : mMedium(medium)
+        , mSampler(medium)
+        , mOptions(options)
+    {
+        if (auto d = set.find("direct")) mDirect.emplace(set.get<openvdb::Vec3SGrid>("direct")->getConstAccessor());
+        if (auto s = set.find("scatter")) mScatter.emplace(set.get<openvdb::Vec3SGrid>("scatter")->getConstAccessor());
+        const openvdb::CoordBBox& b = medium.activeBounds();
+        mBounds = openvdb::BBoxd(b.min().asVec3d() - openvdb::Vec3d(1.0), b.max().asVec3d() + openvdb::Vec3d(1.0));
+        mTauCutoff = -std::log(std::max(options.cutoff, std::numeric_limits<double>::min()));
+    }
+
+    /// March from world point @a start along unit world direction @a dir.
+    Gathered march(const openvdb::Vec3d& start, const openvdb::Vec3d& dir)
+    {
+        Gathered g;
+        if (mMedium.activeBounds().empty()) return g;
+        const openvdb::math::Transform& xform = mMedium.transform();
+        const openvdb::Vec3d o = xform.worldToIndex(start);
+        openvdb::Vec3d d = xform.worldToIndex(start + dir) - o;
+        d.normalize();
+        double t0 = 0.0, t1 = std::numeric_limits<double>::max();
+        for (int a = 0; a < 3; ++a) {
+            if (d[a] == 0.0) {
+                if (o[a] < mBounds.min()[a] || o[a] > mBounds.max()[a]) return g;
+                continue;
+            }
+            double n = (mBounds.min()[a] - o[a]) / d[a], f = (mBounds.max()[a] - o[a]) / d[a];
+            if (n > f) std::swap(n, f);
+            t0 = std::max(t0, n);
+            t1 = std::min(t1, f);
+        }
+        if (!(t0 < t1)) return g;
+        const int steps = std::max(1, int(std::ceil((t1 - t0) / std::max(mOptions.step, 1e-3))));
+        const double h = (t1 - t0) / steps, hWorld = h * mMedium.voxelSize();
+        openvdb::Vec3d tau(0.0);
+        for (int i = 0; i < steps; ++i) {
+            const openvdb::Vec3d p = o + d * (t0 + (i + 0.5) * h);
+            const openvdb::Vec3d sigmaT = mSampler.sigmaT(p);
+            if (sigmaT[0] <= 0.0 && sigmaT[1] <= 0.0 && sigmaT[2] <= 0.0) continue;
+            g.touched = true;
+            const openvdb::Vec3d sigmaS = mSampler.sigmaS(p);
+            const openvdb::Vec3d phiDirect = mDirect ? openvdb::Vec3d(openvdb::tools::BoxSampler::sample(*mDirect, p)) : openvdb::Vec3d(0.0);
+            const openvdb::Vec3d phiScatter = mScatter ? openvdb::Vec3d(openvdb::tools::BoxSampler::sample(*mScatter, p)) : openvdb::Vec3d(0.0);
+            for (int c = 0; c < 3; ++c) {
+                // J = σs φ / 4π; ΔL = T·J·(1 − e^{−σt h})/σt; T ·= e^{−σt h}.
+                const double s = std::max(0.0, sigmaT[c]);
+                const double od = s * hWorld;
+                const double segment = od > 1e-8 ? -std::expm1(-od) / s : hWorld * (1.0 - 0.5 * od);
+                const double weight = g.transmittance[c] * segment * sigmaS[c] / (4.0 * M_PI);
+                g.direct[c] += weight * phiDirect[c];
+                g.scatter[c] += weight * phiScatter[c];
+                g.transmittance[c] *= std::exp(-od);
+                tau[c] += od;
+            }
+            if (std::min({tau[0], tau[1], tau[2]}) > mTauCutoff) {
+                g.transmittance = openvdb::Vec3d(0.0);
+                break;
+            }
+        }
+        return g;
+    }
+
+private:
+    const Medium& mMedium;
+    Medium::Sampler mSampler;
+    const RenderOptions& mOptions;
+    std::optional<openvdb::Vec3SGrid::ConstAccessor> mDirect, mScatter;
+    openvdb::BBoxd mBounds;
+    double mTauCutoff;
+};
+
+} // namespace
+
+RenderedImage render(const VoxelSet& set, const Medium& medium, const Camera& camera, const RenderOptions& options,
+    Interrupter* interrupter)
+{
+    InterruptStep step(interrupter, "rendering");
+    if (options.width < 1 || options.height < 1 || options.samples < 1) {
+        throw UsageError(fmt::format("image size {}x{} with {} samples per pixel is empty", options.width, options.height, options.samples));
+    }
+    auto surface = set.get<openvdb::FloatGrid>("surface");
+    if (surface->getGridClass() != openvdb::GRID_LEVEL_SET) throw Error("grid 'surface' must be a level set");
+
+    RenderedImage image;
+    image.width = options.width;
+    image.height = options.height;
+    const std::size_t n = std::size_t(options.width) * std::size_t(options.height);
+    image.combined.assign(n, openvdb::Vec3f(0.0f));
+    image.direct.assign(n, openvdb::Vec3f(0.0f));
+    image.scatter.assign(n, openvdb::Vec3f(0.0f));
+    image.normal.assign(n, openvdb::Vec3f(0.0f));
+    image.alpha.assign(n, 0.0f);
+    image.depth.assign(n, 0.0f);
+
+    // Camera frame.
+    const openvdb::Vec3d forward = (camera.lookAt - camera.position).unit();
+    const openvdb::Vec3d right = forward.cross(camera.up).unit();
+    const openvdb::Vec3d up = right.cross(forward);
+    const double aspect = double(options.width) / double(options.height);
+    const double tanHalf = std::tan(0.5 * camera.fovDegrees * M_PI / 180.0);
+    const int side = std::max(1, int(std::lround(std::sqrt(double(options.samples)))));
+    const int spp = side * side;
+    const auto gatherDirs = std::max(1, options.gatherDirections);
+
+    const openvdb::tools::LevelSetRayIntersector<openvdb::FloatGrid> prototype(*surface);
+    std::atomic<int> rowsDone{0};
+    std::atomic<bool> cancelled{false};
+    tbb::parallel_for(tbb::blocked_range<int>(0, options.height), [&](const tbb::blocked_range<int>& rows) {
+        auto intersector = prototype;
+        Marcher marcher(set, medium, options);
+        for (int y = rows.begin(); y != rows.end() && !cancelled; ++y) {
+            for (int x = 0; x < options.width; ++x) {
+                const std::size_t pixel = std::size_t(y) * std::size_t(options.width) + std::size_t(x);
+                openvdb::Vec3d sumCombined(0.0), sumDirect(0.0), sumScatter(0.0), sumNormal(0.0);
+                double sumAlpha = 0.0, sumDepth = 0.0;
+                for (int s = 0; s < spp; ++s) {
+                    const double u = (s % side + hash01(pixel, std::uint64_t(2 * s))) / side;
+                    const double v = (s / side + hash01(pixel, std::uint64_t(2 * s + 1))) / side;
+                    const double sx = (2.0 * (x + u) / options.width - 1.0), sy = (1.0 - 2.0 * (y + v) / options.height);
+                    openvdb::Vec3d origin = camera.position, dir = forward;
+                    if (camera.orthographic) {
+                        origin += right * (0.5 * camera.width * sx) + up * (0.5 * camera.width / aspect * sy);
+                    } else {
+                        dir = (forward + right * (sx * tanHalf * aspect) + up * (sy * tanHalf)).unit();
+                    }
+                    openvdb::math::Ray<double> ray(origin, dir);
+                    openvdb::Vec3d hit, normal;
+                    double time = 0.0;
+                    if (!intersector.intersectsWS(ray, hit, normal, time)) {
+                        sumCombined += options.background;
+                        continue;
+                    }
+                    normal.normalize();
+                    sumAlpha += 1.0;
+                    sumDepth += time;
+                    sumNormal += normal;
+                    if (!options.gather) {
+                        // View mode: march on along the camera ray; the background shows through.
+                        const Gathered g = marcher.march(hit, dir);
+                        sumDirect += g.direct;
+                        sumScatter += g.scatter;
+                        for (int c = 0; c < 3; ++c) {
+                            sumCombined[c] += g.direct[c] + g.scatter[c] + g.transmittance[c] * options.background[c];
+                        }
+                        continue;
+                    }
+                    // Gather mode: cosine-weighted directions about the inward normal.
+                    openvdb::Vec3d t1, t2;
+                    const openvdb::Vec3d inward = -normal;
+                    const openvdb::Vec3d helper = std::abs(inward.x()) < 0.9 ? openvdb::Vec3d(1, 0, 0) : openvdb::Vec3d(0, 1, 0);
+                    t1 = inward.cross(helper).unit();
+                    t2 = inward.cross(t1);
+                    openvdb::Vec3d gd(0.0), gs(0.0);
+                    int kept = 0;
+                    for (int k = 0; k < gatherDirs; ++k) {
+                        const double a = (k + hash01(pixel * 977 + std::uint64_t(s), std::uint64_t(k) + 7)) / gatherDirs;
+                        const double phi = 2.0 * M_PI * hash01(pixel * 131 + std::uint64_t(s), std::uint64_t(k) + 11);
+                        const double r = std::sqrt(a);
+                        const openvdb::Vec3d w = (t1 * (r * std::cos(phi)) + t2 * (r * std::sin(phi)) + inward * std::sqrt(std::max(0.0, 1.0 - a))).unit();
+                        const Gathered g = marcher.march(hit, w);
+                        if (!g.touched) continue; // left the volume: dropped, the rest re-weighted
+                        gd += g.direct;
+                        gs += g.scatter;
+                        ++kept;
+                    }
+                    if (kept > 0) {
+                        gd /= kept;
+                        gs /= kept;
+                    }
+                    sumDirect += gd;
+                    sumScatter += gs;
+                    sumCombined += gd + gs;
+                }
+                const double inv = 1.0 / spp;
+                const auto finite = [](openvdb::Vec3d v) {
+                    for (int c = 0; c < 3; ++c) v[c] = std::isfinite(v[c]) ? v[c] : 0.0;
+                    return openvdb::Vec3f(v);
+                };
+                image.combined[pixel] = finite(sumCombined * inv);
+                image.direct[pixel] = finite(sumDirect * inv);
+                image.scatter[pixel] = finite(sumScatter * inv);
+                image.alpha[pixel] = float(sumAlpha * inv);
+                image.depth[pixel] = sumAlpha > 0.0 ? float(sumDepth / sumAlpha) : 0.0f;
+                image.normal[pixel] = sumAlpha > 0.0 ? finite(sumNormal / sumAlpha) : openvdb::Vec3f(0.0f);
+            }
+            const int done = ++rowsDone;
+            if (interrupter && interrupter->wasInterrupted(100 * done / options.height)) cancelled = true;
+        }
+    });
+    if (cancelled) throw Interrupted();
+    return image;
+}
+
+} // namespace vxf
