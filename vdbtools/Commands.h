@@ -25,6 +25,7 @@ std::unique_ptr<Command> makeDemoCommand(CLI::App& parent);
 std::unique_ptr<Command> makeLightCommand(CLI::App& parent);
 std::unique_ptr<Command> makeScatterCommand(CLI::App& parent);
 std::unique_ptr<Command> makeRenderCommand(CLI::App& parent);
+std::unique_ptr<Command> makeRunCommand(CLI::App& parent);
 
 } // namespace vxf::cli
 

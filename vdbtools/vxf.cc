@@ -18,6 +18,7 @@ int main(int argc, char** argv)
     commands.push_back(makeLightCommand(app));
     commands.push_back(makeScatterCommand(app));
     commands.push_back(makeRenderCommand(app));
+    commands.push_back(makeRunCommand(app));
     commands.push_back(makeDemoCommand(app));
     return runMain(app, argc, argv, [&] {
         for (auto& command : commands) {

@@ -349,3 +349,51 @@ TEST_CASE("vxf light lights a voxel set from a scene file", "[cli][light]")
     CHECK(bad.err.find("bad.json: /camera: Missing required property 'look_at'") != std::string::npos);
     CHECK_FALSE(fs::exists(dir.path("x.vdb")));
 }
+
+TEST_CASE("vxf run simulates only what the scene needs and reuses what did not change", "[cli][run]")
+{
+    TempDir dir;
+    const auto scene = [&](const std::string& fov, const std::string& intensity, const std::string& material, const std::string& outputs) {
+        vxf::test::spit(dir.path("s.json"), R"({
+  "objects": [{"mesh": "builtin:sphere", "material": )" + material + R"(}],
+  "lights": [{"type": "point", "position": [0, 0, 2], "intensity": )" + intensity + R"(}],
+  "camera": {"position": [0, -4, 0], "look_at": [0, 0, 0], "fov": )" + fov + R"(},
+  "voxelize": {"dim": 16},
+  "scatter": {"passes": 2, "directions": 8},
+  "render": {"width": 32, "height": 24, "samples": 1},
+  "outputs": )" + outputs + "}");
+        const auto result = run(fmt::format("{} run {} --out {}", binary("vxf"), dir.path("s.json"), dir.path("out")));
+        INFO(result.err);
+        REQUIRE(result.status == 0);
+        return result.out;
+    };
+    const std::string wax = R"({"albedo": 0.9, "mean_free_path": 0.2})";
+    const std::string first = scene("40", "3", wax, R"(["image"])");
+    CHECK(first.find("voxelize  ran") != std::string::npos);
+    CHECK(first.find("scatter   ran") != std::string::npos);
+    CHECK(fs::exists(dir.path("out/s.exr")));
+    CHECK(fs::exists(dir.path("out/s.png")));
+
+    const std::string again = scene("40", "3", wax, R"(["image"])");
+    CHECK(again.find("voxelize  reused") != std::string::npos);
+    CHECK(again.find("light     reused") != std::string::npos);
+    CHECK(again.find("scatter   reused") != std::string::npos);
+
+    const std::string camera = scene("30", "3", wax, R"(["image"])"); // only the camera changed
+    CHECK(camera.find("scatter   reused") != std::string::npos);
+    CHECK(camera.find("render    ran") != std::string::npos);
+
+    const std::string brighter = scene("30", "5", wax, R"(["image"])"); // one light changed
+    CHECK(brighter.find("voxelize  reused") != std::string::npos);
+    CHECK(brighter.find("light     ran") != std::string::npos);
+    CHECK(brighter.find("scatter   ran") != std::string::npos);
+
+    const std::string absorbing = scene("30", "5", R"({"sigma_a": 3, "sigma_s": 0})", R"(["image"])");
+    CHECK(absorbing.find("scatter   skipped") != std::string::npos);
+    CHECK(absorbing.find("does not scatter") != std::string::npos);
+
+    const std::string directOnly = scene("30", "5", wax, R"(["direct"])");
+    CHECK(directOnly.find("scatter   skipped") != std::string::npos);
+    CHECK(directOnly.find("no requested output needs it") != std::string::npos);
+    CHECK(directOnly.find("render    skipped") != std::string::npos);
+}

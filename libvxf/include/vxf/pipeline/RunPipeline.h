@@ -1,0 +1,37 @@
+// vxf — `vxf run`: voxelize → light → scatter → render for a scene, doing only what it needs.
+#pragma once
+
+#include <vxf/core/Interrupter.h>
+#include <vxf/pipeline/Scene.h>
+
+#include <string>
+#include <vector>
+
+namespace vxf {
+
+struct StageRecord
+{
+    std::string stage;   ///< voxelize, light, scatter, render
+    std::string action;  ///< "ran", "reused" or "skipped"
+    std::string why;     ///< one phrase for a person
+    std::string file;    ///< the stage's output file
+    double seconds = 0.0;
+};
+
+struct PipelineReport
+{
+    std::vector<StageRecord> stages;
+    std::string image, preview; ///< written image files ("" when no image was asked for)
+};
+
+/// Run @a scene's pipeline into @a outDir. Each stage's output is cached in
+/// outDir/cache/STAGE-HASH.vdb, HASH covering the stage's inputs and parameters (and the
+/// hash of the stage before it, and the mesh file's bytes), so a second run reuses what did
+/// not change: changing only the camera re-renders only. Scattering is skipped when the
+/// material does not scatter or no requested output needs it; lights with zero power are
+/// skipped by the light stage; passes stop at the scene's tolerance. Writes
+/// outDir/NAME.exr and NAME.png (NAME: the scene file's stem) when "image" is requested.
+/// One medium object per scene for now (vxf::UsageError otherwise).
+PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interrupter* interrupter = nullptr);
+
+} // namespace vxf

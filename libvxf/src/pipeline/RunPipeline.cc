@@ -1,0 +1,201 @@
+#include <vxf/pipeline/RunPipeline.h>
+
+#include <vxf/core/ProceduralMesh.h>
+#include <vxf/io/ImageFile.h>
+#include <vxf/io/MeshFile.h>
+#include <vxf/io/VoxelSetFile.h>
+#include <vxf/light/DirectLight.h>
+#include <vxf/render/Render.h>
+#include <vxf/scatter/Scatter.h>
+#include <vxf/voxelize/Voxelize.h>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+
+namespace vxf {
+
+namespace {
+
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+/// FNV-1a, 64 bit: stable across runs, builds and machines (std::hash is not).
+std::uint64_t fnv1a(const std::string& bytes, std::uint64_t h = 0xcbf29ce484222325ull)
+{
+    for (unsigned char c : bytes) {
+        h ^= c;
+        h *= 0x100000001b3ull;
+    }
+    return h;
+}
+
+std::string hashOf(const json& inputs) { return fmt::format("{:016x}", fnv1a(inputs.dump())); }
+
+json vec(const openvdb::Vec3d& v) { return json::array({v[0], v[1], v[2]}); }
+
+json lightJson(const Light& l)
+{
+    return {{"type", int(l.type)}, {"name", l.name}, {"color", vec(l.color)}, {"intensity", l.intensity},
+        {"falloff", int(l.falloff)}, {"position", vec(l.position)}, {"direction", vec(l.direction)},
+        {"cone", {l.coneAngleDegrees, l.coneSoftnessDegrees}}, {"shape", int(l.shape)},
+        {"size", {l.width, l.height, l.radius}}, {"samples", l.samples}, {"file", l.file}, {"grid", l.grid}};
+}
+
+std::string meshFingerprint(const std::string& mesh)
+{
+    if (mesh.rfind("builtin:", 0) == 0) return mesh;
+    std::ifstream in(mesh, std::ios::binary);
+    if (!in) throw Error(fmt::format("{}: cannot open mesh file", mesh));
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    return fmt::format("{:016x}", fnv1a(bytes));
+}
+
+} // namespace
+
+PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interrupter* interrupter)
+{
+    PipelineReport report;
+    const SceneObject* object = nullptr;
+    for (const auto& o : scene.objects) {
+        if (o.role != SceneObject::Role::Medium) continue;
+        if (object) throw UsageError(fmt::format("{}: one medium object per scene for now ('{}' and '{}')", scene.path, object->name, o.name));
+        object = &o;
+    }
+    if (!object) throw UsageError(fmt::format("{}: no object is a medium", scene.path));
+    const Material& material = *object->material;
+    const SceneSettings& s = scene.settings;
+    const auto& outputs = s.outputs;
+    const auto wants = [&](const char* o) { return std::find(outputs.begin(), outputs.end(), o) != outputs.end(); };
+
+    const fs::path out(outDir), cache = out / "cache";
+    fs::create_directories(cache);
+    const auto timed = [](auto&& f) {
+        const auto start = std::chrono::steady_clock::now();
+        f();
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    };
+    const auto record = [&](const char* stage, const char* action, std::string why, const fs::path& file, double seconds) {
+        report.stages.push_back({stage, action, std::move(why), file.string(), seconds});
+    };
+
+    // Voxelize: the mesh (bytes), its transform, the voxel settings.
+    json voxelInputs = {{"mesh", object->mesh}, {"bytes", meshFingerprint(object->mesh)}, {"dim", s.dim},
+        {"voxel_size", s.voxelSize}, {"band", s.band}};
+    {
+        json m = json::array();
+        for (int r = 0; r < 4; ++r)
+            for (int c = 0; c < 4; ++c) m.push_back(object->objectToWorld(r, c));
+        voxelInputs["transform"] = m;
+    }
+    const std::string voxelHash = hashOf(voxelInputs);
+    const fs::path voxelFile = cache / ("voxelize-" + voxelHash + ".vdb");
+    VoxelSet set;
+    if (fs::exists(voxelFile)) {
+        record("voxelize", "reused", "mesh and voxel settings unchanged", voxelFile, 0.0);
+    } else {
+        const double seconds = timed([&] {
+            TriangleMesh mesh = object->mesh.rfind("builtin:", 0) == 0 ? builtinMesh(object->mesh).value() : readMesh(object->mesh);
+            for (auto& p : mesh.points) p = object->objectToWorld.transform(p);
+            VoxelizeOptions options;
+            options.voxelSize = s.voxelSize;
+            options.dim = s.voxelSize > 0.0 ? 0 : s.dim;
+            options.bandWidth = float(s.band);
+            set = voxelize(mesh, options, interrupter);
+            set.setProvenance("voxelize", voxelInputs.dump());
+            writeVoxelSet(voxelFile.string(), set);
+        });
+        record("voxelize", "ran", "no cached voxel set for these inputs", voxelFile, seconds);
+    }
+
+    // Light: the voxel set, the material, the lights.
+    json lights = json::array();
+    for (const auto& l : scene.lights) lights.push_back(lightJson(l));
+    const json lightInputs = {{"voxels", voxelHash}, {"sigma_a", vec(material.sigmaA)}, {"sigma_s", vec(material.sigmaS)},
+        {"grids", {material.gridsFile, material.sigmaAGrid, material.sigmaSGrid}}, {"lights", lights}, {"step", s.step}};
+    const std::string lightHash = hashOf(lightInputs);
+    const fs::path lightFile = cache / ("light-" + lightHash + ".vdb");
+    if (fs::exists(lightFile)) {
+        record("light", "reused", "voxels, material and lights unchanged", lightFile, 0.0);
+    } else {
+        const double seconds = timed([&] {
+            if (set.empty()) set = readVoxelSet(voxelFile.string());
+            const Medium medium(set, material);
+            DirectLightOptions options;
+            options.march.step = s.step;
+            const DirectLightReport lit = computeDirectLight(set, medium, scene.lights, options, interrupter);
+            set.setProvenance("light", lightInputs.dump());
+            recordMaterial(set, material);
+            writeVoxelSet(lightFile.string(), set);
+        });
+        record("light", "ran", "no cached lighting for these inputs", lightFile, seconds);
+        set = VoxelSet();
+    }
+
+    // Scatter, only when it matters.
+    fs::path volumeFile = lightFile;
+    std::string volumeHash = lightHash;
+    const bool needScatter = wants("image") || wants("scatter") || wants("illumination") || wants("scatter_passes");
+    if (!material.scatters() && material.sigmaSGrid.empty()) {
+        record("scatter", "skipped", "the material does not scatter (sigma_s = 0)", "", 0.0);
+    } else if (!needScatter) {
+        record("scatter", "skipped", "no requested output needs it", "", 0.0);
+    } else {
+        const json scatterInputs = {{"lit", lightHash}, {"passes", s.passes}, {"directions", s.directions}, {"step", s.step},
+            {"tolerance", s.tolerance}, {"extrapolate", s.extrapolate}, {"keep", wants("scatter_passes")}};
+        volumeHash = hashOf(scatterInputs);
+        volumeFile = cache / ("scatter-" + volumeHash + ".vdb");
+        if (fs::exists(volumeFile)) {
+            record("scatter", "reused", "lighting and scatter settings unchanged", volumeFile, 0.0);
+        } else {
+            ScatterReport scattered;
+            const double seconds = timed([&] {
+                VoxelSet lit = readVoxelSet(lightFile.string());
+                const Medium medium(lit, material);
+                ScatterOptions options;
+                options.passes = s.passes;
+                options.tolerance = s.tolerance;
+                options.extrapolateTail = s.extrapolate;
+                options.keepPasses = wants("scatter_passes");
+                options.pass.directions = s.directions;
+                options.pass.step = s.step;
+                scattered = scatter(lit, medium, options, interrupter);
+                lit.setProvenance("scatter", scatterInputs.dump());
+                writeVoxelSet(volumeFile.string(), lit);
+            });
+            record("scatter", "ran", fmt::format("{} passes: {}", scattered.passes.size(), scattered.stopReason), volumeFile, seconds);
+        }
+    }
+
+    // Render: always when an image is asked for (it is the cheap end of the chain).
+    if (!wants("image")) {
+        record("render", "skipped", "no image requested", "", 0.0);
+        return report;
+    }
+    const std::string stem = fs::path(scene.path).stem().string().empty() ? "scene" : fs::path(scene.path).stem().string();
+    report.image = (out / (stem + ".exr")).string();
+    report.preview = (out / (stem + ".png")).string();
+    const double seconds = timed([&] {
+        const VoxelSet volume = readVoxelSet(volumeFile.string());
+        const Medium medium(volume, material);
+        RenderOptions options;
+        options.width = s.width;
+        options.height = s.height;
+        options.samples = s.samples;
+        options.gather = s.gather;
+        options.gatherDirections = s.gatherDirections;
+        options.background = s.background;
+        options.step = s.step;
+        const RenderedImage image = render(volume, medium, scene.camera, options, interrupter);
+        writeExr(report.image, image);
+        writePng(report.preview, image);
+    });
+    record("render", "ran", "images are always rendered from the (cached) volume", report.image, seconds);
+    return report;
+}
+
+} // namespace vxf
