@@ -198,34 +198,49 @@ TriangleMesh readMesh(const std::string& path, const MeshReadOptions& options, M
     checkInterrupt(interrupter);
     timer.lap("read");
 
-    // Repair: merge duplicate points, drop degenerate and duplicate polygons and unused points.
-    PMP::repair_polygon_soup(points, polygons);
     // Polygons whose points all lie on one line have no area (exact predicate).
-    polygons.erase(std::remove_if(polygons.begin(), polygons.end(),
-                       [&](const std::vector<std::size_t>& polygon) {
-                           for (std::size_t i = 2; i < polygon.size(); ++i) {
-                               if (!CGAL::collinear(points[polygon[0]], points[polygon[1]], points[polygon[i]])) return false;
-                           }
-                           return true;
-                       }),
-        polygons.end());
-    report.mergedPoints = report.inputPoints - std::min(report.inputPoints, points.size());
-    report.removedPolygons = report.inputPolygons - std::min(report.inputPolygons, polygons.size());
-    if (polygons.empty()) {
-        throw Error(fmt::format("{}: the mesh has no usable faces ({} read, all degenerate)", path,
-            report.inputPolygons));
+    const auto degenerate = [&](const std::vector<std::size_t>& polygon) {
+        for (std::size_t i = 2; i < polygon.size(); ++i) {
+            if (!CGAL::collinear(points[polygon[0]], points[polygon[1]], points[polygon[i]])) return false;
+        }
+        return true;
+    };
+    // A soup that is already clean — triangles with distinct corners and area, every point
+    // used, an oriented closed manifold — needs no repair (the common case; saves a sort).
+    std::size_t soupBorderEdges = 0;
+    bool manifold = false;
+    {
+        std::vector<bool> used(points.size(), false);
+        bool clean = true;
+        for (const auto& p : polygons) {
+            clean = clean && p.size() == 3 && p[0] != p[1] && p[1] != p[2] && p[0] != p[2];
+            if (!clean) break;
+            used[p[0]] = used[p[1]] = used[p[2]] = true;
+        }
+        clean = clean && std::all_of(used.begin(), used.end(), [](bool u) { return u; }) &&
+                std::none_of(polygons.begin(), polygons.end(), degenerate);
+        manifold = clean && isOrientedManifoldSoup(points.size(), polygons, soupBorderEdges);
+        if (!manifold || soupBorderEdges > 0) {
+            // Repair: merge duplicate points, drop degenerate and duplicate polygons and unused points.
+            PMP::repair_polygon_soup(points, polygons);
+            polygons.erase(std::remove_if(polygons.begin(), polygons.end(), degenerate), polygons.end());
+            report.mergedPoints = report.inputPoints - std::min(report.inputPoints, points.size());
+            report.removedPolygons = report.inputPolygons - std::min(report.inputPolygons, polygons.size());
+            if (polygons.empty()) {
+                throw Error(fmt::format("{}: the mesh has no usable faces ({} read, all degenerate)", path,
+                    report.inputPolygons));
+            }
+            if (report.removedPolygons > 0) {
+                report.warnings.push_back(fmt::format(
+                    "removed {} degenerate or duplicate faces; voxelization ignores them", report.removedPolygons));
+            }
+            manifold = isOrientedManifoldSoup(points.size(), polygons, soupBorderEdges);
+        }
     }
-    if (report.removedPolygons > 0) {
-        report.warnings.push_back(fmt::format(
-            "removed {} degenerate or duplicate faces; voxelization ignores them", report.removedPolygons));
-    }
-
-    timer.lap("repair");
+    timer.lap("check and repair");
 
     // Fast path, the common case: a closed, oriented, manifold triangle soup needs no
     // half-edge mesh; it is only turned outward as a whole when its volume is negative.
-    std::size_t soupBorderEdges = 0;
-    const bool manifold = isOrientedManifoldSoup(points.size(), polygons, soupBorderEdges);
     const bool allTriangles = std::all_of(polygons.begin(), polygons.end(), [](const auto& p) { return p.size() == 3; });
     if (manifold && soupBorderEdges == 0 && allTriangles) {
         TriangleMesh result;
@@ -237,7 +252,7 @@ TriangleMesh readMesh(const std::string& path, const MeshReadOptions& options, M
             for (auto& t : result.triangles) std::swap(t[1], t[2]);
         }
         report.outwardOriented = true;
-        timer.lap("check manifold");
+        timer.lap("export");
         if (options.checkSelfIntersections) {
             InterruptStep step(interrupter, "checking self-intersections");
             checkSelfIntersections(result, report);
