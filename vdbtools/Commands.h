@@ -54,9 +54,6 @@ struct VoxelizeRequest
 /// voxelization); throws vxf::UsageError when there is none or more than one.
 const Material& sceneMaterial(const Scene& scene);
 
-/// Render options from a scene's settings.
-RenderOptions renderOptionsFrom(const SceneSettings& settings);
-
 /// The embedded default scene (examples/candle.json, compiled in).
 const std::string& demoSceneText();
 

@@ -1,16 +1,12 @@
 // `vxf demo`: the main job on the embedded default scene (no downloads): a candle whose
-// flame is a point light makes the wax glow.
+// flame is a point light makes the wax glow. It is `vxf run` on examples/candle.json,
+// compiled in.
 #include "CliSupport.h"
 #include "Commands.h"
 
-#include <vxf/core/GridStats.h>
-#include <vxf/core/ProceduralMesh.h>
-#include <vxf/io/ImageFile.h>
-#include <vxf/light/DirectLight.h>
-#include <vxf/scatter/Scatter.h>
+#include <vxf/pipeline/RunPipeline.h>
 
 #include <fmt/format.h>
-#include <nlohmann/json.hpp>
 
 #include <filesystem>
 #include <iostream>
@@ -26,7 +22,8 @@ public:
     {
         mApp = parent.add_subcommand("demo",
             "Run the main job on the embedded default scene (examples/candle.json: a wax candle lit by its flame): "
-            "voxelize, light, scatter, render to OUT/demo.exr, OUT/demo.png and OUT/demo.vdb.");
+            "voxelize, light, scatter, render to OUT/demo.exr and OUT/demo.png, keeping the voxel set as OUT/demo.vdb. "
+            "Stages are cached in OUT/cache as for `vxf run`.");
         mApp->add_option("--out", mOut, "Output folder (default: out)");
         mApp->add_option("--dim", mDim, "Voxels along the candle's height (default: the scene's)")->check(CLI::Range(8, 4096));
         mApp->add_option("--width", mWidth, "Image width (default: the scene's)")->check(CLI::Range(1, 32768));
@@ -37,61 +34,21 @@ public:
     {
         TerminalProgress progress;
         const auto start = std::chrono::steady_clock::now();
-        std::filesystem::create_directories(mOut);
-        const Scene scene = parseScene(demoSceneText(), "builtin:candle-scene");
-        const SceneObject& object = scene.objects.front();
-        const Material& material = *object.material;
-
-        auto t = std::chrono::steady_clock::now();
-        VoxelizeOptions voxelizeOptions;
-        voxelizeOptions.dim = mDim > 0 ? mDim : scene.settings.dim;
-        voxelizeOptions.bandWidth = float(scene.settings.band);
-        VoxelSet set = voxelize(*builtinMesh(object.mesh), voxelizeOptions, &progress);
-        const double voxelizeSeconds = secondsSince(t);
-
-        t = std::chrono::steady_clock::now();
-        const Medium medium(set, material);
-        DirectLightOptions lightOptions;
-        lightOptions.march.step = scene.settings.step;
-        computeDirectLight(set, medium, scene.lights, lightOptions, &progress);
-        const double lightSeconds = secondsSince(t);
-
-        t = std::chrono::steady_clock::now();
-        ScatterOptions scatterOptions;
-        scatterOptions.passes = scene.settings.passes;
-        scatterOptions.tolerance = scene.settings.tolerance;
-        scatterOptions.pass.directions = scene.settings.directions;
-        scatterOptions.pass.step = scene.settings.step;
-        scatterOptions.extrapolateTail = scene.settings.extrapolate;
-        const ScatterReport scattered = scatter(set, medium, scatterOptions, &progress);
-        const double scatterSeconds = secondsSince(t);
-
-        t = std::chrono::steady_clock::now();
-        RenderOptions renderOptions = renderOptionsFrom(scene.settings);
-        if (mWidth) renderOptions.width = mWidth;
-        if (mHeight) renderOptions.height = mHeight;
-        const RenderedImage image = render(set, medium, scene.camera, renderOptions, &progress);
-        const double renderSeconds = secondsSince(t);
-
-        const std::filesystem::path out(mOut);
-        set.setProvenance("scatter", nlohmann::json{{"command", "demo"}, {"dim", voxelizeOptions.dim},
-                                                    {"passes_run", scattered.passes.size()}}.dump());
-        recordMaterial(set, material);
-        writeVoxelSet((out / "demo.vdb").string(), set);
-        writeExr((out / "demo.exr").string(), image);
-        writePng((out / "demo.png").string(), image);
+        // The scene's "path" names the outputs (demo.exr, demo.png); its mesh is built in.
+        Scene scene = parseScene(demoSceneText(), "demo.json");
+        if (mDim) scene.settings.dim = mDim;
+        if (mWidth) scene.settings.width = mWidth;
+        if (mHeight) scene.settings.height = mHeight;
+        const PipelineReport report = runPipeline(scene, mOut, &progress);
+        const std::string volume = (std::filesystem::path(mOut) / "demo.vdb").string();
+        std::filesystem::copy_file(report.volume, volume, std::filesystem::copy_options::overwrite_existing);
 
         std::cout << fmt::format("demo: a wax candle lit by its flame (embedded scene, {} voxels along its height)\n",
-            voxelizeOptions.dim);
-        std::cout << fmt::format("  voxelize  {:>7.2f} s   {} active voxels\n", voxelizeSeconds,
-            gridStats(*set.find("density")).activeVoxels);
-        std::cout << fmt::format("  light     {:>7.2f} s   {} lights\n", lightSeconds, scene.lights.size());
-        std::cout << fmt::format("  scatter   {:>7.2f} s   {} passes ({})\n", scatterSeconds, scattered.passes.size(),
-            scattered.stopReason);
-        std::cout << fmt::format("  render    {:>7.2f} s   {}x{}, {} samples per pixel\n", renderSeconds, renderOptions.width,
-            renderOptions.height, renderOptions.samples);
-        std::cout << fmt::format("  wrote {}, {}, {} in {:.2f} s\n", (out / "demo.exr").string(), (out / "demo.png").string(),
-            (out / "demo.vdb").string(), secondsSince(start));
+            scene.settings.dim);
+        for (const auto& stage : report.stages) {
+            std::cout << fmt::format("  {:<9} {:<7} {:>7.2f} s  {}\n", stage.stage, stage.action, stage.seconds, stage.why);
+        }
+        std::cout << fmt::format("  wrote {}, {}, {} in {:.2f} s\n", report.image, report.preview, volume, secondsSince(start));
     }
 
 private:

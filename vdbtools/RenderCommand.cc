@@ -12,18 +12,6 @@
 
 namespace vxf::cli {
 
-RenderOptions renderOptionsFrom(const SceneSettings& s)
-{
-    RenderOptions o;
-    o.width = s.width;
-    o.height = s.height;
-    o.samples = s.samples;
-    o.gather = s.gather;
-    o.gatherDirections = s.gatherDirections;
-    o.background = s.background;
-    return o;
-}
-
 namespace {
 
 class RenderCommand : public Command

@@ -147,6 +147,7 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
     } else {
         const json scatterInputs = {{"lit", lightHash}, {"passes", s.passes}, {"directions", s.directions}, {"step", s.step},
             {"tolerance", s.tolerance}, {"extrapolate", s.extrapolate}, {"keep", wants("scatter_passes")}};
+        // (every field scatterOptionsFrom reads)
         volumeHash = hashOf(scatterInputs);
         volumeFile = cache / ("scatter-" + volumeHash + ".vdb");
         if (fs::exists(volumeFile)) {
@@ -156,13 +157,7 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
             const double seconds = timed([&] {
                 VoxelSet lit = readVoxelSet(lightFile.string());
                 const Medium medium(lit, material);
-                ScatterOptions options;
-                options.passes = s.passes;
-                options.tolerance = s.tolerance;
-                options.extrapolateTail = s.extrapolate;
-                options.keepPasses = wants("scatter_passes");
-                options.pass.directions = s.directions;
-                options.pass.step = s.step;
+                const ScatterOptions options = scatterOptionsFrom(s);
                 scattered = scatter(lit, medium, options, interrupter);
                 lit.setProvenance("scatter", scatterInputs.dump());
                 writeVoxelSet(volumeFile.string(), lit);
@@ -170,6 +165,8 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
             record("scatter", "ran", fmt::format("{} passes: {}", scattered.passes.size(), scattered.stopReason), volumeFile, seconds);
         }
     }
+
+    report.volume = volumeFile.string();
 
     // Render: always when an image is asked for (it is the cheap end of the chain).
     if (!wants("image")) {
@@ -182,14 +179,7 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
     const double seconds = timed([&] {
         const VoxelSet volume = readVoxelSet(volumeFile.string());
         const Medium medium(volume, material);
-        RenderOptions options;
-        options.width = s.width;
-        options.height = s.height;
-        options.samples = s.samples;
-        options.gather = s.gather;
-        options.gatherDirections = s.gatherDirections;
-        options.background = s.background;
-        options.step = s.step;
+        const RenderOptions options = renderOptionsFrom(s);
         const RenderedImage image = render(volume, medium, scene.camera, options, interrupter);
         writeExr(report.image, image);
         writePng(report.preview, image);

@@ -106,6 +106,19 @@ private:
 
 } // namespace
 
+RenderOptions renderOptionsFrom(const SceneSettings& s)
+{
+    RenderOptions o;
+    o.width = s.width;
+    o.height = s.height;
+    o.samples = s.samples;
+    o.gather = s.gather;
+    o.gatherDirections = s.gatherDirections;
+    o.background = s.background;
+    o.step = s.step;
+    return o;
+}
+
 RenderedImage render(const VoxelSet& set, const Medium& medium, const Camera& camera, const RenderOptions& options,
     Interrupter* interrupter)
 {

@@ -6,10 +6,23 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <optional>
 
 namespace vxf {
+
+ScatterOptions scatterOptionsFrom(const SceneSettings& s)
+{
+    ScatterOptions o;
+    o.passes = s.passes;
+    o.tolerance = s.tolerance;
+    o.extrapolateTail = s.extrapolate;
+    o.keepPasses = std::find(s.outputs.begin(), s.outputs.end(), "scatter_passes") != s.outputs.end();
+    o.pass.directions = s.directions;
+    o.pass.step = s.step;
+    return o;
+}
 
 openvdb::Vec3d gridEnergy(const openvdb::Vec3SGrid& grid)
 {

@@ -22,6 +22,7 @@ struct PipelineReport
 {
     std::vector<StageRecord> stages;
     std::string image, preview; ///< written image files ("" when no image was asked for)
+    std::string volume;         ///< the last voxel set of the chain (in the cache)
 };
 
 /// Run @a scene's pipeline into @a outDir. Each stage's output is cached in
@@ -31,6 +32,7 @@ struct PipelineReport
 /// material does not scatter or no requested output needs it; lights with zero power are
 /// skipped by the light stage; passes stop at the scene's tolerance. Writes
 /// outDir/NAME.exr and NAME.png (NAME: the scene file's stem) when "image" is requested.
+/// Skip-or-run decisions and seconds are in the report, one record per stage.
 /// One medium object per scene for now (vxf::UsageError otherwise).
 PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interrupter* interrupter = nullptr);
 

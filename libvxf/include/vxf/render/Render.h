@@ -28,6 +28,9 @@ struct RenderedImage
     std::vector<float> alpha, depth; ///< depth: distance along the camera ray to the surface (0 where it misses)
 };
 
+/// Render options from a scene's settings.
+RenderOptions renderOptionsFrom(const SceneSettings& settings);
+
 /// Render the voxel set @a set as seen by @a camera. Camera rays hit the `surface` level set
 /// (OpenVDB's LevelSetRayIntersector, so a .vdb alone renders). In view mode a ray that hits
 /// marches on through the medium along the same direction (index-matched boundary):

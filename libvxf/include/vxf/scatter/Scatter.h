@@ -4,6 +4,7 @@
 #include <vxf/scatter/ScatterPass.h>
 
 #include <vxf/core/VoxelSet.h>
+#include <vxf/pipeline/Scene.h>
 
 #include <string>
 #include <vector>
@@ -36,6 +37,9 @@ struct ScatterReport
     std::string stopReason;
     double tailFactor = 0.0; ///< r/(1−r) of the global energy ratio (0: no extrapolation); per voxel it varies
 };
+
+/// Scatter options from a scene's settings (keepPasses when "scatter_passes" is an output).
+ScatterOptions scatterOptionsFrom(const SceneSettings& settings);
 
 /// Σ over active values of a Vec3f grid, active tiles weighted by their voxel count.
 openvdb::Vec3d gridEnergy(const openvdb::Vec3SGrid& grid);
