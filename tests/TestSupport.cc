@@ -50,6 +50,16 @@ RunResult run(const std::string& commandLine)
     return result;
 }
 
+vxf::Material greyMaterial(double sigmaA, double sigmaS)
+{
+    vxf::Material m;
+    m.sigmaA = openvdb::Vec3d(sigmaA);
+    m.sigmaS = openvdb::Vec3d(sigmaS);
+    return m;
+}
+
+vxf::Material albedoMaterial(double sigmaT, double albedo) { return greyMaterial(sigmaT - albedo * sigmaT, albedo * sigmaT); }
+
 std::string binary(const std::string& name) { return std::string(VXF_BINARY_DIR) + "/" + name; }
 
 std::string source(const std::string& relative) { return std::string(VXF_SOURCE_DIR) + "/" + relative; }

@@ -2,6 +2,8 @@
 // comparison.
 #pragma once
 
+#include <vxf/pipeline/Scene.h>
+
 #include <openvdb/openvdb.h>
 
 #include <filesystem>
@@ -43,6 +45,12 @@ std::string slurp(const std::string& path);
 
 /// Write a whole file.
 void spit(const std::string& path, const std::string& text);
+
+/// A grey material with the given absorption and scattering (1/world unit).
+vxf::Material greyMaterial(double sigmaA, double sigmaS);
+
+/// A grey material of extinction @a sigmaT and single-scattering @a albedo.
+vxf::Material albedoMaterial(double sigmaT, double albedo);
 
 /// Whether two grids are identical: type, class, background, transform, and every stored
 /// value and active state (tiles compared voxel by voxel, so pruning does not matter).

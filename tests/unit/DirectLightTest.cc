@@ -20,14 +20,6 @@ vxf::VoxelSet boxMedium(const openvdb::CoordBBox& box, double dx, bool tiles = f
     return set;
 }
 
-vxf::Material material(double sigmaA, double sigmaS)
-{
-    vxf::Material m;
-    m.sigmaA = openvdb::Vec3d(sigmaA);
-    m.sigmaS = openvdb::Vec3d(sigmaS);
-    return m;
-}
-
 vxf::Light pointLight(const openvdb::Vec3d& p, double intensity)
 {
     vxf::Light l;
@@ -43,7 +35,7 @@ vxf::Light pointLight(const openvdb::Vec3d& p, double intensity)
 TEST_CASE("point light: I/r^2 in a thin medium", "[light][direct]")
 {
     const vxf::VoxelSet set = boxMedium(openvdb::CoordBBox(openvdb::Coord(-20), openvdb::Coord(20)), 0.1);
-    const vxf::Medium medium(set, material(5e-7, 5e-7));
+    const vxf::Medium medium(set, vxf::test::greyMaterial(5e-7, 5e-7));
     vxf::Medium::Sampler sampler(medium);
     const vxf::Light light = pointLight(openvdb::Vec3d(0.0), 3.0);
     for (const openvdb::Coord c : {openvdb::Coord(10, 0, 0), openvdb::Coord(3, -4, 12), openvdb::Coord(-20, 20, 1)}) {
@@ -61,7 +53,7 @@ TEST_CASE("directional light: E exp(-sigma_t depth)", "[light][direct]")
 {
     const double dx = 0.05;
     const vxf::VoxelSet set = boxMedium(openvdb::CoordBBox(openvdb::Coord(0, -30, -30), openvdb::Coord(39, 30, 30)), dx);
-    const vxf::Medium medium(set, material(0.5, 1.5));
+    const vxf::Medium medium(set, vxf::test::greyMaterial(0.5, 1.5));
     vxf::Medium::Sampler sampler(medium);
     vxf::Light sun;
     sun.type = vxf::Light::Type::Directional;
@@ -80,7 +72,7 @@ TEST_CASE("directional light: E exp(-sigma_t depth)", "[light][direct]")
 TEST_CASE("environment light: 4 pi L with no extinction", "[light][direct]")
 {
     const vxf::VoxelSet set = boxMedium(openvdb::CoordBBox(openvdb::Coord(-5), openvdb::Coord(5)), 0.1);
-    const vxf::Medium medium(set, material(0.0, 0.0));
+    const vxf::Medium medium(set, vxf::test::greyMaterial(0.0, 0.0));
     vxf::Medium::Sampler sampler(medium);
     vxf::Light sky;
     sky.type = vxf::Light::Type::Environment;
@@ -94,7 +86,7 @@ TEST_CASE("environment light: 4 pi L with no extinction", "[light][direct]")
 TEST_CASE("spot and area lights agree with their point-light limits", "[light][direct]")
 {
     const vxf::VoxelSet set = boxMedium(openvdb::CoordBBox(openvdb::Coord(-20), openvdb::Coord(20)), 0.1);
-    const vxf::Medium medium(set, material(0.2, 0.3));
+    const vxf::Medium medium(set, vxf::test::greyMaterial(0.2, 0.3));
     vxf::Medium::Sampler sampler(medium);
     const vxf::Light point = pointLight(openvdb::Vec3d(0, 0, 3), 2.0);
     vxf::Light spot = point;
@@ -129,7 +121,7 @@ TEST_CASE("spot and area lights agree with their point-light limits", "[light][d
 TEST_CASE("the light stage writes direct and scatter_source on the medium's topology", "[light][direct]")
 {
     vxf::VoxelSet set = boxMedium(openvdb::CoordBBox(openvdb::Coord(-64), openvdb::Coord(63)), 0.02, /*tiles=*/true);
-    const vxf::Material m = material(0.5, 2.0);
+    const vxf::Material m = vxf::test::greyMaterial(0.5, 2.0);
     const vxf::Medium medium(set, m);
     vxf::Light dark = pointLight(openvdb::Vec3d(0.0), 0.0);
     dark.name = "off";

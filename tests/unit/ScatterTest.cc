@@ -37,19 +37,11 @@ vxf::VoxelSet uniformSphere(const vxf::Material& m, double phi0)
     return set;
 }
 
-vxf::Material withAlbedo(double sigmaT, double albedo)
-{
-    vxf::Material m;
-    m.sigmaS = openvdb::Vec3d(albedo * sigmaT);
-    m.sigmaA = openvdb::Vec3d(sigmaT - albedo * sigmaT);
-    return m;
-}
-
 } // namespace
 
 TEST_CASE("in a large homogeneous medium each pass scales by the albedo", "[scatter]")
 {
-    const vxf::Material m = withAlbedo(20.0, 0.9); // sigma_t R = 20: the centre does not see the boundary
+    const vxf::Material m = vxf::test::albedoMaterial(20.0, 0.9); // sigma_t R = 20: the centre does not see the boundary
     vxf::VoxelSet set = uniformSphere(m, 1.0);
     const vxf::Medium medium(set, m);
     vxf::ScatterOptions options;
@@ -75,7 +67,7 @@ TEST_CASE("in a large homogeneous medium each pass scales by the albedo", "[scat
 
 TEST_CASE("albedo near 1 stays finite and bounded; tolerance stops the passes", "[scatter][stability]")
 {
-    const vxf::Material m = withAlbedo(8.0, 0.9999);
+    const vxf::Material m = vxf::test::albedoMaterial(8.0, 0.9999);
     vxf::VoxelSet set = uniformSphere(m, 1.0);
     const vxf::Medium medium(set, m);
     vxf::ScatterOptions options;
@@ -95,7 +87,7 @@ TEST_CASE("albedo near 1 stays finite and bounded; tolerance stops the passes", 
 
 TEST_CASE("no scattering when sigma_s is zero", "[scatter]")
 {
-    const vxf::Material m = withAlbedo(5.0, 0.0);
+    const vxf::Material m = vxf::test::albedoMaterial(5.0, 0.0);
     vxf::VoxelSet set = uniformSphere(m, 1.0);
     const auto report = vxf::scatter(set, vxf::Medium(set, m));
     CHECK(report.passes.empty());
@@ -105,7 +97,7 @@ TEST_CASE("no scattering when sigma_s is zero", "[scatter]")
 
 TEST_CASE("continuing from a kept pass equals running straight through, for any thread count", "[scatter]")
 {
-    const vxf::Material m = withAlbedo(6.0, 0.8);
+    const vxf::Material m = vxf::test::albedoMaterial(6.0, 0.8);
     vxf::ScatterOptions three;
     three.passes = 3;
     three.tolerance = 0.0;
@@ -139,7 +131,7 @@ TEST_CASE("continuing from a kept pass equals running straight through, for any 
 
 TEST_CASE("extrapolating the geometric tail reaches the converged sum in few passes", "[scatter]")
 {
-    const vxf::Material m = withAlbedo(20.0, 0.9);
+    const vxf::Material m = vxf::test::albedoMaterial(20.0, 0.9);
     vxf::VoxelSet set = uniformSphere(m, 1.0);
     vxf::ScatterOptions options;
     options.passes = 4;

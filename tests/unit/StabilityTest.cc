@@ -6,6 +6,8 @@
 #include <vxf/core/ProceduralMesh.h>
 #include <vxf/voxelize/Voxelize.h>
 
+#include "TestSupport.h"
+
 #include <catch2/catch.hpp>
 
 namespace {
@@ -63,14 +65,6 @@ Bounds runChain(const vxf::TriangleMesh& mesh, const vxf::Material& m, int dim)
     return b;
 }
 
-vxf::Material material(double sigmaT, double albedo)
-{
-    vxf::Material m;
-    m.sigmaS = openvdb::Vec3d(albedo * sigmaT);
-    m.sigmaA = openvdb::Vec3d(sigmaT - albedo * sigmaT);
-    return m;
-}
-
 } // namespace
 
 TEST_CASE("hard cases stay finite and bounded through the whole chain", "[stability]")
@@ -82,7 +76,7 @@ TEST_CASE("hard cases stay finite and bounded through the whole chain", "[stabil
     {
         for (double sigmaT : {1e-6, 1.0, 1e6}) {
             INFO("sigma_t " << sigmaT);
-            const Bounds b = runChain(sphere, material(sigmaT, 0.5), 24);
+            const Bounds b = runChain(sphere, vxf::test::albedoMaterial(sigmaT, 0.5), 24);
             CHECK(b.finite);
             CHECK(b.maxDirect <= 4.0 + 1e-6);
             CHECK(b.maxScatter <= 4.0 + 1e-6);
@@ -90,21 +84,21 @@ TEST_CASE("hard cases stay finite and bounded through the whole chain", "[stabil
     }
     SECTION("albedo 0.9999")
     {
-        const Bounds b = runChain(sphere, material(10.0, 0.9999), 24);
+        const Bounds b = runChain(sphere, vxf::test::albedoMaterial(10.0, 0.9999), 24);
         CHECK(b.finite);
         CHECK(b.maxScatter <= 4.0 * 100.0);
     }
     SECTION("a mesh 1e5 units from the origin")
     {
-        const Bounds far = runChain(vxf::makeSphere(openvdb::Vec3d(1e5, -1e5, 1e5), 1.0, 32, 64), material(4.0, 0.8), 24);
-        const Bounds near = runChain(sphere, material(4.0, 0.8), 24);
+        const Bounds far = runChain(vxf::makeSphere(openvdb::Vec3d(1e5, -1e5, 1e5), 1.0, 32, 64), vxf::test::albedoMaterial(4.0, 0.8), 24);
+        const Bounds near = runChain(sphere, vxf::test::albedoMaterial(4.0, 0.8), 24);
         CHECK(far.finite);
         CHECK(far.maxDirect == Approx(near.maxDirect).epsilon(0.02)); // the same scene, translated
     }
     SECTION("a one-voxel-thin shell")
     {
         // Box 0.04 thick at a voxel size of 1/24 of its width: thinner than a voxel.
-        const Bounds b = runChain(vxf::makeBox(openvdb::Vec3d(-1, -1, -0.02), openvdb::Vec3d(1, 1, 0.02)), material(20.0, 0.9), 48);
+        const Bounds b = runChain(vxf::makeBox(openvdb::Vec3d(-1, -1, -0.02), openvdb::Vec3d(1, 1, 0.02)), vxf::test::albedoMaterial(20.0, 0.9), 48);
         CHECK(b.finite);
         CHECK(b.maxDirect <= 4.0 + 1e-6);
     }

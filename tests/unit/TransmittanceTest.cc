@@ -1,5 +1,7 @@
 #include <vxf/light/Transmittance.h>
 
+#include "TestSupport.h"
+
 #include <catch2/catch.hpp>
 
 namespace {
@@ -17,14 +19,6 @@ vxf::VoxelSet slab(int n, double dx)
     return set;
 }
 
-vxf::Material material(double sigmaA, double sigmaS)
-{
-    vxf::Material m;
-    m.sigmaA = openvdb::Vec3d(sigmaA);
-    m.sigmaS = openvdb::Vec3d(sigmaS);
-    return m;
-}
-
 } // namespace
 
 TEST_CASE("slab transmittance is exp(-sigma_t d)", "[light][transmittance]")
@@ -33,7 +27,7 @@ TEST_CASE("slab transmittance is exp(-sigma_t d)", "[light][transmittance]")
     const int n = 20; // d = n dx = 1
     const vxf::VoxelSet set = slab(n, dx);
     for (double sigmaT : {0.1, 1.0, 2.5, 6.0}) {
-        const vxf::Medium medium(set, material(0.25 * sigmaT, 0.75 * sigmaT));
+        const vxf::Medium medium(set, vxf::test::greyMaterial(0.25 * sigmaT, 0.75 * sigmaT));
         vxf::Medium::Sampler sampler(medium);
         // From 10 voxels before to 10 voxels after: the trilinear density integrates to n dx.
         const openvdb::Vec3d t = vxf::transmittance(sampler, medium, openvdb::Vec3d(-10, 0, 0), openvdb::Vec3d(n + 9, 0, 0), {});
@@ -50,7 +44,7 @@ TEST_CASE("transmittance stays finite and in [0,1] at extreme coefficients", "[l
 {
     const vxf::VoxelSet set = slab(20, 0.05);
     for (double sigmaT : {0.0, 1e-6, 1e6}) {
-        const vxf::Medium medium(set, material(sigmaT, 0.0));
+        const vxf::Medium medium(set, vxf::test::greyMaterial(sigmaT, 0.0));
         vxf::Medium::Sampler sampler(medium);
         const openvdb::Vec3d t = vxf::transmittance(sampler, medium, openvdb::Vec3d(-10, 0, 0), openvdb::Vec3d(30, 0, 0), {});
         INFO("sigma_t " << sigmaT);
@@ -62,7 +56,7 @@ TEST_CASE("transmittance stays finite and in [0,1] at extreme coefficients", "[l
         if (sigmaT == 1e6) CHECK(t.x() == 0.0);
     }
     // Outside the medium entirely, and a zero-length segment.
-    const vxf::Medium medium(set, material(1.0, 1.0));
+    const vxf::Medium medium(set, vxf::test::greyMaterial(1.0, 1.0));
     vxf::Medium::Sampler sampler(medium);
     CHECK(vxf::transmittance(sampler, medium, openvdb::Vec3d(-50, 0, 0), openvdb::Vec3d(-40, 5, 0), {}) == openvdb::Vec3d(1.0));
     CHECK(vxf::transmittance(sampler, medium, openvdb::Vec3d(3, 0, 0), openvdb::Vec3d(3, 0, 0), {}) == openvdb::Vec3d(1.0));
@@ -76,7 +70,7 @@ TEST_CASE("negative artist coefficients never amplify light", "[light][transmitt
     sigmaA->setTransform(set.transformPtr());
     sigmaA->tree().fill(openvdb::CoordBBox(openvdb::Coord(0, -20, -20), openvdb::Coord(19, 20, 20)), openvdb::Vec3f(-5.0f, 1.0f, 0.0f), true);
     set.put(sigmaA);
-    const vxf::Medium medium(set, material(0.0, 0.0));
+    const vxf::Medium medium(set, vxf::test::greyMaterial(0.0, 0.0));
     vxf::Medium::Sampler sampler(medium);
     const openvdb::Vec3d t = vxf::transmittance(sampler, medium, openvdb::Vec3d(-10, 0, 0), openvdb::Vec3d(29, 0, 0), {});
     CHECK(t.x() == 1.0); // sigma_t < 0 counts as 0
@@ -94,7 +88,7 @@ TEST_CASE("transmittance to the boundary through a concave gap counts only the m
     density->tree().fill(openvdb::CoordBBox(openvdb::Coord(0, -8, -8), openvdb::Coord(9, 8, 8)), 1.0f, true);
     density->tree().fill(openvdb::CoordBBox(openvdb::Coord(30, -8, -8), openvdb::Coord(39, 8, 8)), 1.0f, true);
     set.put(density);
-    const vxf::Medium medium(set, material(1.0, 0.0));
+    const vxf::Medium medium(set, vxf::test::greyMaterial(1.0, 0.0));
     vxf::Medium::Sampler sampler(medium);
     // From the centre of voxel 5 toward +x: centres 5..9 (4 voxels) + the half-voxel ramp out,
     // then the second slab: ramp in + centres 30..39 + ramp out = 10 voxels. The gap adds 0.

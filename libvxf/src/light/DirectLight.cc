@@ -1,5 +1,6 @@
 #include <vxf/light/DirectLight.h>
 
+#include <vxf/core/Hash.h>
 #include <vxf/core/SphericalFibonacci.h>
 #include <vxf/io/VoxelSetFile.h>
 
@@ -24,19 +25,6 @@ double falloff(Light::Falloff f, double r)
     case Light::Falloff::None: return 1.0;
     }
     return 0.0;
-}
-
-/// Deterministic hash of a voxel and a sample index to [0, 1).
-double hash01(const openvdb::Coord& c, std::uint32_t sample, std::uint32_t salt)
-{
-    std::uint64_t h = 0x9E3779B97F4A7C15ull ^ (std::uint64_t(std::uint32_t(c[0])) * 0xBF58476D1CE4E5B9ull);
-    h ^= std::uint64_t(std::uint32_t(c[1])) * 0x94D049BB133111EBull + (h << 6) + (h >> 2);
-    h ^= std::uint64_t(std::uint32_t(c[2])) * 0xD6E8FEB86659FD93ull + (h << 6) + (h >> 2);
-    h ^= (std::uint64_t(sample) << 32 | salt) * 0x9E3779B97F4A7C15ull;
-    h ^= h >> 31;
-    h *= 0xBF58476D1CE4E5B9ull;
-    h ^= h >> 29;
-    return double(h >> 11) * (1.0 / 9007199254740992.0);
 }
 
 /// Orthonormal tangents of unit normal @a n.
@@ -107,8 +95,8 @@ openvdb::Vec3d lightFluence(const Light& light, Medium::Sampler& sampler, const 
             const double area = 4.0 * M_PI * light.radius * light.radius;
             for (int i = 0; i < n; ++i) {
                 // Stratified in z (equal-area bands) and jittered in angle, per voxel.
-                const double z = 1.0 - 2.0 * (i + hash01(voxel, std::uint32_t(i), 1)) / n;
-                const double phi = 2.0 * M_PI * hash01(voxel, std::uint32_t(i), 2);
+                const double z = 1.0 - 2.0 * (i + unitHash(coordKey(voxel), std::uint64_t(i), 1)) / n;
+                const double phi = 2.0 * M_PI * unitHash(coordKey(voxel), std::uint64_t(i), 2);
                 const double s = std::sqrt(std::max(0.0, 1.0 - z * z));
                 const openvdb::Vec3d normal(s * std::cos(phi), s * std::sin(phi), z);
                 const openvdb::Vec3d q = light.position + light.radius * normal;
@@ -125,8 +113,8 @@ openvdb::Vec3d lightFluence(const Light& light, Medium::Sampler& sampler, const 
         const int count = side * side;
         const double area = light.shape == Light::Shape::Disk ? M_PI * light.radius * light.radius : light.width * light.height;
         for (int i = 0; i < count; ++i) {
-            const double a = (i % side + hash01(voxel, std::uint32_t(i), 3)) / side;
-            const double b = (i / side + hash01(voxel, std::uint32_t(i), 4)) / side;
+            const double a = (i % side + unitHash(coordKey(voxel), std::uint64_t(i), 3)) / side;
+            const double b = (i / side + unitHash(coordKey(voxel), std::uint64_t(i), 4)) / side;
             openvdb::Vec3d q;
             if (light.shape == Light::Shape::Disk) {
                 const double r = light.radius * std::sqrt(a), phi = 2.0 * M_PI * b; // area-preserving

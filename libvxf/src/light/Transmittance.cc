@@ -6,10 +6,14 @@
 
 namespace vxf {
 
-namespace {
+openvdb::BBoxd marchBounds(const Medium& medium)
+{
+    const openvdb::CoordBBox& b = medium.activeBounds();
+    if (b.empty()) return openvdb::BBoxd(); // empty
+    return openvdb::BBoxd(b.min().asVec3d() - openvdb::Vec3d(1.0), b.max().asVec3d() + openvdb::Vec3d(1.0));
+}
 
-/// Clip the ray origin + t·direction, t ∈ [t0, t1], to @a box (slab method); false if it misses.
-bool clip(const openvdb::BBoxd& box, const openvdb::Vec3d& origin, const openvdb::Vec3d& direction, double& t0, double& t1)
+bool clipRay(const openvdb::BBoxd& box, const openvdb::Vec3d& origin, const openvdb::Vec3d& direction, double& t0, double& t1)
 {
     for (int a = 0; a < 3; ++a) {
         if (direction[a] == 0.0) {
@@ -25,17 +29,12 @@ bool clip(const openvdb::BBoxd& box, const openvdb::Vec3d& origin, const openvdb
     return t0 < t1;
 }
 
-openvdb::BBoxd marchBounds(const Medium& medium)
-{
-    // Trilinear lookups reach one voxel beyond the active voxels.
-    const openvdb::CoordBBox& b = medium.activeBounds();
-    return openvdb::BBoxd(b.min().asVec3d() - openvdb::Vec3d(1.0), b.max().asVec3d() + openvdb::Vec3d(1.0));
-}
+namespace {
 
 openvdb::Vec3d march(Medium::Sampler& sampler, const Medium& medium, const openvdb::Vec3d& origin,
     const openvdb::Vec3d& unit, double t0, double t1, const MarchOptions& options)
 {
-    if (medium.activeBounds().empty() || !clip(marchBounds(medium), origin, unit, t0, t1)) return openvdb::Vec3d(1.0);
+    if (medium.activeBounds().empty() || !clipRay(marchBounds(medium), origin, unit, t0, t1)) return openvdb::Vec3d(1.0);
     const double length = t1 - t0;
     const int steps = std::max(1, int(std::ceil(length / std::max(options.step, 1e-3))));
     const double h = length / steps;

@@ -1,5 +1,8 @@
 #include <vxf/render/Render.h>
 
+#include <vxf/core/Hash.h>
+#include <vxf/light/Transmittance.h>
+
 #include <openvdb/tools/RayIntersector.h>
 
 #include <fmt/format.h>
@@ -12,15 +15,6 @@
 namespace vxf {
 
 namespace {
-
-double hash01(std::uint64_t a, std::uint64_t b)
-{
-    std::uint64_t h = a * 0x9E3779B97F4A7C15ull ^ (b + 0x632BE59BD9B4E019ull) * 0xBF58476D1CE4E5B9ull;
-    h ^= h >> 31;
-    h *= 0x94D049BB133111EBull;
-    h ^= h >> 29;
-    return double(h >> 11) * (1.0 / 9007199254740992.0);
-}
 
 /// Radiance gathered along one ray through the medium, per layer.
 struct Gathered
@@ -39,8 +33,7 @@ public:
     {
         if (auto d = set.find("direct")) mDirect.emplace(set.get<openvdb::Vec3SGrid>("direct")->getConstAccessor());
         if (auto s = set.find("scatter")) mScatter.emplace(set.get<openvdb::Vec3SGrid>("scatter")->getConstAccessor());
-        const openvdb::CoordBBox& b = medium.activeBounds();
-        mBounds = openvdb::BBoxd(b.min().asVec3d() - openvdb::Vec3d(1.0), b.max().asVec3d() + openvdb::Vec3d(1.0));
+        mBounds = marchBounds(medium);
         mTauCutoff = -std::log(std::max(options.cutoff, std::numeric_limits<double>::min()));
     }
 
@@ -54,17 +47,7 @@ public:
         openvdb::Vec3d d = xform.worldToIndex(start + dir) - o;
         d.normalize();
         double t0 = 0.0, t1 = std::numeric_limits<double>::max();
-        for (int a = 0; a < 3; ++a) {
-            if (d[a] == 0.0) {
-                if (o[a] < mBounds.min()[a] || o[a] > mBounds.max()[a]) return g;
-                continue;
-            }
-            double n = (mBounds.min()[a] - o[a]) / d[a], f = (mBounds.max()[a] - o[a]) / d[a];
-            if (n > f) std::swap(n, f);
-            t0 = std::max(t0, n);
-            t1 = std::min(t1, f);
-        }
-        if (!(t0 < t1)) return g;
+        if (!clipRay(mBounds, o, d, t0, t1)) return g;
         const int steps = std::max(1, int(std::ceil((t1 - t0) / std::max(mOptions.step, 1e-3))));
         const double h = (t1 - t0) / steps, hWorld = h * mMedium.voxelSize();
         openvdb::Vec3d tau(0.0);
@@ -78,10 +61,8 @@ public:
             const openvdb::Vec3d phiScatter = mScatter ? openvdb::Vec3d(openvdb::tools::BoxSampler::sample(*mScatter, p)) : openvdb::Vec3d(0.0);
             for (int c = 0; c < 3; ++c) {
                 // J = σs φ / 4π; ΔL = T·J·(1 − e^{−σt h})/σt; T ·= e^{−σt h}.
-                const double s = std::max(0.0, sigmaT[c]);
-                const double od = s * hWorld;
-                const double segment = od > 1e-8 ? -std::expm1(-od) / s : hWorld * (1.0 - 0.5 * od);
-                const double weight = g.transmittance[c] * segment * sigmaS[c] / (4.0 * M_PI);
+                const double od = std::max(0.0, sigmaT[c]) * hWorld;
+                const double weight = g.transmittance[c] * stepIntegral(sigmaT[c], hWorld) * sigmaS[c] / (4.0 * M_PI);
                 g.direct[c] += weight * phiDirect[c];
                 g.scatter[c] += weight * phiScatter[c];
                 g.transmittance[c] *= std::exp(-od);
@@ -162,8 +143,8 @@ RenderedImage render(const VoxelSet& set, const Medium& medium, const Camera& ca
                 openvdb::Vec3d sumCombined(0.0), sumDirect(0.0), sumScatter(0.0), sumNormal(0.0);
                 double sumAlpha = 0.0, sumDepth = 0.0;
                 for (int s = 0; s < spp; ++s) {
-                    const double u = (s % side + hash01(pixel, std::uint64_t(2 * s))) / side;
-                    const double v = (s / side + hash01(pixel, std::uint64_t(2 * s + 1))) / side;
+                    const double u = (s % side + unitHash(pixel, std::uint64_t(s), 0)) / side;
+                    const double v = (s / side + unitHash(pixel, std::uint64_t(s), 1)) / side;
                     const double sx = (2.0 * (x + u) / options.width - 1.0), sy = (1.0 - 2.0 * (y + v) / options.height);
                     openvdb::Vec3d origin = camera.position, dir = forward;
                     if (camera.orthographic) {
@@ -201,8 +182,8 @@ RenderedImage render(const VoxelSet& set, const Medium& medium, const Camera& ca
                     openvdb::Vec3d gd(0.0), gs(0.0);
                     int kept = 0;
                     for (int k = 0; k < gatherDirs; ++k) {
-                        const double a = (k + hash01(pixel * 977 + std::uint64_t(s), std::uint64_t(k) + 7)) / gatherDirs;
-                        const double phi = 2.0 * M_PI * hash01(pixel * 131 + std::uint64_t(s), std::uint64_t(k) + 11);
+                        const double a = (k + unitHash(pixel, std::uint64_t(s) << 32 | std::uint64_t(k), 2)) / gatherDirs;
+                        const double phi = 2.0 * M_PI * unitHash(pixel, std::uint64_t(s) << 32 | std::uint64_t(k), 3);
                         const double r = std::sqrt(a);
                         const openvdb::Vec3d w = (t1 * (r * std::cos(phi)) + t2 * (r * std::sin(phi)) + inward * std::sqrt(std::max(0.0, 1.0 - a))).unit();
                         const Gathered g = marcher.march(hit, w);

@@ -1,6 +1,8 @@
 #include <vxf/scatter/ScatterPass.h>
 
+#include <vxf/core/Hash.h>
 #include <vxf/core/SphericalFibonacci.h>
+#include <vxf/light/Transmittance.h>
 
 #include <openvdb/math/Mat3.h>
 #include <openvdb/tree/LeafManager.h>
@@ -15,50 +17,17 @@ namespace vxf {
 
 namespace {
 
-std::uint64_t mix(std::uint64_t h)
-{
-    h ^= h >> 31;
-    h *= 0xBF58476D1CE4E5B9ull;
-    h ^= h >> 29;
-    h *= 0x94D049BB133111EBull;
-    h ^= h >> 32;
-    return h;
-}
-
 /// A uniformly random rotation (Shoemake's quaternion method) seeded by the voxel.
 openvdb::Mat3d voxelRotation(const openvdb::Coord& c)
 {
-    std::uint64_t h = mix(std::uint64_t(std::uint32_t(c[0])) * 73856093ull ^ std::uint64_t(std::uint32_t(c[1])) * 19349663ull ^
-                          std::uint64_t(std::uint32_t(c[2])) * 83492791ull ^ 0x5CA77E2ull);
-    double u[3];
-    for (double& v : u) {
-        h = mix(h + 0x9E3779B97F4A7C15ull);
-        v = double(h >> 11) * (1.0 / 9007199254740992.0);
-    }
+    const std::uint64_t key = coordKey(c);
+    const double u[3] = {unitHash(key, 0, 5), unitHash(key, 1, 5), unitHash(key, 2, 5)};
     const double a = std::sqrt(1.0 - u[0]), b = std::sqrt(u[0]);
     const double w = a * std::sin(2 * M_PI * u[1]), x = a * std::cos(2 * M_PI * u[1]);
     const double y = b * std::sin(2 * M_PI * u[2]), z = b * std::cos(2 * M_PI * u[2]);
     return openvdb::Mat3d(1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w),
         2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w),
         2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y));
-}
-
-/// Entry and exit distances of a ray in a box (slab method); false when it misses.
-bool clip(const openvdb::BBoxd& box, const openvdb::Vec3d& o, const openvdb::Vec3d& d, double& t1)
-{
-    double t0 = 0.0;
-    t1 = std::numeric_limits<double>::max();
-    for (int a = 0; a < 3; ++a) {
-        if (d[a] == 0.0) {
-            if (o[a] < box.min()[a] || o[a] > box.max()[a]) return false;
-            continue;
-        }
-        double n = (box.min()[a] - o[a]) / d[a], f = (box.max()[a] - o[a]) / d[a];
-        if (n > f) std::swap(n, f);
-        t0 = std::max(t0, n);
-        t1 = std::min(t1, f);
-    }
-    return t0 < t1;
 }
 
 } // namespace
@@ -78,8 +47,8 @@ openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGr
     const double dx = medium.voxelSize();
     const double h = std::max(options.step, 1e-3);
     const double tauCutoff = -std::log(std::max(options.cutoff, std::numeric_limits<double>::min()));
-    const openvdb::CoordBBox& active = medium.activeBounds();
-    const openvdb::BBoxd bounds(active.min().asVec3d() - openvdb::Vec3d(1.0), active.max().asVec3d() + openvdb::Vec3d(1.0));
+    const bool empty = medium.activeBounds().empty();
+    const openvdb::BBoxd bounds = marchBounds(medium);
 
     // φ(x) at one index-space point.
     const auto gather = [&](Medium::Sampler& sampler, openvdb::Vec3SGrid::ConstAccessor& j, const openvdb::Coord& c) {
@@ -88,8 +57,8 @@ openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGr
         openvdb::Vec3d phi(0.0);
         for (const openvdb::Vec3d& d0 : directions) {
             const openvdb::Vec3d d = rotation * d0;
-            double tExit;
-            if (active.empty() || !clip(bounds, x, d, tExit)) continue;
+            double tEntry = 0.0, tExit = std::numeric_limits<double>::max();
+            if (empty || !clipRay(bounds, x, d, tEntry, tExit)) continue;
             openvdb::Vec3d radiance(0.0), T(1.0), tau(0.0);
             const int steps = std::max(1, int(std::ceil(tExit / h)));
             const double hi = tExit / steps, hWorld = hi * dx;
@@ -99,10 +68,8 @@ openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGr
                 const openvdb::Vec3d J(openvdb::tools::BoxSampler::sample(j, p));
                 // ΔL = T·J·(1 − e^{−σt h})/σt; T ·= e^{−σt h}.
                 for (int ch = 0; ch < 3; ++ch) {
-                    const double s = std::max(0.0, sigmaT[ch]);
-                    const double od = s * hWorld;
-                    const double segment = od > 1e-8 ? -std::expm1(-od) / s : hWorld * (1.0 - 0.5 * od);
-                    radiance[ch] += T[ch] * J[ch] * segment;
+                    const double od = std::max(0.0, sigmaT[ch]) * hWorld;
+                    radiance[ch] += T[ch] * J[ch] * stepIntegral(sigmaT[ch], hWorld);
                     T[ch] *= std::exp(-od);
                     tau[ch] += od;
                 }

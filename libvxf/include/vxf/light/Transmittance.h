@@ -3,6 +3,8 @@
 
 #include <vxf/light/Medium.h>
 
+#include <cmath>
+
 namespace vxf {
 
 struct MarchOptions
@@ -10,6 +12,23 @@ struct MarchOptions
     double step = 0.5;    ///< march step in voxels (σt is taken constant over each step)
     double cutoff = 1e-4; ///< below this transmittance (every channel) a march stops and returns 0
 };
+
+/// Index-space box every march is clipped to: the medium's active bounds plus one voxel
+/// (trilinear lookups reach that far). Empty when there is no medium.
+openvdb::BBoxd marchBounds(const Medium& medium);
+
+/// Clip the ray origin + t·direction to @a box, narrowing [t0, t1] (slab method);
+/// false when nothing of the interval is inside.
+bool clipRay(const openvdb::BBoxd& box, const openvdb::Vec3d& origin, const openvdb::Vec3d& direction, double& t0, double& t1);
+
+/// ∫_0^h e^{−σt s} ds = (1 − e^{−σt h})/σt for one march step of world length @a h, exact for
+/// any σt ≥ 0 (series form as σt·h → 0; never divides by zero). Negative σt counts as 0.
+inline double stepIntegral(double sigmaT, double h)
+{
+    const double s = sigmaT > 0.0 ? sigmaT : 0.0;
+    const double od = s * h;
+    return od > 1e-8 ? -std::expm1(-od) / s : h * (1.0 - 0.5 * od);
+}
 
 /// T(a, b) = exp(−∫ σt ds) on the segment from @a fromIjk to @a toIjk (index space),
 /// per channel. Only the medium counts: σt is 0 outside it, so a segment may leave and
