@@ -1,4 +1,4 @@
-// `vxf scatter IN.vdb -o OUT.vdb [--passes N] [--directions D] [--step H] [--tolerance E] [--keep-passes] [--from-pass K]`
+// `vxf scatter IN.vdb -o OUT.vdb [--passes N] [--directions D] [--step H] [--tolerance E] [--keep-passes] [--band W] [--from-pass K]`
 #include "CliSupport.h"
 #include "Commands.h"
 
@@ -33,6 +33,10 @@ public:
             ->check(CLI::Range(0.0, 1.0));
         mApp->add_flag("--extrapolate", mOptions.extrapolateTail,
             "After the last pass add the geometric tail phi_K r/(1-r), r = phi_K/phi_(K-1) per voxel");
+        mApp->add_option("--band", mOptions.band,
+               "Adaptive narrow band, world units: full resolution within W of the surface, the tree's 8^3 and 128^3 "
+               "tiles deeper (default 0: full resolution everywhere)")
+            ->check(CLI::NonNegativeNumber);
         mApp->add_flag("--keep-passes", mOptions.keepPasses, "Keep each pass as scatter_pass_K");
         mApp->add_option("--from-pass", mOptions.fromPass, "Continue from scatter_pass_K (as edited) instead of scatter_source")
             ->check(CLI::Range(1, 10000));
@@ -53,13 +57,17 @@ public:
         const ScatterReport report = scatter(set, medium, mOptions, &progress);
         nlohmann::json params = {{"command", "scatter"}, {"input", mInput}, {"passes", mOptions.passes},
             {"directions", mOptions.pass.directions}, {"step", mOptions.pass.step}, {"tolerance", mOptions.tolerance},
-            {"keep_passes", mOptions.keepPasses}, {"extrapolate", mOptions.extrapolateTail}, {"from_pass", mOptions.fromPass},
+            {"keep_passes", mOptions.keepPasses}, {"band", mOptions.band}, {"extrapolate", mOptions.extrapolateTail}, {"from_pass", mOptions.fromPass},
             {"rotate_per_voxel", mOptions.pass.rotatePerVoxel}, {"passes_run", report.passes.size()}};
         set.setProvenance("scatter", params.dump());
         recordMaterial(set, material);
         writeVoxelSet(mOutput, set, mWrite);
         if (mQuiet) return;
         std::cout << fmt::format("scattered {} -> {}: {} passes ({})\n", mInput, mOutput, report.passes.size(), report.stopReason);
+        if (mOptions.band > 0.0) {
+            std::cout << fmt::format("  band {}: {} voxels at full resolution, {} voxels in {} 8^3 and {} 128^3 tiles\n",
+                mOptions.band, report.band.fineVoxels, report.band.coarseVoxels, report.band.leafTiles, report.band.internalTiles);
+        }
         std::cout << "  pass   energy (sum of fluence over voxels, r g b)        ratio   seconds\n";
         for (const auto& p : report.passes) {
             std::cout << fmt::format("  {:>4}   {:>12.5g} {:>12.5g} {:>12.5g}   {:>7.4f}   {:>7.3f}\n", p.index, p.energy[0],

@@ -146,7 +146,7 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
         record("scatter", "skipped", "no requested output needs it", "", 0.0);
     } else {
         const json scatterInputs = {{"lit", lightHash}, {"passes", s.passes}, {"directions", s.directions}, {"step", s.step},
-            {"tolerance", s.tolerance}, {"extrapolate", s.extrapolate}, {"keep", wants("scatter_passes")}};
+            {"tolerance", s.tolerance}, {"extrapolate", s.extrapolate}, {"band", s.scatterBand}, {"keep", wants("scatter_passes")}};
         // (every field scatterOptionsFrom reads)
         volumeHash = hashOf(scatterInputs);
         volumeFile = cache / ("scatter-" + volumeHash + ".vdb");

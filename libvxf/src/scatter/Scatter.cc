@@ -1,5 +1,7 @@
 #include <vxf/scatter/Scatter.h>
 
+#include <vxf/scatter/AdaptiveBand.h>
+
 #include <openvdb/tools/Composite.h>
 #include <openvdb/tools/ValueTransformer.h>
 #include <openvdb/tree/LeafManager.h>
@@ -21,6 +23,7 @@ ScatterOptions scatterOptionsFrom(const SceneSettings& s)
     o.keepPasses = std::find(s.outputs.begin(), s.outputs.end(), "scatter_passes") != s.outputs.end();
     o.pass.directions = s.directions;
     o.pass.step = s.step;
+    o.band = s.scatterBand;
     return o;
 }
 
@@ -75,6 +78,8 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
     int k = options.fromPass;
     if (k == 0) {
         j = set.get<openvdb::Vec3SGrid>("scatter_source");
+        if (options.band > 0.0) j = j->deepCopy(); // the file's scatter_source stays as it was
+        report.band = coarsenBeyondBand(*j, medium.density(), options.band);
         sum = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
         sum->setTransform(j->transformPtr());
         sum->tree().topologyUnion(j->tree());
@@ -85,6 +90,7 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
             openvdb::tools::compSum(*sum, *pass);
         }
         j = sourceFromFluence(medium, *set.get<openvdb::Vec3SGrid>(fmt::format("scatter_pass_{}", k)));
+        report.band = coarsenBeyondBand(*j, medium.density(), options.band);
     }
 
     const bool scatters = maxChannel(medium.material().sigmaS) > 0.0 || set.find("sigma_s");

@@ -1,6 +1,7 @@
 // vxf — the scatter stage: source iteration over passes, with early stopping.
 #pragma once
 
+#include <vxf/scatter/AdaptiveBand.h>
 #include <vxf/scatter/ScatterPass.h>
 
 #include <vxf/core/VoxelSet.h>
@@ -21,6 +22,9 @@ struct ScatterOptions
     /// r = φ_K/φ_{K−1} per voxel and channel, capped by the global energy ratio of the last
     /// two passes (itself ≤ 0.99). Makes albedo ≈ 1 converge in few passes.
     bool extrapolateTail = false;
+    /// Adaptive narrow band (world units): full resolution within this distance of the
+    /// surface, 8³ and 128³ tiles deeper (see coarsenBeyondBand). 0: full resolution everywhere.
+    double band = 0.0;
     ScatterPassOptions pass;
 };
 
@@ -36,6 +40,7 @@ struct ScatterReport
     std::vector<Pass> passes;
     std::string stopReason;
     double tailFactor = 0.0; ///< r/(1−r) of the global energy ratio (0: no extrapolation); per voxel it varies
+    AdaptiveBandReport band;  ///< the resolution the passes ran at
 };
 
 /// Scatter options from a scene's settings (keepPasses when "scatter_passes" is an output).
@@ -50,7 +55,8 @@ openvdb::Vec3d gridEnergy(const openvdb::Vec3SGrid& grid);
 /// `scatter_pass_K`. With fromPass = K the iteration restarts from `scatter_pass_K` (as edited)
 /// and the sum from `scatter_pass_1..K`. Stops after options.passes, or when a pass adds
 /// less than the tolerance, or at once when the medium does not scatter (σs = 0: `scatter`
-/// is 0). Topology: that of `scatter_source`. Throws vxf::Error naming a missing grid.
+/// is 0). Topology: that of `scatter_source`, with the deep interior made tiles when options.band > 0
+/// (`scatter_source` itself is left as it was). Throws vxf::Error naming a missing grid.
 ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions& options = {},
     Interrupter* interrupter = nullptr);
 

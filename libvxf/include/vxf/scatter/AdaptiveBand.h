@@ -1,0 +1,28 @@
+// vxf — the adaptive narrow band: full resolution near the surface, the tree's tiles deeper.
+#pragma once
+
+#include <openvdb/openvdb.h>
+
+namespace vxf {
+
+struct AdaptiveBandReport
+{
+    openvdb::Index64 fineVoxels = 0;       ///< active voxels left at full resolution
+    std::size_t leafTiles = 0;             ///< 8³ blocks made one value
+    std::size_t internalTiles = 0;         ///< 128³ blocks made one value
+    openvdb::Index64 coarseVoxels = 0;     ///< voxels those tiles cover
+};
+
+/// Coarsen the deep interior of @a grid (a quantity on the medium, e.g. a scattering source):
+/// every 8³ leaf whose voxels all lie at least max(band, 4 voxels) inside the medium (the
+/// active region of @a density) becomes one active tile holding the leaf's mean, and every
+/// 128³ block at least max(band, 64 voxels) deep becomes one tile holding its mean — the
+/// VDB tree's own levels, so each block's centre is never farther from its voxels than they
+/// are from the band. Depth is measured by eroding the medium's topology with the 26-neighbour
+/// (L∞) stencil, so it never overstates the distance to the surface. Means keep the grid's
+/// sum (energy) unchanged. @a band is in world units; band ≤ 0 leaves @a grid untouched.
+/// Passes over the tree evaluate tiles once (at their centre), so a pass costs the band's
+/// voxels plus one per tile. Idempotent.
+AdaptiveBandReport coarsenBeyondBand(openvdb::Vec3SGrid& grid, const openvdb::FloatGrid& density, double band);
+
+} // namespace vxf

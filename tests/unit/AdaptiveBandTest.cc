@@ -1,0 +1,123 @@
+#include <vxf/scatter/AdaptiveBand.h>
+#include <vxf/scatter/Scatter.h>
+
+#include "TestSupport.h"
+
+#include <catch2/catch.hpp>
+
+namespace {
+
+/// A cube of density 1 over voxels [-half, half-1]³ (active tiles where the tree allows) with
+/// voxel size @a dx, and a source grid on its topology holding a value that varies per voxel.
+std::pair<openvdb::FloatGrid::Ptr, openvdb::Vec3SGrid::Ptr> cube(int half, double dx)
+{
+    auto density = openvdb::FloatGrid::create(0.0f);
+    density->setTransform(openvdb::math::Transform::createLinearTransform(dx));
+    density->tree().fill(openvdb::CoordBBox(openvdb::Coord(-half), openvdb::Coord(half - 1)), 1.0f, true);
+    auto source = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
+    source->setTransform(density->transformPtr());
+    source->tree().topologyUnion(density->tree());
+    source->tree().voxelizeActiveTiles();
+    for (auto it = source->tree().beginValueOn(); it; ++it) {
+        const openvdb::Coord c = it.getCoord();
+        it.setValue(openvdb::Vec3f(1.0f + 0.01f * float(c.x()), 2.0f, 0.5f + 0.001f * float(c.y() * c.z())));
+    }
+    return {density, source};
+}
+
+} // namespace
+
+TEST_CASE("the band keeps full resolution near the surface and tiles the deep interior, preserving energy", "[band]")
+{
+    auto [density, source] = cube(24, 0.1); // 48³ voxels
+    const openvdb::Vec3d before = vxf::gridEnergy(*source);
+    const openvdb::Index64 voxels = source->activeVoxelCount();
+
+    SECTION("band 0 changes nothing")
+    {
+        const auto report = vxf::coarsenBeyondBand(*source, *density, 0.0);
+        CHECK(report.leafTiles == 0);
+        CHECK(report.fineVoxels == voxels);
+    }
+    SECTION("band of 8 voxels: leaves in [-16, 15]³ become tiles")
+    {
+        // A voxel is 8 deep (L∞) when its 17³ neighbourhood is inside: i in [-16, 15] per axis;
+        // the leaves aligned within that are 4 per axis.
+        const auto report = vxf::coarsenBeyondBand(*source, *density, 0.8);
+        CHECK(report.leafTiles == 64);
+        CHECK(report.internalTiles == 0);
+        CHECK(report.coarseVoxels == 64 * 512);
+        CHECK(report.fineVoxels == voxels - 64 * 512);
+        CHECK(source->activeVoxelCount() == voxels);
+        const openvdb::Vec3d after = vxf::gridEnergy(*source);
+        for (int c = 0; c < 3; ++c) CHECK(after[c] == Approx(before[c]).epsilon(1e-6));
+        // Voxels within the band keep their own values.
+        CHECK(source->tree().getValue(openvdb::Coord(-17, 0, 0)) == openvdb::Vec3f(1.0f - 0.17f, 2.0f, 0.5f));
+        CHECK(source->tree().probeConstLeaf(openvdb::Coord(-17, 0, 0)) != nullptr);
+        CHECK(source->tree().probeConstLeaf(openvdb::Coord(0, 0, 0)) == nullptr);
+        // Idempotent.
+        const auto again = vxf::coarsenBeyondBand(*source, *density, 0.8);
+        CHECK(again.leafTiles == 0);
+        CHECK(again.fineVoxels == report.fineVoxels);
+    }
+    SECTION("a band thinner than half a leaf still keeps 4 voxels")
+    {
+        // max(band, 4): depth 4 means i in [-20, 19], leaves [-16, 15]: 64 again.
+        CHECK(vxf::coarsenBeyondBand(*source, *density, 0.1).leafTiles == 64);
+    }
+}
+
+TEST_CASE("blocks 64 voxels deep become 128³ tiles", "[band]")
+{
+    auto density = openvdb::FloatGrid::create(0.0f);
+    density->tree().fill(openvdb::CoordBBox(openvdb::Coord(-192), openvdb::Coord(191)), 1.0f, true); // 384³, as tiles
+    auto source = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
+    source->tree().topologyUnion(density->tree());
+    const openvdb::Coord probe(5, 6, 7);
+    source->tree().setValueOn(probe, openvdb::Vec3f(512.0f)); // one voxel of a 128³ block differs
+    const openvdb::Vec3d before = vxf::gridEnergy(*source);
+    const auto report = vxf::coarsenBeyondBand(*source, *density, 1.0); // 1 voxel: depth max(1, 64)
+    // Blocks [-128, -1] and [0, 127] per axis lie 64 deep: 8 of them; 7 already are tiles
+    // (the fill made them), the one holding the probe becomes one.
+    CHECK(report.internalTiles == 1);
+    const openvdb::Vec3d after = vxf::gridEnergy(*source);
+    for (int c = 0; c < 3; ++c) CHECK(after[c] == Approx(before[c]).epsilon(1e-6));
+    CHECK(source->tree().getValueDepth(probe) == 1); // a level-2 tile sits at depth 1 below the root
+    CHECK(source->tree().getValue(probe)[0] == Approx(512.0 / (128.0 * 128.0 * 128.0)));
+}
+
+TEST_CASE("scattering with a band matches full resolution near the surface", "[band][scatter]")
+{
+    // A homogeneous cube, lit uniformly: J0 = σs φ0/4π everywhere inside.
+    const vxf::Material m = vxf::test::albedoMaterial(10.0, 0.8); // mean free path 0.1 = 1 voxel
+    auto [density, source] = cube(16, 0.1);
+    for (auto it = source->tree().beginValueOn(); it; ++it) it.setValue(openvdb::Vec3f(float(m.sigmaS[0] / (4.0 * M_PI))));
+    const auto run = [&](double band) {
+        vxf::VoxelSet set(density->transformPtr());
+        auto d = density->deepCopy();
+        d->setName("density");
+        auto j = source->deepCopy();
+        j->setName("scatter_source");
+        set.put(d);
+        set.put(j);
+        const vxf::Medium medium(set, m);
+        vxf::ScatterOptions options;
+        options.passes = 3;
+        options.tolerance = 0.0;
+        options.band = band;
+        options.pass.directions = 16;
+        const auto report = vxf::scatter(set, medium, options);
+        return std::make_pair(set.get<openvdb::Vec3SGrid>("scatter"), report);
+    };
+    const auto [full, fullReport] = run(0.0);
+    const auto [banded, bandReport] = run(0.4); // 4 voxels = 4 mean free paths
+    CHECK(bandReport.band.leafTiles == 8); // [-8, 7]³
+    CHECK(fullReport.band.leafTiles == 0);
+    CHECK(bandReport.band.fineVoxels < fullReport.band.fineVoxels);
+    // Within the band (the part a camera sees) the two agree; energy agrees overall.
+    for (const openvdb::Coord c : {openvdb::Coord(-16, 0, 0), openvdb::Coord(15, 5, -3), openvdb::Coord(0, -13, 10)}) {
+        INFO(c);
+        CHECK(banded->tree().getValue(c)[0] == Approx(full->tree().getValue(c)[0]).epsilon(0.02));
+    }
+    CHECK(vxf::gridEnergy(*banded)[0] == Approx(vxf::gridEnergy(*full)[0]).epsilon(0.02));
+}
