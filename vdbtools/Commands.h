@@ -50,10 +50,6 @@ struct VoxelizeRequest
     bool quiet = false; ///< no summary
 };
 
-/// The material of the scene's one medium (several media arrive with multi-object
-/// voxelization); throws vxf::UsageError when there is none or more than one.
-const Material& sceneMaterial(const Scene& scene);
-
 /// The embedded default scene (examples/candle.json, compiled in).
 const std::string& demoSceneText();
 

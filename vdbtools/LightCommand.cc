@@ -4,7 +4,7 @@
 
 #include <vxf/core/GridStats.h>
 #include <vxf/light/DirectLight.h>
-#include <vxf/pipeline/Scene.h>
+#include <vxf/pipeline/SceneGeometry.h>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -12,21 +12,6 @@
 #include <iostream>
 
 namespace vxf::cli {
-
-const Material& sceneMaterial(const Scene& scene)
-{
-    const SceneObject* medium = nullptr;
-    for (const auto& object : scene.objects) {
-        if (object.role != SceneObject::Role::Medium) continue;
-        if (medium) {
-            throw UsageError(fmt::format("{}: objects '{}' and '{}' are both media; one medium per voxel set for now",
-                scene.path, medium->name, object.name));
-        }
-        medium = &object;
-    }
-    if (!medium) throw UsageError(fmt::format("{}: no object is a medium", scene.path));
-    return *medium->material;
-}
 
 namespace {
 
@@ -54,9 +39,12 @@ public:
         const auto start = std::chrono::steady_clock::now();
         const Scene scene = loadScene(mScene);
         VoxelSet set = readVoxelSet(mInput);
-        const Material& material = sceneMaterial(scene);
+        const Material& material = *mediumObject(scene).material;
         const Medium medium(set, material);
-        const DirectLightReport report = computeDirectLight(set, medium, scene.lights, mOptions, &progress);
+        const RayScene occluders = sceneGeometry(scene, GeometryRoles::Occluders);
+        DirectLightOptions options = mOptions;
+        options.occluders = occluders.empty() ? nullptr : &occluders;
+        const DirectLightReport report = computeDirectLight(set, medium, scene.lights, options, &progress);
         nlohmann::json params = {{"command", "light"}, {"input", mInput}, {"scene", mScene}, {"step", mOptions.march.step},
             {"cutoff", mOptions.march.cutoff}};
         set.setProvenance("light", params.dump());

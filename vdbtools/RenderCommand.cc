@@ -1,9 +1,10 @@
-// `vxf render S.json --volume V.vdb -o IMAGE.exr [--png PREVIEW.png]`
+// `vxf render S.json --volume V.vdb -o IMAGE.exr [--png PREVIEW.png] [--level-set] [--no-surface]`
 #include "CliSupport.h"
 #include "Commands.h"
 
 #include <vxf/io/ImageFile.h>
 #include <vxf/light/Medium.h>
+#include <vxf/pipeline/SceneGeometry.h>
 #include <vxf/render/Render.h>
 
 #include <fmt/format.h>
@@ -20,9 +21,10 @@ public:
     explicit RenderCommand(CLI::App& parent)
     {
         mApp = parent.add_subcommand("render",
-            "Render a lit voxel set with the scene's camera: rays hit the `surface` level set and gather the volume "
-            "(view mode: along the camera ray; gather mode: the thesis's final gather). OpenEXR layers: R G B A, direct, "
-            "scatter, depth, normal; optional sRGB PNG preview.");
+            "Render a lit voxel set with the scene's camera: rays hit the scene's meshes (Embree; or the `surface` level "
+            "set) and gather the volume (view mode: along the camera ray; gather mode: the thesis's final gather), plus "
+            "the surface term (Lambert + specular) of objects with a reflecting surface. OpenEXR layers: R G B A, "
+            "surface, direct, scatter, depth, normal; optional sRGB PNG preview.");
         mApp->add_option("scene", mScene, "Scene file (camera, render settings)")->required();
         mApp->add_option("--volume", mVolume, "Voxel set from vxf scatter (or vxf light)")->required();
         mApp->add_option("-o,--output", mOutput, "Output .exr")->required();
@@ -32,6 +34,8 @@ public:
         mApp->add_option("--height", mHeight, "Override the scene's height")->check(CLI::Range(1, 32768));
         mApp->add_option("--samples", mSamples, "Override the samples per pixel")->check(CLI::Range(1, 65536));
         mApp->add_option("--mode", mMode, "view or gather (overrides the scene)")->check(CLI::IsMember({"view", "gather"}));
+        mApp->add_flag("--level-set", mLevelSet, "Hit the volume's `surface` level set instead of the scene's meshes");
+        mApp->add_flag("--no-surface", [this](std::int64_t) { mNoSurface = true; }, "Leave out the surface term");
         mApp->add_flag("--half", mHalf, "16-bit half EXR channels");
     }
 
@@ -45,7 +49,7 @@ public:
         if (set.metadata().getMetadata<openvdb::StringMetadata>(kMaterialMetaKey)) {
             material = recordedMaterial(set);
         } else {
-            material = sceneMaterial(scene);
+            material = *mediumObject(scene).material;
         }
         const Medium medium(set, material);
         RenderOptions options = renderOptionsFrom(scene.settings);
@@ -53,7 +57,11 @@ public:
         if (mHeight) options.height = mHeight;
         if (mSamples) options.samples = mSamples;
         if (!mMode.empty()) options.gather = mMode == "gather";
-        const RenderedImage image = render(set, medium, scene.camera, options, &progress);
+        if (mNoSurface) options.surface = false;
+        RayScene visible, occluders;
+        if (!mLevelSet) visible = sceneGeometry(scene, GeometryRoles::All);
+        occluders = sceneGeometry(scene, GeometryRoles::Occluders);
+        const RenderedImage image = render(set, medium, scene, options, {&visible, &occluders}, &progress);
         writeExr(mOutput, image, mHalf);
         if (!mPng.empty()) writePng(mPng, image, mExposure);
         std::cout << fmt::format("rendered {} ({}x{}, {} samples per pixel, {} mode) -> {}{} in {:.3f} s\n", mVolume,
@@ -65,7 +73,7 @@ private:
     std::string mScene, mVolume, mOutput, mPng, mMode;
     double mExposure = 0.0;
     int mWidth = 0, mHeight = 0, mSamples = 0;
-    bool mHalf = false;
+    bool mHalf = false, mLevelSet = false, mNoSurface = false;
 };
 
 } // namespace

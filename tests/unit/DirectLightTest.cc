@@ -1,4 +1,8 @@
 #include <vxf/light/DirectLight.h>
+#include <vxf/core/ProceduralMesh.h>
+#include <vxf/io/ImageFile.h>
+
+#include <functional>
 
 #include "TestSupport.h"
 
@@ -40,11 +44,11 @@ TEST_CASE("point light: I/r^2 in a thin medium", "[light][direct]")
     const vxf::Light light = pointLight(openvdb::Vec3d(0.0), 3.0);
     for (const openvdb::Coord c : {openvdb::Coord(10, 0, 0), openvdb::Coord(3, -4, 12), openvdb::Coord(-20, 20, 1)}) {
         const double r = c.asVec3d().length() * 0.1;
-        const openvdb::Vec3d phi = vxf::lightFluence(light, sampler, medium, c, {});
+        const openvdb::Vec3d phi = vxf::lightFluence(vxf::LightSampler(light), sampler, medium, c, {});
         CHECK(phi.x() == Approx(3.0 / (r * r)).epsilon(1e-4));
     }
     // At the light's own position: finite (r is taken as half a voxel).
-    const openvdb::Vec3d atLight = vxf::lightFluence(light, sampler, medium, openvdb::Coord(0), {});
+    const openvdb::Vec3d atLight = vxf::lightFluence(vxf::LightSampler(light), sampler, medium, openvdb::Coord(0), {});
     CHECK(std::isfinite(atLight.x()));
     CHECK(atLight.x() == Approx(3.0 / (0.05 * 0.05)).epsilon(1e-4));
 }
@@ -63,7 +67,7 @@ TEST_CASE("directional light: E exp(-sigma_t depth)", "[light][direct]")
     for (int i : {0, 5, 17}) {
         // Optical depth from voxel centre i back to the face: i voxels + the half-voxel ramp.
         const double expected = 2.0 * std::exp(-2.0 * dx * (i + 0.5));
-        const openvdb::Vec3d phi = vxf::lightFluence(sun, sampler, medium, openvdb::Coord(i, 0, 0), {});
+        const openvdb::Vec3d phi = vxf::lightFluence(vxf::LightSampler(sun), sampler, medium, openvdb::Coord(i, 0, 0), {});
         CHECK(phi.x() == Approx(expected).margin(1e-4));
         CHECK(phi.z() == Approx(0.25 * expected).margin(1e-4));
     }
@@ -78,9 +82,65 @@ TEST_CASE("environment light: 4 pi L with no extinction", "[light][direct]")
     sky.type = vxf::Light::Type::Environment;
     sky.color = openvdb::Vec3d(0.5);
     sky.samples = 32;
-    CHECK(vxf::lightFluence(sky, sampler, medium, openvdb::Coord(1, 2, 3), {}).x() == Approx(4.0 * M_PI * 0.5));
-    sky.file = "sky.exr";
-    CHECK_THROWS_AS(vxf::lightFluence(sky, sampler, medium, openvdb::Coord(0), {}), vxf::UsageError);
+    CHECK(vxf::lightFluence(vxf::LightSampler(sky), sampler, medium, openvdb::Coord(1, 2, 3), {}).x() == Approx(4.0 * M_PI * 0.5));
+    sky.file = "no-such-sky.exr";
+    CHECK_THROWS_AS(vxf::LightSampler(sky), vxf::InputError);
+}
+
+namespace {
+
+/// Write a lat-long map whose pixels are f(u, v) (grey) as OpenEXR.
+void writeMap(const std::string& path, int width, int height, const std::function<float(double, double)>& f)
+{
+    vxf::RenderedImage map;
+    map.width = width;
+    map.height = height;
+    const std::size_t n = std::size_t(width) * std::size_t(height);
+    map.combined.resize(n);
+    map.surface = map.direct = map.scatter = map.normal = std::vector<openvdb::Vec3f>(n, openvdb::Vec3f(0.0f));
+    map.alpha = map.depth = std::vector<float>(n, 1.0f);
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) map.combined[std::size_t(y * width + x)] = openvdb::Vec3f(f((x + 0.5) / width, (y + 0.5) / height));
+    vxf::writeExr(path, map);
+}
+
+} // namespace
+
+TEST_CASE("environment maps: lat-long convention, energy kept for any direction count, bad pixels refused", "[light][direct]")
+{
+    // Blender's convention, +Z up.
+    CHECK((vxf::latLongDirection(0.5, 0.5) - openvdb::Vec3d(1, 0, 0)).length() < 1e-12);
+    CHECK((vxf::latLongDirection(0.75, 0.5) - openvdb::Vec3d(0, -1, 0)).length() < 1e-12);
+    CHECK((vxf::latLongDirection(0.3, 0.0) - openvdb::Vec3d(0, 0, 1)).length() < 1e-12);
+
+    vxf::test::TempDir dir;
+    const std::string sky = dir.path("sky.exr");
+    writeMap(sky, 128, 64, [](double, double v) { return v < 0.5 ? 2.0f : 0.0f; }); // upper hemisphere L = 2
+    const vxf::VoxelSet set = boxMedium(openvdb::CoordBBox(openvdb::Coord(-5), openvdb::Coord(5)), 0.1);
+    const vxf::Medium medium(set, vxf::test::greyMaterial(0.0, 0.0));
+    vxf::Medium::Sampler sampler(medium);
+    vxf::Light light;
+    light.type = vxf::Light::Type::Environment;
+    light.file = sky;
+    for (int samples : {7, 64, 300}) {
+        light.samples = samples;
+        INFO(samples << " directions");
+        // φ = ∫ L dω = 2π·2 with no extinction, however the texels are binned.
+        CHECK(vxf::lightFluence(vxf::LightSampler(light), sampler, medium, openvdb::Coord(1, 2, 3), {}).x() ==
+              Approx(4.0 * M_PI).epsilon(1e-3));
+    }
+    // A thick medium below... lit from above only: the top face sees more than the bottom face.
+    const vxf::Medium thick(set, vxf::test::greyMaterial(5.0, 0.0));
+    vxf::Medium::Sampler thickSampler(thick);
+    light.samples = 64;
+    const vxf::LightSampler sampled(light);
+    CHECK(vxf::lightFluence(sampled, thickSampler, thick, openvdb::Coord(0, 0, 5), {}).x() >
+          5.0 * vxf::lightFluence(sampled, thickSampler, thick, openvdb::Coord(0, 0, -5), {}).x());
+
+    const std::string bad = dir.path("bad.exr");
+    writeMap(bad, 8, 4, [](double u, double v) { return u > 0.5 && v > 0.5 ? std::nanf("") : 1.0f; });
+    light.file = bad;
+    CHECK_THROWS_WITH(vxf::LightSampler(light), Catch::Contains("bad.exr") && Catch::Contains("pixel (4, 2)"));
 }
 
 TEST_CASE("spot and area lights agree with their point-light limits", "[light][direct]")
@@ -95,12 +155,12 @@ TEST_CASE("spot and area lights agree with their point-light limits", "[light][d
     spot.coneAngleDegrees = 60.0;
     spot.coneSoftnessDegrees = 10.0;
     const openvdb::Coord below(0, 0, 10), edge(16, 0, 0), outside(20, 0, 18);
-    CHECK(vxf::lightFluence(spot, sampler, medium, below, {}).x() ==
-          Approx(vxf::lightFluence(point, sampler, medium, below, {}).x()));
-    const double soft = vxf::lightFluence(spot, sampler, medium, edge, {}).x(); // ~28 degrees off axis: in the soft edge
+    CHECK(vxf::lightFluence(vxf::LightSampler(spot), sampler, medium, below, {}).x() ==
+          Approx(vxf::lightFluence(vxf::LightSampler(point), sampler, medium, below, {}).x()));
+    const double soft = vxf::lightFluence(vxf::LightSampler(spot), sampler, medium, edge, {}).x(); // ~28 degrees off axis: in the soft edge
     CHECK(soft > 0.0);
-    CHECK(soft < vxf::lightFluence(point, sampler, medium, edge, {}).x());
-    CHECK(vxf::lightFluence(spot, sampler, medium, outside, {}).x() == 0.0);
+    CHECK(soft < vxf::lightFluence(vxf::LightSampler(point), sampler, medium, edge, {}).x());
+    CHECK(vxf::lightFluence(vxf::LightSampler(spot), sampler, medium, outside, {}).x() == 0.0);
 
     // A small square facing the voxel, far away, acts as a point of intensity L A.
     vxf::Light area;
@@ -111,11 +171,11 @@ TEST_CASE("spot and area lights agree with their point-light limits", "[light][d
     area.width = area.height = 0.02;
     area.intensity = 2.0 / (0.02 * 0.02);
     area.samples = 16;
-    CHECK(vxf::lightFluence(area, sampler, medium, below, {}).x() ==
-          Approx(vxf::lightFluence(point, sampler, medium, below, {}).x()).epsilon(1e-3));
+    CHECK(vxf::lightFluence(vxf::LightSampler(area), sampler, medium, below, {}).x() ==
+          Approx(vxf::lightFluence(vxf::LightSampler(point), sampler, medium, below, {}).x()).epsilon(1e-3));
     // One-sided: nothing behind it.
     area.direction = openvdb::Vec3d(0, 0, 1);
-    CHECK(vxf::lightFluence(area, sampler, medium, below, {}).x() == 0.0);
+    CHECK(vxf::lightFluence(vxf::LightSampler(area), sampler, medium, below, {}).x() == 0.0);
 }
 
 TEST_CASE("the light stage writes direct and scatter_source on the medium's topology", "[light][direct]")
@@ -163,4 +223,22 @@ TEST_CASE("the light stage writes direct and scatter_source on the medium's topo
     CHECK(vxf::test::identicalGrids(*one.find("direct"), *direct, &why));
     INFO(why);
     CHECK(vxf::test::identicalGrids(*one.find("scatter_source"), *source, &why));
+}
+
+TEST_CASE("occluder meshes cast shadows in the light stage", "[light][direct][rayscene]")
+{
+    const vxf::VoxelSet set = boxMedium(openvdb::CoordBBox(openvdb::Coord(-20), openvdb::Coord(20)), 0.1);
+    const vxf::Medium medium(set, vxf::test::greyMaterial(0.0, 0.0)); // clear: only the occluder attenuates
+    vxf::Medium::Sampler sampler(medium);
+    vxf::RayScene occluders;
+    occluders.add(vxf::makeBox(openvdb::Vec3d(-0.5, -0.5, 2.9), openvdb::Vec3d(0.5, 0.5, 3.1)), 0);
+    occluders.commit();
+    const vxf::LightSampler light(pointLight(openvdb::Vec3d(0, 0, 5), 10.0));
+    // Under the occluder: nothing arrives.
+    CHECK(vxf::lightFluence(light, sampler, medium, openvdb::Coord(0), {}, &occluders).x() == 0.0);
+    // Beside its shadow (the line to the light passes x = 0.6 at z = 3): I/r².
+    const double r2 = 1.5 * 1.5 + 25.0;
+    CHECK(vxf::lightFluence(light, sampler, medium, openvdb::Coord(15, 0, 0), {}, &occluders).x() == Approx(10.0 / r2));
+    // Without occluders the centre is lit.
+    CHECK(vxf::lightFluence(light, sampler, medium, openvdb::Coord(0), {}).x() == Approx(10.0 / 25.0));
 }

@@ -33,7 +33,7 @@ vxf::VoxelSet litSphere(double phi)
     return set;
 }
 
-vxf::Camera frontCamera()
+vxf::Scene frontView()
 {
     vxf::Camera camera;
     camera.orthographic = true;
@@ -41,7 +41,9 @@ vxf::Camera frontCamera()
     camera.lookAt = openvdb::Vec3d(0.0);
     camera.up = openvdb::Vec3d(0, 0, 1);
     camera.width = 3.0;
-    return camera;
+    vxf::Scene scene;
+    scene.camera = camera;
+    return scene;
 }
 
 } // namespace
@@ -59,7 +61,7 @@ TEST_CASE("view mode: a constant source in a thick sphere gives J/sigma_t", "[re
     options.height = 31;
     options.samples = 1;
     options.background = openvdb::Vec3d(0.25);
-    const vxf::RenderedImage image = vxf::render(set, medium, frontCamera(), options);
+    const vxf::RenderedImage image = vxf::render(set, medium, frontView(), options);
     const std::size_t centre = 15 * 31 + 15;
     // L = ∫ T J dt = J (1 − e^{−σt d})/σt with J = σs φ / 4π (the same ratio inside the ramp).
     for (int c = 0; c < 3; ++c) {
@@ -87,7 +89,7 @@ TEST_CASE("view mode through a thin sphere: J (1 - e^{-tau}) / sigma_t plus the 
     options.width = options.height = 31;
     options.samples = 1;
     options.background = openvdb::Vec3d(1.0);
-    const vxf::RenderedImage image = vxf::render(set, medium, frontCamera(), options);
+    const vxf::RenderedImage image = vxf::render(set, medium, frontView(), options);
     // Optical depth along the central chord: σt ∫ρ ds, ∫ρ ds = 2 − (inner ramp deficit: band·dx/2 per side).
     const double dx = set.transform().voxelSize()[0];
     const double tau = 0.5 * (2.0 - 3.0 * dx);
@@ -109,7 +111,7 @@ TEST_CASE("gather mode and image files", "[render][io]")
     options.samples = 2;
     options.gather = true;
     options.gatherDirections = 16;
-    const vxf::RenderedImage image = vxf::render(set, medium, frontCamera(), options);
+    const vxf::RenderedImage image = vxf::render(set, medium, frontView(), options);
     bool finite = true;
     for (const auto& p : image.combined) finite = finite && std::isfinite(p[0]) && p[0] >= 0.0f;
     CHECK(finite);
@@ -127,4 +129,65 @@ TEST_CASE("gather mode and image files", "[render][io]")
     CHECK(exr.header().dataWindow().max.x == 23);
     const std::string png = vxf::test::slurp(dir.path("a.png"));
     CHECK(png.substr(1, 3) == "PNG");
+}
+
+TEST_CASE("surface term: Lambert + normalized Blinn-Phong in closed form, occluder shadows, Embree hits", "[render][rayscene]")
+{
+    // A clear medium (no volume term), an occluder box whose face y = -1 faces the camera,
+    // lit by a directional light of irradiance E = 2 from 45 degrees above the camera side.
+    vxf::VoxelSet set = litSphere(0.0);
+    const vxf::Medium medium(set, vxf::test::greyMaterial(0.0, 0.0));
+    vxf::Scene scene = frontView();
+    vxf::SceneObject wall;
+    wall.name = "wall";
+    wall.role = vxf::SceneObject::Role::Occluder;
+    wall.surface.diffuse = openvdb::Vec3d(0.5);
+    wall.surface.specular = openvdb::Vec3d(0.2);
+    wall.surface.shininess = 10.0;
+    scene.objects.push_back(wall);
+    vxf::SceneObject blocker = wall;
+    blocker.name = "blocker";
+    scene.objects.push_back(blocker);
+    vxf::Light sun;
+    sun.type = vxf::Light::Type::Directional;
+    sun.direction = openvdb::Vec3d(0, 1, -1).unit();
+    sun.intensity = 2.0;
+    scene.lights.push_back(sun);
+
+    vxf::RayScene visible, occluders;
+    const vxf::TriangleMesh wallMesh = vxf::makeBox(openvdb::Vec3d(-1.4), openvdb::Vec3d(1.4, 1.4, 1.0) + openvdb::Vec3d(0, -0.4, 0));
+    // Its front face is y = -1.4; the blocker sits on the shadow ray of the centre, off the camera rays.
+    const vxf::TriangleMesh blockerMesh = vxf::makeBox(openvdb::Vec3d(-0.2, -3.2, 1.6), openvdb::Vec3d(0.2, -2.8, 2.0));
+    visible.add(wallMesh, 0);
+    visible.add(blockerMesh, 1);
+    visible.commit();
+    occluders.add(wallMesh, 0);
+    occluders.add(blockerMesh, 1);
+    occluders.commit();
+
+    vxf::RenderOptions options;
+    options.width = 31;
+    options.height = 21;
+    options.samples = 1;
+    const vxf::RenderedImage image = vxf::render(set, medium, scene, options, {&visible, &occluders});
+    const auto at = [&](int x, int y) { return std::size_t(y) * std::size_t(options.width) + std::size_t(x); };
+    // Lit pixel off the centre line (x = 0.9): L = E cosθ (kd/π + ks (e+8)/(8π) (n·h)^e),
+    // cosθ = 1/√2, h halfway between the light (0,-1,1)/√2 and the viewer (0,-1,0).
+    const openvdb::Vec3d n(0, -1, 0), toLight = openvdb::Vec3d(0, -1, 1).unit(), h = (toLight + n).unit();
+    const double cosTheta = n.dot(toLight);
+    const double expected = 2.0 * cosTheta * (0.5 / M_PI + 0.2 * 18.0 / (8.0 * M_PI) * std::pow(n.dot(h), 10.0));
+    const std::size_t lit = at(24, 10); // x = (24.5/31·2 − 1)·1.5 ≈ 0.87
+    CHECK(image.alpha[lit] == 1.0f);
+    CHECK(image.surface[lit][0] == Approx(expected).epsilon(1e-5));
+    CHECK(image.combined[lit][0] == Approx(expected).epsilon(1e-5));
+    CHECK(image.depth[lit] == Approx(5.0 - 1.4).epsilon(1e-5));
+    // The centre pixel's shadow ray meets the blocker.
+    CHECK(image.surface[at(15, 10)][0] == 0.0f);
+    CHECK(image.alpha[at(15, 10)] == 1.0f);
+
+    // Without the surface term the occluder is black but still opaque.
+    options.surface = false;
+    const vxf::RenderedImage plain = vxf::render(set, medium, scene, options, {&visible, &occluders});
+    CHECK(plain.combined[lit][0] == 0.0f);
+    CHECK(plain.alpha[lit] == 1.0f);
 }

@@ -36,14 +36,14 @@ Bounds runChain(const vxf::TriangleMesh& mesh, const vxf::Material& m, int dim)
     options.pass.directions = 16;
     options.extrapolateTail = true;
     vxf::scatter(set, medium, options);
-    vxf::Camera camera;
-    camera.position = box.getCenter() + openvdb::Vec3d(0, -3.0 * box.extents().length(), 0);
-    camera.lookAt = box.getCenter();
+    vxf::Scene view;
+    view.camera.position = box.getCenter() + openvdb::Vec3d(0, -3.0 * box.extents().length(), 0);
+    view.camera.lookAt = box.getCenter();
     vxf::RenderOptions render;
     render.width = 24;
     render.height = 16;
     render.samples = 1;
-    const vxf::RenderedImage image = vxf::render(set, medium, camera, render);
+    const vxf::RenderedImage image = vxf::render(set, medium, view, render);
 
     Bounds b;
     for (const char* name : {"direct", "scatter"}) {

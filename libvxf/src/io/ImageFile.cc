@@ -5,6 +5,7 @@
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>
 #include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfInputFile.h>
 #include <OpenEXR/ImfOutputFile.h>
 #include <png.h>
 
@@ -38,6 +39,7 @@ void writeExr(const std::string& path, const RenderedImage& image, bool half)
     };
     addVec(image.combined, "", "RGB");
     addScalar(image.alpha, "A");
+    addVec(image.surface, "surface.", "RGB");
     addVec(image.direct, "direct.", "RGB");
     addVec(image.scatter, "scatter.", "RGB");
     addVec(image.normal, "normal.", "XYZ");
@@ -51,6 +53,52 @@ void writeExr(const std::string& path, const RenderedImage& image, bool half)
             throw Error(fmt::format("{}: cannot write OpenEXR: {}", path, e.what()));
         }
     });
+}
+
+RgbImage readExr(const std::string& path)
+{
+    RgbImage image;
+    try {
+        Imf::InputFile file(path.c_str());
+        const Imath::Box2i window = file.header().dataWindow();
+        image.width = window.max.x - window.min.x + 1;
+        image.height = window.max.y - window.min.y + 1;
+        if (image.width < 1 || image.height < 1) throw InputError(path, 0, 0, "the image is empty");
+        image.pixels.assign(std::size_t(image.width) * std::size_t(image.height), openvdb::Vec3f(0.0f));
+        const bool grey = !file.header().channels().findChannel("R") && file.header().channels().findChannel("Y");
+        Imf::FrameBuffer frame;
+        const std::size_t stride = sizeof(openvdb::Vec3f), row = stride * std::size_t(image.width);
+        // Slices are addressed by absolute pixel coordinates: shift the base by the window origin.
+        char* base = reinterpret_cast<char*>(image.pixels.data()->asPointer()) - std::ptrdiff_t(window.min.x) * std::ptrdiff_t(stride) -
+                     std::ptrdiff_t(window.min.y) * std::ptrdiff_t(row);
+        for (int c = 0; c < 3; ++c) {
+            const char* name = grey ? "Y" : (c == 0 ? "R" : c == 1 ? "G" : "B");
+            frame.insert(name, Imf::Slice(Imf::FLOAT, base + c * sizeof(float), stride, row, 1, 1, 0.0));
+            if (grey) {
+                frame.insert(name, Imf::Slice(Imf::FLOAT, base, stride, row, 1, 1, 0.0));
+                break;
+            }
+        }
+        file.setFrameBuffer(frame);
+        file.readPixels(window.min.y, window.max.y);
+        if (grey) {
+            for (auto& p : image.pixels) p = openvdb::Vec3f(p[0]);
+        }
+    } catch (const Error&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw InputError(path, 0, 0, fmt::format("cannot read OpenEXR: {}", e.what()));
+    }
+    for (std::size_t i = 0; i < image.pixels.size(); ++i) {
+        for (int c = 0; c < 3; ++c) {
+            const float v = image.pixels[i][c];
+            if (!std::isfinite(v) || v < 0.0f) {
+                throw InputError(path, 0, 0, fmt::format("pixel ({}, {}) channel {} is {}: radiance must be finite and >= 0",
+                    i % std::size_t(image.width), i / std::size_t(image.width), "RGB"[c], v));
+            }
+        }
+    }
+    return image;
 }
 
 namespace {

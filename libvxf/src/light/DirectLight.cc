@@ -1,7 +1,6 @@
 #include <vxf/light/DirectLight.h>
 
 #include <vxf/core/Hash.h>
-#include <vxf/core/SphericalFibonacci.h>
 #include <vxf/io/VoxelSetFile.h>
 
 #include <openvdb/tools/Morphology.h>
@@ -15,123 +14,30 @@
 
 namespace vxf {
 
-namespace {
-
-double falloff(Light::Falloff f, double r)
+openvdb::Vec3d sampleTransmittance(const LightSample& sample, Medium::Sampler& sampler, const Medium& medium,
+    const openvdb::Vec3d& xWorld, const MarchOptions& options, const RayScene* occluders)
 {
-    switch (f) {
-    case Light::Falloff::InverseSquare: return 1.0 / (r * r);
-    case Light::Falloff::Linear: return 1.0 / r;
-    case Light::Falloff::None: return 1.0;
+    if (occluders && occluders->occluded(xWorld, sample.direction, 1e-4 * medium.voxelSize(), sample.distance)) {
+        return openvdb::Vec3d(0.0);
     }
-    return 0.0;
+    const openvdb::math::Transform& xform = medium.transform();
+    const openvdb::Vec3d xIjk = xform.worldToIndex(xWorld);
+    if (std::isfinite(sample.distance)) {
+        return transmittance(sampler, medium, xIjk, xform.worldToIndex(xWorld + sample.direction * sample.distance), options);
+    }
+    return transmittanceToBoundary(sampler, medium, xIjk, xform.worldToIndex(xWorld + sample.direction) - xIjk, options);
 }
 
-/// Orthonormal tangents of unit normal @a n.
-void frame(const openvdb::Vec3d& n, openvdb::Vec3d& u, openvdb::Vec3d& v)
+openvdb::Vec3d lightFluence(const LightSampler& light, Medium::Sampler& sampler, const Medium& medium,
+    const openvdb::Coord& voxel, const MarchOptions& options, const RayScene* occluders)
 {
-    const openvdb::Vec3d helper = std::abs(n.x()) < 0.9 ? openvdb::Vec3d(1, 0, 0) : openvdb::Vec3d(0, 1, 0);
-    u = n.cross(helper).unit();
-    v = n.cross(u);
-}
-
-/// Fluence from an emitting point @a q (world) with radiant intensity @a intensity toward x.
-openvdb::Vec3d fromPoint(const openvdb::Vec3d& q, const openvdb::Vec3d& intensity, Light::Falloff f,
-    Medium::Sampler& sampler, const Medium& medium, const openvdb::Vec3d& xIjk, const openvdb::Vec3d& xWorld,
-    const MarchOptions& options)
-{
-    // Never divide by zero: distances below half a voxel are taken as half a voxel.
-    const double r = std::max((q - xWorld).length(), 0.5 * medium.voxelSize());
-    const openvdb::Vec3d t = transmittance(sampler, medium, xIjk, medium.transform().worldToIndex(q), options);
-    return intensity * falloff(f, r) * t;
-}
-
-} // namespace
-
-openvdb::Vec3d lightFluence(const Light& light, Medium::Sampler& sampler, const Medium& medium,
-    const openvdb::Coord& voxel, const MarchOptions& options)
-{
-    const openvdb::Vec3d xIjk = voxel.asVec3d();
-    const openvdb::Vec3d xWorld = medium.transform().indexToWorld(xIjk);
-    const openvdb::Vec3d power = light.power();
-    switch (light.type) {
-    case Light::Type::Point:
-        return fromPoint(light.position, power, light.falloff, sampler, medium, xIjk, xWorld, options);
-    case Light::Type::Spot: {
-        // Cone factor: 1 within (half angle − softness), smoothstep to 0 at the half angle.
-        const openvdb::Vec3d toX = xWorld - light.position;
-        const double length = toX.length();
-        const double cosAngle = length > 0.0 ? light.direction.dot(toX) / length : 1.0;
-        const double angle = std::acos(std::clamp(cosAngle, -1.0, 1.0)) * 180.0 / M_PI;
-        const double outer = 0.5 * light.coneAngleDegrees, inner = outer - light.coneSoftnessDegrees;
-        double cone = angle <= inner ? 1.0 : angle >= outer ? 0.0 : (outer - angle) / (outer - inner);
-        cone = cone * cone * (3.0 - 2.0 * cone);
-        if (cone <= 0.0) return openvdb::Vec3d(0.0);
-        return cone * fromPoint(light.position, power, light.falloff, sampler, medium, xIjk, xWorld, options);
-    }
-    case Light::Type::Directional: {
-        const openvdb::Vec3d towardLight = medium.transform().worldToIndex(xWorld - light.direction) - xIjk;
-        return power * transmittanceToBoundary(sampler, medium, xIjk, towardLight, options);
-    }
-    case Light::Type::Environment: {
-        if (!light.file.empty()) {
-            throw UsageError(fmt::format("light '{}': environment maps are not supported yet; give a constant colour",
-                light.name));
-        }
-        // φ = ∫ L T dω ≈ Σ (4π/N) L T(ω_i).
-        static thread_local std::vector<openvdb::Vec3d> directions;
-        if (int(directions.size()) != light.samples) directions = sphericalFibonacci(light.samples);
-        openvdb::Vec3d sum(0.0);
-        for (const auto& w : directions) {
-            sum += transmittanceToBoundary(sampler, medium, xIjk, medium.transform().worldToIndex(xWorld + w) - xIjk, options);
-        }
-        return power * sum * (4.0 * M_PI / double(directions.size()));
-    }
-    case Light::Type::Area: {
-        // Lambertian emitter of radiance L = color·intensity: dφ = L cosθ_l dA f(r) T.
-        const int n = light.samples;
-        openvdb::Vec3d sum(0.0);
-        if (light.shape == Light::Shape::Sphere) {
-            const double area = 4.0 * M_PI * light.radius * light.radius;
-            for (int i = 0; i < n; ++i) {
-                // Stratified in z (equal-area bands) and jittered in angle, per voxel.
-                const double z = 1.0 - 2.0 * (i + unitHash(coordKey(voxel), std::uint64_t(i), 1)) / n;
-                const double phi = 2.0 * M_PI * unitHash(coordKey(voxel), std::uint64_t(i), 2);
-                const double s = std::sqrt(std::max(0.0, 1.0 - z * z));
-                const openvdb::Vec3d normal(s * std::cos(phi), s * std::sin(phi), z);
-                const openvdb::Vec3d q = light.position + light.radius * normal;
-                const openvdb::Vec3d toX = xWorld - q;
-                const double cosTheta = toX.length() > 0.0 ? normal.dot(toX) / toX.length() : 0.0;
-                if (cosTheta <= 0.0) continue;
-                sum += fromPoint(q, power * cosTheta * (area / n), light.falloff, sampler, medium, xIjk, xWorld, options);
-            }
-            return sum;
-        }
-        openvdb::Vec3d u, v;
-        frame(light.direction, u, v);
-        const int side = std::max(1, int(std::lround(std::sqrt(double(n)))));
-        const int count = side * side;
-        const double area = light.shape == Light::Shape::Disk ? M_PI * light.radius * light.radius : light.width * light.height;
-        for (int i = 0; i < count; ++i) {
-            const double a = (i % side + unitHash(coordKey(voxel), std::uint64_t(i), 3)) / side;
-            const double b = (i / side + unitHash(coordKey(voxel), std::uint64_t(i), 4)) / side;
-            openvdb::Vec3d q;
-            if (light.shape == Light::Shape::Disk) {
-                const double r = light.radius * std::sqrt(a), phi = 2.0 * M_PI * b; // area-preserving
-                q = light.position + r * (std::cos(phi) * u + std::sin(phi) * v);
-            } else {
-                q = light.position + (a - 0.5) * light.width * u + (b - 0.5) * light.height * v;
-            }
-            const openvdb::Vec3d toX = xWorld - q;
-            const double cosTheta = toX.length() > 0.0 ? light.direction.dot(toX) / toX.length() : 0.0;
-            if (cosTheta <= 0.0) continue; // one-sided emitter
-            sum += fromPoint(q, power * cosTheta * (area / count), light.falloff, sampler, medium, xIjk, xWorld, options);
-        }
-        return sum;
-    }
-    case Light::Type::Volume: return openvdb::Vec3d(0.0);
-    }
-    return openvdb::Vec3d(0.0);
+    static thread_local std::vector<LightSample> samples;
+    const openvdb::Vec3d xWorld = medium.transform().indexToWorld(voxel.asVec3d());
+    // Never divide by zero: distances below half a voxel count as half a voxel.
+    light.sample(xWorld, coordKey(voxel), 0.5 * medium.voxelSize(), samples);
+    openvdb::Vec3d phi(0.0);
+    for (const LightSample& s : samples) phi += s.fluence * sampleTransmittance(s, sampler, medium, xWorld, options, occluders);
+    return phi;
 }
 
 DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const std::vector<Light>& lights,
@@ -139,7 +45,7 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
 {
     InterruptStep step(interrupter, "lighting");
     DirectLightReport report;
-    std::vector<const Light*> active;
+    std::vector<LightSampler> active;
     std::vector<int> activeIndex; // per report entry: its index in `active`, or -1
     std::vector<openvdb::GridBase::ConstPtr> emission; // volume lights, sampled in world space
     for (const Light& light : lights) {
@@ -158,11 +64,8 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
             emission.push_back(grid);
             entry.why = "volume light: its emission adds to scatter_source";
         } else {
-            if (light.type == Light::Type::Environment && !light.file.empty()) {
-                throw UsageError(fmt::format("light '{}': environment maps are not supported yet; give a constant colour", light.name));
-            }
             activeIndex.push_back(int(active.size()));
-            active.push_back(&light);
+            active.emplace_back(light);
             report.lights.push_back(entry);
             continue;
         }
@@ -213,7 +116,7 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
                               double weight) {
         openvdb::Vec3d phi(0.0);
         for (std::size_t l = 0; l < active.size(); ++l) {
-            const openvdb::Vec3d f = lightFluence(*active[l], sampler, medium, ijk, options.march);
+            const openvdb::Vec3d f = lightFluence(active[l], sampler, medium, ijk, options.march, options.occluders);
             phi += f;
             sums[l] += f * weight;
         }

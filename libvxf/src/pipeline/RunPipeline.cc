@@ -1,10 +1,9 @@
 #include <vxf/pipeline/RunPipeline.h>
 
-#include <vxf/core/ProceduralMesh.h>
 #include <vxf/io/ImageFile.h>
-#include <vxf/io/MeshFile.h>
 #include <vxf/io/VoxelSetFile.h>
 #include <vxf/light/DirectLight.h>
+#include <vxf/pipeline/SceneGeometry.h>
 #include <vxf/render/Render.h>
 #include <vxf/scatter/Scatter.h>
 #include <vxf/voxelize/Voxelize.h>
@@ -38,6 +37,14 @@ std::string hashOf(const json& inputs) { return fmt::format("{:016x}", fnv1a(inp
 
 json vec(const openvdb::Vec3d& v) { return json::array({v[0], v[1], v[2]}); }
 
+json matrix(const openvdb::Mat4d& m)
+{
+    json out = json::array();
+    for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c) out.push_back(m(r, c));
+    return out;
+}
+
 json lightJson(const Light& l)
 {
     return {{"type", int(l.type)}, {"name", l.name}, {"color", vec(l.color)}, {"intensity", l.intensity},
@@ -46,11 +53,12 @@ json lightJson(const Light& l)
         {"size", {l.width, l.height, l.radius}}, {"samples", l.samples}, {"file", l.file}, {"grid", l.grid}};
 }
 
-std::string meshFingerprint(const std::string& mesh)
+/// A file's bytes as a hash (built-in meshes by name).
+std::string fileFingerprint(const std::string& file)
 {
-    if (mesh.rfind("builtin:", 0) == 0) return mesh;
-    std::ifstream in(mesh, std::ios::binary);
-    if (!in) throw Error(fmt::format("{}: cannot open mesh file", mesh));
+    if (file.rfind("builtin:", 0) == 0) return file;
+    std::ifstream in(file, std::ios::binary);
+    if (!in) throw Error(fmt::format("{}: cannot open", file));
     std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     return fmt::format("{:016x}", fnv1a(bytes));
 }
@@ -60,13 +68,7 @@ std::string meshFingerprint(const std::string& mesh)
 PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interrupter* interrupter)
 {
     PipelineReport report;
-    const SceneObject* object = nullptr;
-    for (const auto& o : scene.objects) {
-        if (o.role != SceneObject::Role::Medium) continue;
-        if (object) throw UsageError(fmt::format("{}: one medium object per scene for now ('{}' and '{}')", scene.path, object->name, o.name));
-        object = &o;
-    }
-    if (!object) throw UsageError(fmt::format("{}: no object is a medium", scene.path));
+    const SceneObject* object = &mediumObject(scene);
     const Material& material = *object->material;
     const SceneSettings& s = scene.settings;
     const auto& outputs = s.outputs;
@@ -84,14 +86,9 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
     };
 
     // Voxelize: the mesh (bytes), its transform, the voxel settings.
-    json voxelInputs = {{"mesh", object->mesh}, {"bytes", meshFingerprint(object->mesh)}, {"dim", s.dim},
+    json voxelInputs = {{"mesh", object->mesh}, {"bytes", fileFingerprint(object->mesh)}, {"dim", s.dim},
         {"voxel_size", s.voxelSize}, {"band", s.band}};
-    {
-        json m = json::array();
-        for (int r = 0; r < 4; ++r)
-            for (int c = 0; c < 4; ++c) m.push_back(object->objectToWorld(r, c));
-        voxelInputs["transform"] = m;
-    }
+    voxelInputs["transform"] = matrix(object->objectToWorld);
     const std::string voxelHash = hashOf(voxelInputs);
     const fs::path voxelFile = cache / ("voxelize-" + voxelHash + ".vdb");
     VoxelSet set;
@@ -99,8 +96,7 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
         record("voxelize", "reused", "mesh and voxel settings unchanged", voxelFile, 0.0);
     } else {
         const double seconds = timed([&] {
-            TriangleMesh mesh = object->mesh.rfind("builtin:", 0) == 0 ? builtinMesh(object->mesh).value() : readMesh(object->mesh);
-            for (auto& p : mesh.points) p = object->objectToWorld.transform(p);
+            const TriangleMesh mesh = objectMesh(*object);
             VoxelizeOptions options;
             options.voxelSize = s.voxelSize;
             options.dim = s.voxelSize > 0.0 ? 0 : s.dim;
@@ -115,8 +111,16 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
     // Light: the voxel set, the material, the lights.
     json lights = json::array();
     for (const auto& l : scene.lights) lights.push_back(lightJson(l));
+    json occluders = json::array();
+    for (const auto& o : scene.objects) {
+        if (o.role == SceneObject::Role::Occluder) occluders.push_back({fileFingerprint(o.mesh), matrix(o.objectToWorld)});
+    }
+    for (const auto& l : scene.lights) {
+        if (!l.file.empty()) lights.push_back(fileFingerprint(l.file)); // environment map, emission grid: their bytes
+    }
     const json lightInputs = {{"voxels", voxelHash}, {"sigma_a", vec(material.sigmaA)}, {"sigma_s", vec(material.sigmaS)},
-        {"grids", {material.gridsFile, material.sigmaAGrid, material.sigmaSGrid}}, {"lights", lights}, {"step", s.step}};
+        {"grids", {material.gridsFile, material.sigmaAGrid, material.sigmaSGrid}}, {"lights", lights}, {"occluders", occluders},
+        {"step", s.step}};
     const std::string lightHash = hashOf(lightInputs);
     const fs::path lightFile = cache / ("light-" + lightHash + ".vdb");
     if (fs::exists(lightFile)) {
@@ -125,8 +129,10 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
         const double seconds = timed([&] {
             if (set.empty()) set = readVoxelSet(voxelFile.string());
             const Medium medium(set, material);
+            const RayScene occluderMeshes = sceneGeometry(scene, GeometryRoles::Occluders);
             DirectLightOptions options;
             options.march.step = s.step;
+            options.occluders = occluderMeshes.empty() ? nullptr : &occluderMeshes;
             const DirectLightReport lit = computeDirectLight(set, medium, scene.lights, options, interrupter);
             set.setProvenance("light", lightInputs.dump());
             recordMaterial(set, material);
@@ -180,7 +186,9 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
         const VoxelSet volume = readVoxelSet(volumeFile.string());
         const Medium medium(volume, material);
         const RenderOptions options = renderOptionsFrom(s);
-        const RenderedImage image = render(volume, medium, scene.camera, options, interrupter);
+        const RayScene visible = sceneGeometry(scene, GeometryRoles::All);
+        const RayScene occluders = sceneGeometry(scene, GeometryRoles::Occluders);
+        const RenderedImage image = render(volume, medium, scene, options, {&visible, &occluders}, interrupter);
         writeExr(report.image, image);
         writePng(report.preview, image);
     });

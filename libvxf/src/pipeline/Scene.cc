@@ -243,6 +243,13 @@ Scene parseScene(const std::string& text, const std::string& path)
         if (object.role == SceneObject::Role::Medium && !object.material) {
             reader.fail(where, "a medium object needs a material (or set \"role\": \"occluder\")");
         }
+        if (object.role == SceneObject::Role::Occluder) object.surface.diffuse = openvdb::Vec3d(0.5);
+        if (o.contains("surface")) {
+            const json& f = o["surface"];
+            if (f.contains("diffuse")) object.surface.diffuse = reader.rgb(f["diffuse"]);
+            if (f.contains("specular")) object.surface.specular = reader.rgb(f["specular"]);
+            object.surface.shininess = f.value("shininess", object.surface.shininess);
+        }
         scene.objects.push_back(std::move(object));
     }
     for (std::size_t i = 0; i < document["lights"].size(); ++i) {

@@ -1,6 +1,8 @@
 #include <vxf/render/Render.h>
 
 #include <vxf/core/Hash.h>
+#include <vxf/light/DirectLight.h>
+#include <vxf/light/LightSampler.h>
 #include <vxf/light/Transmittance.h>
 
 #include <openvdb/tools/RayIntersector.h>
@@ -11,6 +13,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 namespace vxf {
 
@@ -37,8 +40,9 @@ public:
         mTauCutoff = -std::log(std::max(options.cutoff, std::numeric_limits<double>::min()));
     }
 
-    /// March from world point @a start along unit world direction @a dir.
-    Gathered march(const openvdb::Vec3d& start, const openvdb::Vec3d& dir)
+    /// March from world point @a start along unit world direction @a dir, at most @a maxDistance (world).
+    Gathered march(const openvdb::Vec3d& start, const openvdb::Vec3d& dir,
+        double maxDistance = std::numeric_limits<double>::infinity())
     {
         Gathered g;
         if (mMedium.activeBounds().empty()) return g;
@@ -47,6 +51,7 @@ public:
         openvdb::Vec3d d = xform.worldToIndex(start + dir) - o;
         d.normalize();
         double t0 = 0.0, t1 = std::numeric_limits<double>::max();
+        if (std::isfinite(maxDistance)) t1 = maxDistance / mMedium.voxelSize(); // index units (uniform voxels)
         if (!clipRay(mBounds, o, d, t0, t1)) return g;
         const int steps = std::max(1, int(std::ceil((t1 - t0) / std::max(mOptions.step, 1e-3))));
         const double h = (t1 - t0) / steps, hWorld = h * mMedium.voxelSize();
@@ -97,24 +102,99 @@ RenderOptions renderOptionsFrom(const SceneSettings& s)
     o.gatherDirections = s.gatherDirections;
     o.background = s.background;
     o.step = s.step;
+    o.surface = s.surface;
     return o;
 }
 
-RenderedImage render(const VoxelSet& set, const Medium& medium, const Camera& camera, const RenderOptions& options,
-    Interrupter* interrupter)
+namespace {
+
+/// The surface term at world point @a x with unit normal @a n facing the viewer direction @a v:
+/// Σ_samples φ_s·T·V·cosθ·(kd/π + ks·(e+8)/(8π)·(n·h)^e).
+class SurfaceShader
+{
+public:
+    SurfaceShader(const Medium& medium, const std::vector<LightSampler>& lights, const RayScene* occluders)
+        : mMedium(medium)
+        , mSampler(medium)
+        , mLights(lights)
+        , mOccluders(occluders)
+    {
+    }
+
+    openvdb::Vec3d shade(const SurfaceShading& shading, const openvdb::Vec3d& x, const openvdb::Vec3d& n,
+        const openvdb::Vec3d& v, std::uint64_t key)
+    {
+        // Start half a voxel off the surface: the medium's own fog ramp must not shadow it.
+        const openvdb::Vec3d start = x + n * (0.5 * mMedium.voxelSize());
+        const double specularNorm = (shading.shininess + 8.0) / (8.0 * M_PI);
+        openvdb::Vec3d sum(0.0);
+        for (const LightSampler& light : mLights) {
+            light.sample(start, key, 1e-6 * mMedium.voxelSize(), mSamples);
+            for (const LightSample& s : mSamples) {
+                const double cosTheta = n.dot(s.direction);
+                if (cosTheta <= 0.0) continue;
+                const openvdb::Vec3d visible = sampleTransmittance(s, mSampler, mMedium, start, mMarch, mOccluders);
+                if (visible == openvdb::Vec3d(0.0)) continue;
+                const openvdb::Vec3d h = (s.direction + v).unit();
+                const double specular = specularNorm * std::pow(std::max(0.0, n.dot(h)), shading.shininess);
+                for (int c = 0; c < 3; ++c) {
+                    sum[c] += s.fluence[c] * visible[c] * cosTheta * (shading.diffuse[c] / M_PI + shading.specular[c] * specular);
+                }
+            }
+        }
+        return sum;
+    }
+
+private:
+    const Medium& mMedium;
+    Medium::Sampler mSampler;
+    const std::vector<LightSampler>& mLights;
+    const RayScene* mOccluders;
+    MarchOptions mMarch;
+    std::vector<LightSample> mSamples;
+};
+
+} // namespace
+
+RenderedImage render(const VoxelSet& set, const Medium& medium, const Scene& scene, const RenderOptions& options,
+    const RenderMeshes& meshes, Interrupter* interrupter)
 {
     InterruptStep step(interrupter, "rendering");
     if (options.width < 1 || options.height < 1 || options.samples < 1) {
         throw UsageError(fmt::format("image size {}x{} with {} samples per pixel is empty", options.width, options.height, options.samples));
     }
-    auto surface = set.get<openvdb::FloatGrid>("surface");
-    if (surface->getGridClass() != openvdb::GRID_LEVEL_SET) throw Error("grid 'surface' must be a level set");
+    const bool useMeshes = meshes.visible && !meshes.visible->empty();
+    openvdb::FloatGrid::Ptr surface;
+    if (!useMeshes) {
+        surface = set.get<openvdb::FloatGrid>("surface");
+        if (surface->getGridClass() != openvdb::GRID_LEVEL_SET) throw Error("grid 'surface' must be a level set");
+    }
+    // What the level set stands for: the scene's medium object, if it names one.
+    const SceneObject* levelSetObject = nullptr;
+    for (const auto& o : scene.objects) {
+        if (o.role == SceneObject::Role::Medium) {
+            levelSetObject = &o;
+            break;
+        }
+    }
+    std::vector<LightSampler> lights;
+    if (options.surface) {
+        bool anyReflects = false;
+        for (const auto& o : scene.objects) anyReflects = anyReflects || o.surface.reflects();
+        if (anyReflects) {
+            for (const Light& l : scene.lights) {
+                if (l.type != Light::Type::Volume && l.power() != openvdb::Vec3d(0.0)) lights.emplace_back(l);
+            }
+        }
+    }
+    const Camera& camera = scene.camera;
 
     RenderedImage image;
     image.width = options.width;
     image.height = options.height;
     const std::size_t n = std::size_t(options.width) * std::size_t(options.height);
     image.combined.assign(n, openvdb::Vec3f(0.0f));
+    image.surface.assign(n, openvdb::Vec3f(0.0f));
     image.direct.assign(n, openvdb::Vec3f(0.0f));
     image.scatter.assign(n, openvdb::Vec3f(0.0f));
     image.normal.assign(n, openvdb::Vec3f(0.0f));
@@ -130,19 +210,28 @@ RenderedImage render(const VoxelSet& set, const Medium& medium, const Camera& ca
     const int side = std::max(1, int(std::lround(std::sqrt(double(options.samples)))));
     const int spp = side * side;
     const auto gatherDirs = std::max(1, options.gatherDirections);
+    const double eps = 1e-4 * medium.voxelSize();
 
-    const openvdb::tools::LevelSetRayIntersector<openvdb::FloatGrid> prototype(*surface);
+    std::optional<openvdb::tools::LevelSetRayIntersector<openvdb::FloatGrid>> prototype;
+    if (surface) prototype.emplace(*surface);
     std::atomic<int> rowsDone{0};
     std::atomic<bool> cancelled{false};
     tbb::parallel_for(tbb::blocked_range<int>(0, options.height), [&](const tbb::blocked_range<int>& rows) {
         auto intersector = prototype;
         Marcher marcher(set, medium, options);
+        SurfaceShader shader(medium, lights, meshes.occluders);
+        const auto surfaceTerm = [&](const SceneObject* object, const openvdb::Vec3d& x, const openvdb::Vec3d& normal,
+                                     const openvdb::Vec3d& dir, std::uint64_t key) {
+            if (lights.empty() || !object || !object->surface.reflects()) return openvdb::Vec3d(0.0);
+            return shader.shade(object->surface, x, normal, -dir, key);
+        };
         for (int y = rows.begin(); y != rows.end() && !cancelled; ++y) {
             for (int x = 0; x < options.width; ++x) {
                 const std::size_t pixel = std::size_t(y) * std::size_t(options.width) + std::size_t(x);
-                openvdb::Vec3d sumCombined(0.0), sumDirect(0.0), sumScatter(0.0), sumNormal(0.0);
+                openvdb::Vec3d sumCombined(0.0), sumSurface(0.0), sumDirect(0.0), sumScatter(0.0), sumNormal(0.0);
                 double sumAlpha = 0.0, sumDepth = 0.0;
                 for (int s = 0; s < spp; ++s) {
+                    const std::uint64_t key = std::uint64_t(pixel) * 65536u + std::uint64_t(s);
                     const double u = (s % side + unitHash(pixel, std::uint64_t(s), 0)) / side;
                     const double v = (s / side + unitHash(pixel, std::uint64_t(s), 1)) / side;
                     const double sx = (2.0 * (x + u) / options.width - 1.0), sy = (1.0 - 2.0 * (y + v) / options.height);
@@ -152,24 +241,60 @@ RenderedImage render(const VoxelSet& set, const Medium& medium, const Camera& ca
                     } else {
                         dir = (forward + right * (sx * tanHalf * aspect) + up * (sy * tanHalf)).unit();
                     }
-                    openvdb::math::Ray<double> ray(origin, dir);
+
+                    // First surface.
                     openvdb::Vec3d hit, normal;
-                    double time = 0.0;
-                    if (!intersector.intersectsWS(ray, hit, normal, time)) {
-                        sumCombined += options.background;
-                        continue;
+                    double distance = 0.0;
+                    const SceneObject* object = nullptr;
+                    if (useMeshes) {
+                        const auto h = meshes.visible->intersect(origin, dir);
+                        if (!h) {
+                            sumCombined += options.background;
+                            continue;
+                        }
+                        distance = h->distance;
+                        hit = origin + dir * distance;
+                        normal = h->normal;
+                        object = &scene.objects[std::size_t(h->id)];
+                    } else {
+                        openvdb::math::Ray<double> ray(origin, dir);
+                        if (!intersector->intersectsWS(ray, hit, normal, distance)) {
+                            sumCombined += options.background;
+                            continue;
+                        }
+                        normal.normalize();
+                        if (normal.dot(dir) > 0.0) normal = -normal;
+                        object = levelSetObject;
                     }
-                    normal.normalize();
                     sumAlpha += 1.0;
-                    sumDepth += time;
+                    sumDepth += distance;
                     sumNormal += normal;
+                    const openvdb::Vec3d surfaceLight = surfaceTerm(object, hit, normal, dir, key);
+                    sumSurface += surfaceLight;
+                    sumCombined += surfaceLight;
+                    if (object && object->role == SceneObject::Role::Occluder) continue; // opaque
+
                     if (!options.gather) {
-                        // View mode: march on along the camera ray; the background shows through.
-                        const Gathered g = marcher.march(hit, dir);
+                        // View mode: march on along the camera ray, up to the first occluder behind.
+                        double behindDistance = std::numeric_limits<double>::infinity();
+                        openvdb::Vec3d behind = options.background;
+                        if (useMeshes) {
+                            double t = eps;
+                            while (auto h = meshes.visible->intersect(hit, dir, t)) {
+                                const SceneObject& o = scene.objects[std::size_t(h->id)];
+                                if (o.role == SceneObject::Role::Occluder) {
+                                    behindDistance = h->distance;
+                                    behind = surfaceTerm(&o, hit + dir * h->distance, h->normal, dir, key);
+                                    break;
+                                }
+                                t = h->distance + eps; // the medium's own surfaces: the march covers them
+                            }
+                        }
+                        const Gathered g = marcher.march(hit, dir, behindDistance);
                         sumDirect += g.direct;
                         sumScatter += g.scatter;
                         for (int c = 0; c < 3; ++c) {
-                            sumCombined[c] += g.direct[c] + g.scatter[c] + g.transmittance[c] * options.background[c];
+                            sumCombined[c] += g.direct[c] + g.scatter[c] + g.transmittance[c] * behind[c];
                         }
                         continue;
                     }
@@ -206,6 +331,7 @@ RenderedImage render(const VoxelSet& set, const Medium& medium, const Camera& ca
                     return openvdb::Vec3f(v);
                 };
                 image.combined[pixel] = finite(sumCombined * inv);
+                image.surface[pixel] = finite(sumSurface * inv);
                 image.direct[pixel] = finite(sumDirect * inv);
                 image.scatter[pixel] = finite(sumScatter * inv);
                 image.alpha[pixel] = float(sumAlpha * inv);

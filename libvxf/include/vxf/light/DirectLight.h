@@ -2,6 +2,8 @@
 #pragma once
 
 #include <vxf/core/Interrupter.h>
+#include <vxf/core/RayScene.h>
+#include <vxf/light/LightSampler.h>
 #include <vxf/light/Transmittance.h>
 #include <vxf/pipeline/Scene.h>
 
@@ -17,6 +19,8 @@ struct DirectLightOptions
     /// resolution) instead of voxel by voxel. Only for media so thick that the deep interior
     /// never shows; thinner media show the tiles as blocks.
     bool coarseTiles = false;
+    /// Meshes that block the light entirely (the scene's occluders); null: none.
+    const RayScene* occluders = nullptr;
 };
 
 struct DirectLightReport
@@ -31,14 +35,18 @@ struct DirectLightReport
     std::vector<PerLight> lights;
 };
 
-/// Fluence at an index-space point from one light, attenuated by the medium:
-/// point I·T(x,p)·f(r), spot the same × cone factor, directional E·T to the boundary,
-/// area Σ L·cosθ·(A/N)·f(r)·T over stratified samples, environment Σ (4π/N)·L·T over
-/// spherical Fibonacci directions. f(r) is the falloff: 1/r², 1/r or 1. Volume lights add
-/// no fluence (they are a source; see computeDirectLight). Never NaN: a voxel at a point
-/// light's position gets the value of a point half a voxel away.
-openvdb::Vec3d lightFluence(const Light& light, Medium::Sampler& sampler, const Medium& medium,
-    const openvdb::Coord& voxel, const MarchOptions& options);
+/// T·V for one light sample seen from world point @a xWorld: the medium's transmittance along
+/// the sample's path (to its point, or to the medium's bounds for light from outside) times
+/// 0 when an occluder mesh lies in between (@a occluders may be null).
+openvdb::Vec3d sampleTransmittance(const LightSample& sample, Medium::Sampler& sampler, const Medium& medium,
+    const openvdb::Vec3d& xWorld, const MarchOptions& options, const RayScene* occluders = nullptr);
+
+/// Fluence at a voxel centre from one light: Σ over its samples (LightSampler) of the
+/// sample's fluence × sampleTransmittance. Volume lights add no fluence (they are a source;
+/// see computeDirectLight). Never NaN: a voxel at a point light's position gets the value of
+/// a point half a voxel away.
+openvdb::Vec3d lightFluence(const LightSampler& light, Medium::Sampler& sampler, const Medium& medium,
+    const openvdb::Coord& voxel, const MarchOptions& options, const RayScene* occluders = nullptr);
 
 /// The light stage. Adds to @a set:
 /// - `direct` (Vec3f): φ0 = Σ lights, at every active voxel of `density` (active tiles are
@@ -48,7 +56,7 @@ openvdb::Vec3d lightFluence(const Light& light, Medium::Sampler& sampler, const 
 ///   (0 outside the medium, where σs is 0).
 /// Lights with zero power are skipped and reported. Parallel over leaf nodes (TBB);
 /// each voxel is computed on its own, so results do not depend on the number of threads.
-/// Throws vxf::UsageError for light settings it cannot honour (environment maps, for now).
+/// Throws vxf::InputError for an unreadable volume light or environment map.
 DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const std::vector<Light>& lights,
     const DirectLightOptions& options = {}, Interrupter* interrupter = nullptr);
 

@@ -24,6 +24,15 @@ struct Material
     bool scatters() const { return sigmaS[0] > 0.0 || sigmaS[1] > 0.0 || sigmaS[2] > 0.0; }
 };
 
+/// How an object's surface reflects the lights (the render's surface term).
+struct SurfaceShading
+{
+    openvdb::Vec3d diffuse{0.0};  ///< Lambert albedo
+    openvdb::Vec3d specular{0.0}; ///< normalized Blinn-Phong: specular·(e+8)/(8π)·(n·h)^e
+    double shininess = 64.0;      ///< e
+    bool reflects() const { return diffuse != openvdb::Vec3d(0.0) || specular != openvdb::Vec3d(0.0); }
+};
+
 struct SceneObject
 {
     enum class Role { Medium, Occluder };
@@ -32,6 +41,7 @@ struct SceneObject
     openvdb::Mat4d objectToWorld;  ///< scale, then rotate x, y, z (degrees), then translate
     Role role = Role::Medium;
     std::optional<Material> material; ///< present for media
+    SurfaceShading surface;           ///< diffuse 0.5 by default for occluders, 0 for media
 };
 
 struct Light

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <vxf/core/Interrupter.h>
+#include <vxf/core/RayScene.h>
 #include <vxf/light/Medium.h>
 #include <vxf/pipeline/Scene.h>
 
@@ -15,6 +16,7 @@ struct RenderOptions
     int samples = 4;            ///< camera rays per pixel (stratified, deterministic jitter)
     bool gather = false;        ///< false: "view" mode (physical); true: the thesis's final gather
     int gatherDirections = 64;  ///< cosine-weighted directions per hit in gather mode
+    bool surface = true;        ///< add the surface term of objects whose surface reflects
     openvdb::Vec3d background{0.0};
     double step = 1.0;          ///< march step, voxels
     double cutoff = 1e-4;       ///< stop marching below this transmittance
@@ -24,22 +26,37 @@ struct RenderOptions
 struct RenderedImage
 {
     int width = 0, height = 0;
-    std::vector<openvdb::Vec3f> combined, direct, scatter, normal;
+    std::vector<openvdb::Vec3f> combined, surface, direct, scatter, normal;
     std::vector<float> alpha, depth; ///< depth: distance along the camera ray to the surface (0 where it misses)
 };
 
 /// Render options from a scene's settings.
 RenderOptions renderOptionsFrom(const SceneSettings& settings);
 
-/// Render the voxel set @a set as seen by @a camera. Camera rays hit the `surface` level set
-/// (OpenVDB's LevelSetRayIntersector, so a .vdb alone renders). In view mode a ray that hits
-/// marches on through the medium along the same direction (index-matched boundary):
-/// L = ∫ T·J dt + T_exit·background, with J = σs·φ/(4π) + emission per layer (φ = `direct`
-/// for the direct layer, `scatter` for the scatter layer, their sum for combined; each step
-/// integrated analytically). In gather mode L is the average of such marches over a
-/// cosine-weighted hemisphere of directions into the volume, dropping those that leave it at
-/// once. Missing rays see the background with alpha 0. Parallel over rows; deterministic.
-RenderedImage render(const VoxelSet& set, const Medium& medium, const Camera& camera, const RenderOptions& options,
-    Interrupter* interrupter = nullptr);
+/// The meshes camera and shadow rays meet (ids: indices in Scene::objects), or none.
+struct RenderMeshes
+{
+    const RayScene* visible = nullptr;   ///< every object; null: camera rays hit the `surface` level set
+    const RayScene* occluders = nullptr; ///< the occluders only (shadows of the surface term); may be null
+};
+
+/// Render the voxel set @a set with @a scene's camera, lights and object shading.
+/// Camera rays hit the scene's meshes through Embree (@a meshes.visible), or with no meshes
+/// the `surface` level set (OpenVDB's LevelSetRayIntersector, so a .vdb alone renders; its
+/// shading is that of the scene's medium object, if any).
+/// - Surface term (options.surface, objects whose SurfaceShading reflects): Lambert +
+///   normalized Blinn-Phong from the scene's lights, each sample shadowed by occluders and
+///   attenuated by the medium (sampleTransmittance), from just off the surface.
+/// - Volume term at a medium's surface, view mode: the ray marches on through the medium
+///   along the same direction (index-matched boundary): L = ∫ T·J dt + T_exit·L_behind, with
+///   J = σs·φ/(4π) per layer (φ = `direct` for the direct layer, `scatter` for the scatter
+///   layer, their sum for combined; each step integrated analytically); L_behind is the first
+///   occluder behind (its surface term) or the background, and the march stops there. Gather
+///   mode: the average of such marches over a cosine-weighted hemisphere of directions into
+///   the volume, dropping those that leave it at once.
+/// Occluders show their surface term only. Missing rays see the background with alpha 0.
+/// Parallel over rows; every pixel computed alone, so deterministic for any thread count.
+RenderedImage render(const VoxelSet& set, const Medium& medium, const Scene& scene, const RenderOptions& options,
+    const RenderMeshes& meshes = {}, Interrupter* interrupter = nullptr);
 
 } // namespace vxf

@@ -1,0 +1,25 @@
+// vxf — a scene's objects as geometry: the medium object, world-space meshes, Embree scenes.
+#pragma once
+
+#include <vxf/core/RayScene.h>
+#include <vxf/core/TriangleMesh.h>
+#include <vxf/pipeline/Scene.h>
+
+namespace vxf {
+
+/// The scene's one medium object. Throws vxf::UsageError naming the scene file when there is
+/// none or more than one (one medium per voxel set).
+const SceneObject& mediumObject(const Scene& scene);
+
+/// The world-space triangles of @a object: its mesh file (read and repaired as by
+/// `vxf voxelize`) or built-in mesh, moved by its transform. Throws vxf::InputError for a
+/// bad mesh file.
+TriangleMesh objectMesh(const SceneObject& object);
+
+/// An Embree scene of the scene's objects, each with its index in scene.objects as id:
+/// every object (camera rays), or only the occluders (shadow rays in the light stage).
+/// Empty when nothing qualifies.
+enum class GeometryRoles { All, Occluders };
+RayScene sceneGeometry(const Scene& scene, GeometryRoles roles);
+
+} // namespace vxf

@@ -1,0 +1,56 @@
+#include <vxf/pipeline/SceneGeometry.h>
+
+#include <vxf/core/Error.h>
+#include <vxf/core/ProceduralMesh.h>
+#include <vxf/io/MeshFile.h>
+
+#include <fmt/format.h>
+
+namespace vxf {
+
+const SceneObject& mediumObject(const Scene& scene)
+{
+    const SceneObject* medium = nullptr;
+    for (const auto& object : scene.objects) {
+        if (object.role != SceneObject::Role::Medium) continue;
+        if (medium) {
+            throw UsageError(fmt::format("{}: objects '{}' and '{}' are both media; one medium per voxel set for now",
+                scene.path, medium->name, object.name));
+        }
+        medium = &object;
+    }
+    if (!medium) throw UsageError(fmt::format("{}: no object is a medium", scene.path));
+    return *medium;
+}
+
+TriangleMesh objectMesh(const SceneObject& object)
+{
+    TriangleMesh mesh;
+    if (object.mesh.rfind("builtin:", 0) == 0) {
+        auto builtin = builtinMesh(object.mesh);
+        if (!builtin) {
+            std::string names;
+            for (const auto& n : builtinMeshNames()) names += (names.empty() ? "" : ", ") + n;
+            throw UsageError(fmt::format("object '{}': no built-in mesh '{}' (there are {})", object.name, object.mesh, names));
+        }
+        mesh = std::move(*builtin);
+    } else {
+        mesh = readMesh(object.mesh);
+    }
+    for (auto& p : mesh.points) p = object.objectToWorld.transform(p);
+    return mesh;
+}
+
+RayScene sceneGeometry(const Scene& scene, GeometryRoles roles)
+{
+    RayScene geometry;
+    for (std::size_t i = 0; i < scene.objects.size(); ++i) {
+        const SceneObject& object = scene.objects[i];
+        if (roles == GeometryRoles::Occluders && object.role != SceneObject::Role::Occluder) continue;
+        geometry.add(objectMesh(object), int(i));
+    }
+    geometry.commit();
+    return geometry;
+}
+
+} // namespace vxf
