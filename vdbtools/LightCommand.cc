@@ -5,6 +5,7 @@
 #include <vxf/core/GridStats.h>
 #include <vxf/light/DirectLight.h>
 #include <vxf/pipeline/SceneGeometry.h>
+#include <vxf/pipeline/SceneMedium.h>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -39,7 +40,12 @@ public:
         const auto start = std::chrono::steady_clock::now();
         const Scene scene = loadScene(mScene);
         VoxelSet set = readVoxelSet(mInput);
-        const Material& material = *mediumObject(scene).material;
+        const Material material = sceneMaterial(scene);
+        attachMaterialGrids(set, material);
+        if (mediaCount(scene) > 1 && !(set.find("sigma_a") && set.find("sigma_s"))) {
+            throw UsageError(fmt::format("{}: the scene has {} media but {} has no per-voxel sigma_a and sigma_s; "
+                                         "voxelize them together with `vxf run`", mScene, mediaCount(scene), mInput));
+        }
         const Medium medium(set, material);
         const RayScene occluders = sceneGeometry(scene, GeometryRoles::Occluders);
         DirectLightOptions options = mOptions;

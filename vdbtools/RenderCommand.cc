@@ -5,6 +5,7 @@
 #include <vxf/io/ImageFile.h>
 #include <vxf/light/Medium.h>
 #include <vxf/pipeline/SceneGeometry.h>
+#include <vxf/pipeline/SceneMedium.h>
 #include <vxf/render/Render.h>
 
 #include <fmt/format.h>
@@ -49,7 +50,7 @@ public:
         if (set.metadata().getMetadata<openvdb::StringMetadata>(kMaterialMetaKey)) {
             material = recordedMaterial(set);
         } else {
-            material = *mediumObject(scene).material;
+            material = sceneMaterial(scene);
         }
         const Medium medium(set, material);
         RenderOptions options = renderOptionsFrom(scene.settings);

@@ -3,7 +3,7 @@
 #include "Commands.h"
 
 #include <vxf/light/Medium.h>
-#include <vxf/pipeline/SceneGeometry.h>
+#include <vxf/pipeline/SceneMedium.h>
 #include <vxf/scatter/Scatter.h>
 
 #include <fmt/format.h>
@@ -53,7 +53,7 @@ public:
         TerminalProgress progress;
         const auto start = std::chrono::steady_clock::now();
         VoxelSet set = readVoxelSet(mInput);
-        const Material material = mScene.empty() ? recordedMaterial(set) : *mediumObject(loadScene(mScene)).material;
+        const Material material = mScene.empty() ? recordedMaterial(set) : sceneMaterial(loadScene(mScene));
         const Medium medium(set, material);
         const ScatterReport report = scatter(set, medium, mOptions, &progress);
         nlohmann::json params = {{"command", "scatter"}, {"input", mInput}, {"passes", mOptions.passes},

@@ -4,6 +4,7 @@
 #include <vxf/io/VoxelSetFile.h>
 #include <vxf/light/DirectLight.h>
 #include <vxf/pipeline/SceneGeometry.h>
+#include <vxf/pipeline/SceneMedium.h>
 #include <vxf/render/Render.h>
 #include <vxf/scatter/Scatter.h>
 #include <vxf/voxelize/Voxelize.h>
@@ -68,8 +69,7 @@ std::string fileFingerprint(const std::string& file)
 PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interrupter* interrupter)
 {
     PipelineReport report;
-    const SceneObject* object = &mediumObject(scene);
-    const Material& material = *object->material;
+    const Material material = sceneMaterial(scene);
     const SceneSettings& s = scene.settings;
     const auto& outputs = s.outputs;
     const auto wants = [&](const char* o) { return std::find(outputs.begin(), outputs.end(), o) != outputs.end(); };
@@ -85,10 +85,17 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
         report.stages.push_back({stage, action, std::move(why), file.string(), seconds});
     };
 
-    // Voxelize: the mesh (bytes), its transform, the voxel settings.
-    json voxelInputs = {{"mesh", object->mesh}, {"bytes", fileFingerprint(object->mesh)}, {"dim", s.dim},
-        {"voxel_size", s.voxelSize}, {"band", s.band}};
-    voxelInputs["transform"] = matrix(object->objectToWorld);
+    // Voxelize: the media (mesh bytes, transforms, materials when several, coefficient
+    // grids), the voxel settings.
+    json media = json::array();
+    for (const auto& o : scene.objects) {
+        if (o.role != SceneObject::Role::Medium) continue;
+        const Material& m = *o.material;
+        media.push_back({{"mesh", o.mesh}, {"bytes", fileFingerprint(o.mesh)}, {"transform", matrix(o.objectToWorld)},
+            {"sigma", mediaCount(scene) > 1 ? json{vec(m.sigmaA), vec(m.sigmaS)} : json()},
+            {"grids", m.gridsFile.empty() ? json() : json{fileFingerprint(m.gridsFile), m.sigmaAGrid, m.sigmaSGrid}}});
+    }
+    const json voxelInputs = {{"media", media}, {"dim", s.dim}, {"voxel_size", s.voxelSize}, {"band", s.band}};
     const std::string voxelHash = hashOf(voxelInputs);
     const fs::path voxelFile = cache / ("voxelize-" + voxelHash + ".vdb");
     VoxelSet set;
@@ -96,12 +103,11 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
         record("voxelize", "reused", "mesh and voxel settings unchanged", voxelFile, 0.0);
     } else {
         const double seconds = timed([&] {
-            const TriangleMesh mesh = objectMesh(*object);
             VoxelizeOptions options;
             options.voxelSize = s.voxelSize;
             options.dim = s.voxelSize > 0.0 ? 0 : s.dim;
             options.bandWidth = float(s.band);
-            set = voxelize(mesh, options, interrupter);
+            set = voxelizeMedia(scene, options, interrupter);
             set.setProvenance("voxelize", voxelInputs.dump());
             writeVoxelSet(voxelFile.string(), set);
         });
@@ -119,8 +125,7 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
         if (!l.file.empty()) lights.push_back(fileFingerprint(l.file)); // environment map, emission grid: their bytes
     }
     const json lightInputs = {{"voxels", voxelHash}, {"sigma_a", vec(material.sigmaA)}, {"sigma_s", vec(material.sigmaS)},
-        {"grids", {material.gridsFile, material.sigmaAGrid, material.sigmaSGrid}}, {"lights", lights}, {"occluders", occluders},
-        {"step", s.step}};
+        {"lights", lights}, {"occluders", occluders}, {"step", s.step}};
     const std::string lightHash = hashOf(lightInputs);
     const fs::path lightFile = cache / ("light-" + lightHash + ".vdb");
     if (fs::exists(lightFile)) {
@@ -146,7 +151,7 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
     fs::path volumeFile = lightFile;
     std::string volumeHash = lightHash;
     const bool needScatter = wants("image") || wants("scatter") || wants("illumination") || wants("scatter_passes");
-    if (!material.scatters() && material.sigmaSGrid.empty()) {
+    if (!material.scatters() && material.sigmaSGrid.empty()) { // (several media: the maximum of their σs)
         record("scatter", "skipped", "the material does not scatter (sigma_s = 0)", "", 0.0);
     } else if (!needScatter) {
         record("scatter", "skipped", "no requested output needs it", "", 0.0);

@@ -8,21 +8,6 @@
 
 namespace vxf {
 
-const SceneObject& mediumObject(const Scene& scene)
-{
-    const SceneObject* medium = nullptr;
-    for (const auto& object : scene.objects) {
-        if (object.role != SceneObject::Role::Medium) continue;
-        if (medium) {
-            throw UsageError(fmt::format("{}: objects '{}' and '{}' are both media; one medium per voxel set for now",
-                scene.path, medium->name, object.name));
-        }
-        medium = &object;
-    }
-    if (!medium) throw UsageError(fmt::format("{}: no object is a medium", scene.path));
-    return *medium;
-}
-
 TriangleMesh objectMesh(const SceneObject& object)
 {
     TriangleMesh mesh;

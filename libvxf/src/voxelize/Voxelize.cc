@@ -9,7 +9,7 @@
 
 namespace vxf {
 
-double resolveVoxelSize(const TriangleMesh& mesh, const VoxelizeOptions& options)
+double resolveVoxelSize(const openvdb::BBoxd& bounds, const VoxelizeOptions& options)
 {
     if (options.voxelSize != 0.0 && options.dim != 0) {
         throw UsageError("give either voxel_size or dim, not both");
@@ -17,8 +17,7 @@ double resolveVoxelSize(const TriangleMesh& mesh, const VoxelizeOptions& options
     if (!(options.bandWidth >= 1.0f) || !std::isfinite(options.bandWidth)) {
         throw UsageError(fmt::format("band must be at least 1 voxel, got {}", options.bandWidth));
     }
-    if (mesh.triangles.empty()) throw Error("the mesh has no triangles");
-    const openvdb::BBoxd bounds = mesh.bounds();
+    if (bounds.empty()) throw Error("the mesh has no triangles");
     const double extent = bounds.extents()[bounds.maxExtent()];
     if (options.voxelSize != 0.0) {
         if (!(options.voxelSize > 0.0) || !std::isfinite(options.voxelSize)) {
@@ -37,18 +36,9 @@ double resolveVoxelSize(const TriangleMesh& mesh, const VoxelizeOptions& options
     return extent / double(options.dim);
 }
 
-VoxelSet voxelize(const TriangleMesh& mesh, const VoxelizeOptions& options, Interrupter* interrupter)
+openvdb::math::Transform::Ptr voxelLattice(const openvdb::BBoxd& bounds, double voxelSize)
 {
-    const double voxelSize = resolveVoxelSize(mesh, options);
-    for (const auto& t : mesh.triangles) {
-        for (int c = 0; c < 3; ++c) {
-            if (t[c] >= mesh.points.size()) throw Error(fmt::format("triangle refers to point {} of {}", t[c], mesh.points.size()));
-        }
-    }
-
-    // Index space: voxel centres on voxelSize·ℤ³. Far from the origin, shift the index origin
-    // by a whole number of voxels to the mesh so float index coordinates stay small.
-    const openvdb::BBoxd bounds = mesh.bounds();
+    // Far from the origin, shift the index origin by a whole number of voxels to the bounds.
     openvdb::Vec3d shift(0.0);
     const double farIndex = std::max(bounds.min().length(), bounds.max().length()) / voxelSize;
     if (farIndex > double(1 << 16)) {
@@ -57,6 +47,32 @@ VoxelSet voxelize(const TriangleMesh& mesh, const VoxelizeOptions& options, Inte
     }
     auto xform = openvdb::math::Transform::createLinearTransform(voxelSize);
     if (shift != openvdb::Vec3d(0.0)) xform->postTranslate(shift);
+    return xform;
+}
+
+VoxelSet voxelize(const TriangleMesh& mesh, const VoxelizeOptions& options, Interrupter* interrupter)
+{
+    if (mesh.triangles.empty()) throw Error("the mesh has no triangles");
+    openvdb::math::Transform::Ptr xform;
+    if (options.lattice) {
+        const auto map = options.lattice->baseMap();
+        if (!map->isType<openvdb::math::UniformScaleMap>() && !map->isType<openvdb::math::UniformScaleTranslateMap>()) {
+            throw UsageError(fmt::format("the voxel lattice must be a uniform scale and translation, not a {}", map->type()));
+        }
+        if (!(options.bandWidth >= 1.0f) || !std::isfinite(options.bandWidth)) {
+            throw UsageError(fmt::format("band must be at least 1 voxel, got {}", options.bandWidth));
+        }
+        xform = options.lattice->copy();
+    } else {
+        xform = voxelLattice(mesh.bounds(), resolveVoxelSize(mesh.bounds(), options));
+    }
+    const double voxelSize = xform->voxelSize()[0];
+    const openvdb::Vec3d shift = xform->indexToWorld(openvdb::Vec3d(0.0));
+    for (const auto& t : mesh.triangles) {
+        for (int c = 0; c < 3; ++c) {
+            if (t[c] >= mesh.points.size()) throw Error(fmt::format("triangle refers to point {} of {}", t[c], mesh.points.size()));
+        }
+    }
 
     // Points relative to the shifted origin, rounded to float and mapped to index space as
     // tools::meshToLevelSet does (so a mesh near the origin gives exactly its voxels).

@@ -33,7 +33,8 @@ struct PipelineReport
 /// skipped by the light stage; passes stop at the scene's tolerance. Writes
 /// outDir/NAME.exr and NAME.png (NAME: the scene file's stem) when "image" is requested.
 /// Skip-or-run decisions and seconds are in the report, one record per stage.
-/// One medium object per scene for now (vxf::UsageError otherwise).
+/// Several media objects are voxelized together (voxelizeMedia); occluders cast shadows in
+/// the light stage and show in the render.
 PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interrupter* interrupter = nullptr);
 
 } // namespace vxf

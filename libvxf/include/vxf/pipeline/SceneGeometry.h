@@ -1,4 +1,4 @@
-// vxf — a scene's objects as geometry: the medium object, world-space meshes, Embree scenes.
+// vxf — a scene's objects as geometry: world-space meshes and Embree scenes of them.
 #pragma once
 
 #include <vxf/core/RayScene.h>
@@ -6,10 +6,6 @@
 #include <vxf/pipeline/Scene.h>
 
 namespace vxf {
-
-/// The scene's one medium object. Throws vxf::UsageError naming the scene file when there is
-/// none or more than one (one medium per voxel set).
-const SceneObject& mediumObject(const Scene& scene);
 
 /// The world-space triangles of @a object: its mesh file (read and repaired as by
 /// `vxf voxelize`) or built-in mesh, moved by its transform. Throws vxf::InputError for a

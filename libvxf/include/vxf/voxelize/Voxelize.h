@@ -12,19 +12,27 @@ struct VoxelizeOptions
     double voxelSize = 0.0; ///< world units per voxel; 0: derive from @c dim
     int dim = 0;            ///< voxels along the longest side of the mesh bounds (if voxelSize is 0)
     float bandWidth = 3.0f; ///< narrow band half width in voxels, each side of the surface (≥ 1)
+    /// Voxelize on this lattice (a linear transform, e.g. voxelLattice() of several meshes'
+    /// bounds) instead of one derived from the mesh; voxelSize and dim are then ignored.
+    openvdb::math::Transform::ConstPtr lattice;
 };
 
-/// The voxel size @a options ask for on @a mesh (validates them; throws vxf::UsageError).
-double resolveVoxelSize(const TriangleMesh& mesh, const VoxelizeOptions& options);
+/// The index space vxf voxelizes @a bounds into: voxel centres on voxelSize·ℤ³, the index
+/// origin shifted by whole voxels to the bounds' centre when they lie over 2^16 voxels from
+/// the world origin (so float index coordinates keep sub-voxel precision).
+openvdb::math::Transform::Ptr voxelLattice(const openvdb::BBoxd& bounds, double voxelSize);
+
+/// The voxel size @a options ask for on meshes spanning @a bounds (validates them; throws
+/// vxf::UsageError, or vxf::Error for empty bounds).
+double resolveVoxelSize(const openvdb::BBoxd& bounds, const VoxelizeOptions& options);
 
 /// Voxelize a closed triangle mesh with OpenVDB's mesh-to-volume.
 ///
 /// Produces `surface`, a narrow-band level set (active voxels within bandWidth voxels of the
 /// surface on each side, inactive tiles of ±background elsewhere) and `density`, a fog
 /// volume: 1 inside (deep interior kept as active tiles, never voxelized), a smooth 0 → 1
-/// ramp across the inner band, inactive 0 outside. Voxel centres lie on the world lattice
-/// voxelSize·ℤ³; when the mesh lies far from the origin (over 2^16 voxels) the index space
-/// is re-centred on it so OpenVDB's float index-space coordinates keep sub-voxel precision.
+/// ramp across the inner band, inactive 0 outside. The index space is voxelLattice() of the
+/// mesh's bounds, or options.lattice.
 /// Results do not depend on the number of threads. Throws vxf::UsageError for bad options,
 /// vxf::Error for an empty mesh, vxf::Interrupted when cancelled.
 VoxelSet voxelize(const TriangleMesh& mesh, const VoxelizeOptions& options, Interrupter* interrupter = nullptr);
