@@ -3,6 +3,9 @@
 
 #include <vxf/io/VoxelSetFile.h>
 
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfInputFile.h>
 #include <catch2/catch.hpp>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -396,4 +399,46 @@ TEST_CASE("vxf run simulates only what the scene needs and reuses what did not c
     CHECK(directOnly.find("scatter   skipped") != std::string::npos);
     CHECK(directOnly.find("no requested output needs it") != std::string::npos);
     CHECK(directOnly.find("render    skipped") != std::string::npos);
+}
+
+TEST_CASE("scatter with a band, render through Embree or the level set, occluders in the chain", "[cli][render]")
+{
+    TempDir dir;
+    vxf::test::spit(dir.path("scene.json"), R"({
+  "objects": [{"mesh": "builtin:sphere", "material": {"albedo": 0.9, "mean_free_path": 0.1}},
+              {"name": "card", "mesh": "builtin:box", "role": "occluder", "transform": {"scale": [0.3, 0.3, 0.02], "translate": [0, 0, 1.5]}}],
+  "lights": [{"name": "key", "type": "point", "position": [0, 0, 2.5], "intensity": 4}],
+  "camera": {"position": [0, -4, 0], "look_at": [0, 0, 0]},
+  "render": {"width": 40, "height": 30, "samples": 1}
+})");
+    REQUIRE(run(fmt::format("{} voxelize builtin:sphere -o {} --dim 40 -q", binary("vxf"), dir.path("v.vdb"))).status == 0);
+    const auto lit = run(fmt::format("{} light {} --scene {} -o {} -q", binary("vxf"), dir.path("v.vdb"), dir.path("scene.json"), dir.path("l.vdb")));
+    INFO(lit.err);
+    REQUIRE(lit.status == 0);
+    // The card shadows the top of the sphere: the light arrives only around it.
+    const auto set = vxf::readVoxelSet(dir.path("l.vdb"));
+    auto direct = set.get<openvdb::Vec3SGrid>("direct");
+    const auto index = [&](double x, double y, double z) { return set.transform().worldToIndexCellCentered(openvdb::Vec3d(x, y, z)); };
+    CHECK(direct->tree().getValue(index(0, 0, 0.95)).x() == 0.0f);
+    CHECK(direct->tree().getValue(index(0.7, 0, 0.65)).x() > 0.0f);
+
+    const auto banded = run(fmt::format("{} scatter {} -o {} --passes 2 --directions 8 --band 0.2", binary("vxf"), dir.path("l.vdb"), dir.path("s.vdb")));
+    INFO(banded.err);
+    REQUIRE(banded.status == 0);
+    CHECK(banded.out.find("band 0.2: ") != std::string::npos);
+    CHECK(banded.out.find(" 8^3 and 0 128^3 tiles") != std::string::npos);
+
+    for (const char* mode : {"", "--level-set"}) {
+        INFO(mode);
+        const auto image = run(fmt::format("{} render {} --volume {} -o {} --png {} {}", binary("vxf"), dir.path("scene.json"),
+            dir.path("s.vdb"), dir.path("i.exr"), dir.path("i.png"), mode));
+        INFO(image.err);
+        REQUIRE(image.status == 0);
+        CHECK(slurp(dir.path("i.png")).substr(1, 3) == "PNG");
+        Imf::InputFile exr(dir.path("i.exr").c_str());
+        for (const char* channel : {"R", "A", "surface.R", "direct.R", "scatter.R", "depth.Z", "normal.X"}) {
+            INFO(channel);
+            CHECK(exr.header().channels().findChannel(channel));
+        }
+    }
 }
