@@ -26,6 +26,8 @@ std::unique_ptr<Command> makeLightCommand(CLI::App& parent);
 std::unique_ptr<Command> makeScatterCommand(CLI::App& parent);
 std::unique_ptr<Command> makeRenderCommand(CLI::App& parent);
 std::unique_ptr<Command> makeRunCommand(CLI::App& parent);
+std::unique_ptr<Command> makeOpCommand(CLI::App& parent);
+std::unique_ptr<Command> makeGraphCommand(CLI::App& parent);
 
 } // namespace vxf::cli
 

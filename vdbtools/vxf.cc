@@ -19,6 +19,8 @@ int main(int argc, char** argv)
     commands.push_back(makeScatterCommand(app));
     commands.push_back(makeRenderCommand(app));
     commands.push_back(makeRunCommand(app));
+    commands.push_back(makeOpCommand(app));
+    commands.push_back(makeGraphCommand(app));
     commands.push_back(makeDemoCommand(app));
     return runMain(app, argc, argv, [&] {
         for (auto& command : commands) {

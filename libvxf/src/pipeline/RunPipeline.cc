@@ -1,5 +1,6 @@
 #include <vxf/pipeline/RunPipeline.h>
 
+#include <vxf/io/ContentHash.h>
 #include <vxf/io/ImageFile.h>
 #include <vxf/io/VoxelSetFile.h>
 #include <vxf/light/DirectLight.h>
@@ -24,17 +25,7 @@ namespace {
 using nlohmann::json;
 namespace fs = std::filesystem;
 
-/// FNV-1a, 64 bit: stable across runs, builds and machines (std::hash is not).
-std::uint64_t fnv1a(const std::string& bytes, std::uint64_t h = 0xcbf29ce484222325ull)
-{
-    for (unsigned char c : bytes) {
-        h ^= c;
-        h *= 0x100000001b3ull;
-    }
-    return h;
-}
-
-std::string hashOf(const json& inputs) { return fmt::format("{:016x}", fnv1a(inputs.dump())); }
+std::string hashOf(const json& inputs) { return hashHex(inputs.dump()); }
 
 json vec(const openvdb::Vec3d& v) { return json::array({v[0], v[1], v[2]}); }
 
@@ -52,16 +43,6 @@ json lightJson(const Light& l)
         {"falloff", int(l.falloff)}, {"position", vec(l.position)}, {"direction", vec(l.direction)},
         {"cone", {l.coneAngleDegrees, l.coneSoftnessDegrees}}, {"shape", int(l.shape)},
         {"size", {l.width, l.height, l.radius}}, {"samples", l.samples}, {"file", l.file}, {"grid", l.grid}};
-}
-
-/// A file's bytes as a hash (built-in meshes by name).
-std::string fileFingerprint(const std::string& file)
-{
-    if (file.rfind("builtin:", 0) == 0) return file;
-    std::ifstream in(file, std::ios::binary);
-    if (!in) throw Error(fmt::format("{}: cannot open", file));
-    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    return fmt::format("{:016x}", fnv1a(bytes));
 }
 
 } // namespace

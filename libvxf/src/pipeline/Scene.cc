@@ -1,13 +1,10 @@
 #include <vxf/pipeline/Scene.h>
 
 #include <vxf/core/Error.h>
+#include <vxf/io/JsonDocument.h>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
-#include <valijson/adapters/nlohmann_json_adapter.hpp>
-#include <valijson/schema.hpp>
-#include <valijson/schema_parser.hpp>
-#include <valijson/validator.hpp>
 
 #include <cmath>
 #include <filesystem>
@@ -30,31 +27,10 @@ namespace {
 
 using nlohmann::json;
 
-const valijson::Schema& sceneSchema()
+const JsonSchema& sceneSchema()
 {
-    static const std::unique_ptr<valijson::Schema> schema = [] {
-        auto s = std::make_unique<valijson::Schema>();
-        const json document = json::parse(sceneSchemaText());
-        valijson::SchemaParser parser;
-        valijson::adapters::NlohmannJsonAdapter adapter(document);
-        parser.populateSchema(adapter, *s);
-        return s;
-    }();
-    return *schema;
-}
-
-/// valijson's context ["<root>", "[lights]", "[0]"] as a JSON pointer "/lights/0".
-std::string pointer(const std::vector<std::string>& context)
-{
-    std::string result;
-    for (const auto& part : context) {
-        if (part == "<root>") continue;
-        std::string key = part;
-        if (key.size() >= 2 && key.front() == '[' && key.back() == ']') key = key.substr(1, key.size() - 2);
-        if (key.size() >= 2 && key.front() == '"' && key.back() == '"') key = key.substr(1, key.size() - 2);
-        result += "/" + key;
-    }
-    return result.empty() ? "/" : result;
+    static const JsonSchema schema(json::parse(sceneSchemaText()), "schemas/scene.schema.json");
+    return schema;
 }
 
 class SceneReader
@@ -194,39 +170,8 @@ public:
 
 Scene parseScene(const std::string& text, const std::string& path)
 {
-    json document;
-    try {
-        document = json::parse(text);
-    } catch (const json::parse_error& e) {
-        // Locate e.byte (1-based offset just past the error) as line:column.
-        std::size_t line = 1, column = 1;
-        for (std::size_t i = 0; i + 1 < e.byte && i < text.size(); ++i) {
-            if (text[i] == '\n') {
-                ++line;
-                column = 1;
-            } else {
-                ++column;
-            }
-        }
-        std::string what = e.what();
-        const auto colon = what.find(": ", what.find("parse error"));
-        if (colon != std::string::npos) what = what.substr(colon + 2);
-        throw InputError(path, line, column, "invalid JSON: " + what);
-    }
-
-    valijson::Validator validator;
-    valijson::ValidationResults results;
-    valijson::adapters::NlohmannJsonAdapter target(document);
-    if (!validator.validate(sceneSchema(), target, &results)) {
-        // Report the most specific violation (the deepest field), then the rest briefly.
-        valijson::ValidationResults::Error error, best;
-        std::size_t count = 0;
-        while (results.popError(error)) {
-            if (count++ == 0 || error.context.size() > best.context.size()) best = error;
-        }
-        throw InputError(path, 0, 0, fmt::format("{}: {} (checked against schemas/scene.schema.json)",
-                                         pointer(best.context), best.description));
-    }
+    const json document = parseJsonText(text, path);
+    sceneSchema().check(document, path);
 
     SceneReader reader(path);
     Scene scene;

@@ -1,0 +1,20 @@
+// vxf — stable content hashes for caches: the same bytes give the same hash on every machine.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+namespace vxf {
+
+/// FNV-1a, 64 bit, of @a bytes (continuing from @a seed): stable across runs, builds and
+/// machines (std::hash is not).
+std::uint64_t fnv1a(const std::string& bytes, std::uint64_t seed = 0xcbf29ce484222325ull);
+
+/// fnv1a of @a text as 16 hex digits.
+std::string hashHex(const std::string& text);
+
+/// The hash of a file's bytes as 16 hex digits; built-in names (builtin:…) stand for
+/// themselves. Throws vxf::Error naming the file when it cannot be read.
+std::string fileFingerprint(const std::string& path);
+
+} // namespace vxf

@@ -1,0 +1,32 @@
+#include <vxf/io/ContentHash.h>
+
+#include <vxf/core/Error.h>
+
+#include <fmt/format.h>
+
+#include <fstream>
+#include <iterator>
+
+namespace vxf {
+
+std::uint64_t fnv1a(const std::string& bytes, std::uint64_t h)
+{
+    for (unsigned char c : bytes) {
+        h ^= c;
+        h *= 0x100000001b3ull;
+    }
+    return h;
+}
+
+std::string hashHex(const std::string& text) { return fmt::format("{:016x}", fnv1a(text)); }
+
+std::string fileFingerprint(const std::string& path)
+{
+    if (path.rfind("builtin:", 0) == 0) return path;
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw Error(fmt::format("{}: cannot open", path));
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    return hashHex(bytes);
+}
+
+} // namespace vxf
