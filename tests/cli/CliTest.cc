@@ -442,3 +442,79 @@ TEST_CASE("scatter with a band, render through Embree or the level set, occluder
         }
     }
 }
+
+TEST_CASE("vxf op runs operators on real files, records them, and vxf graph replays them", "[cli][ops]")
+{
+    TempDir dir;
+    REQUIRE(run(fmt::format("{} voxelize builtin:sphere -o {} --dim 24 -q", binary("vxf"), dir.path("v.vdb"))).status == 0);
+    const std::string graph = dir.path("p.json");
+    const auto mul = run(fmt::format("{} op mul {} -o {} --grid density --value 0.5,1,2 --out tinted --record {}", binary("vxf"),
+        dir.path("v.vdb"), dir.path("a.vdb"), graph));
+    INFO(mul.err);
+    REQUIRE(mul.status == 0);
+    CHECK(mul.out.find("mul on 'tinted'") != std::string::npos);
+    const auto gradient = run(fmt::format("{} op gradient {} -o {} --kind radial --radius 1 --colors \"1,0,0;0,0,1\" --record {}",
+        binary("vxf"), dir.path("a.vdb"), dir.path("b.vdb"), graph));
+    INFO(gradient.err);
+    REQUIRE(gradient.status == 0);
+    const auto blur = run(fmt::format("{} op blur {} -o {} --grid gradient --kind distance --radius 2 --record {}", binary("vxf"),
+        dir.path("b.vdb"), dir.path("c.vdb"), graph));
+    INFO(blur.err);
+    REQUIRE(blur.status == 0);
+    const auto set = vxf::readVoxelSet(dir.path("c.vdb"));
+    CHECK(set.stage() == "op");
+    // density × the mean of (0.5, 1, 2) on a float grid; the input grid stays as it was.
+    const openvdb::Coord centre(0);
+    CHECK(set.get<openvdb::FloatGrid>("tinted")->tree().getValue(centre) ==
+          Approx(set.get<openvdb::FloatGrid>("density")->tree().getValue(centre) * 3.5f / 3.0f));
+    for (const char* name : {"surface", "density", "tinted", "gradient"}) {
+        INFO(name);
+        CHECK(set.find(name));
+    }
+    // The graph replays the three commands into fresh files, identically.
+    const auto recorded = nlohmann::json::parse(slurp(graph));
+    CHECK(recorded["nodes"].size() == 4);
+    fs::remove(dir.path("c.vdb"));
+    const auto replay = run(fmt::format("{} graph {} --cache {}", binary("vxf"), graph, dir.path("cache")));
+    INFO(replay.err);
+    REQUIRE(replay.status == 0);
+    CHECK(replay.out.find("blur             ran") != std::string::npos);
+    CHECK(vxf::test::identicalGrids(*set.find("gradient"), *vxf::readVoxelSet(dir.path("c.vdb")).find("gradient")));
+    const auto again = run(fmt::format("{} graph {} --cache {}", binary("vxf"), graph, dir.path("cache")));
+    CHECK(again.out.find("blur             reused") != std::string::npos);
+    CHECK(again.out.find(" ran ") == std::string::npos);
+
+    // Bad parameters: usage errors naming the operator and the parameter; nothing written.
+    const auto range = run(fmt::format("{} op blur {} -o {} --grid density --radius 0", binary("vxf"), dir.path("v.vdb"), dir.path("x.vdb")));
+    CHECK(range.status == 2);
+    CHECK(range.err.find("blur: parameter 'radius' is 0, out of range") != std::string::npos);
+    const auto text = run(fmt::format("{} op mul {} -o {} --grid density --value x", binary("vxf"), dir.path("v.vdb"), dir.path("x.vdb")));
+    CHECK(text.status == 2);
+    CHECK(text.err.find("mul: parameter 'value': cannot read 'x'") != std::string::npos);
+    const auto grid = run(fmt::format("{} op mul {} -o {} --grid nope --value 2", binary("vxf"), dir.path("v.vdb"), dir.path("x.vdb")));
+    CHECK(grid.status == 2);
+    CHECK(grid.err.find("mul: no grid named 'nope'") != std::string::npos);
+    const auto unknown = run(fmt::format("{} op mul {} -o {} --grid density --value 2 --radius 3", binary("vxf"), dir.path("v.vdb"), dir.path("x.vdb")));
+    CHECK(unknown.status == 2);
+    CHECK_FALSE(fs::exists(dir.path("x.vdb")));
+}
+
+TEST_CASE("the README operator table and the pipeline schema are what the registry generates", "[cli][ops][drift]")
+{
+    const auto table = run(fmt::format("{} op --markdown", binary("vxf")));
+    REQUIRE(table.status == 0);
+    const std::string readme = slurp(source("README.md"));
+    const std::string begin = "<!-- operators:begin -->\n", end = "<!-- operators:end -->";
+    const auto from = readme.find(begin), to = readme.find(end);
+    REQUIRE(from != std::string::npos);
+    REQUIRE(to != std::string::npos);
+    INFO("run scripts/generate to refresh the README and schemas/pipeline.schema.json");
+    CHECK(readme.substr(from + begin.size(), to - from - begin.size()) == table.out);
+    const auto schema = run(fmt::format("{} op --schema", binary("vxf")));
+    REQUIRE(schema.status == 0);
+    CHECK(nlohmann::json::parse(schema.out) == nlohmann::json::parse(slurp(source("schemas/pipeline.schema.json"))));
+    // Every operator's own help comes from the registry too.
+    const auto help = run(fmt::format("{} op blend --help", binary("vxf")));
+    CHECK(help.out.find("--normalize_b") != std::string::npos);
+    CHECK(help.out.find("one of add|subtract|multiply|darker|lighter|mix") != std::string::npos);
+}

@@ -22,7 +22,7 @@ openvdb::Index64 fill(openvdb::GridBase& grid, const FillOptions& options, Inter
         fixed.topologyUnion(g.tree());
         if (options.selection) fixed.topologyDifference(options.selection->tree());
         openvdb::MaskTree free;
-        detail::dispatch(*options.region, "blur_special region", [&](const auto& r) { free.topologyUnion(r.tree()); });
+        options.region->apply<detail::TopologyGridTypes>([&](const auto& r) { free.topologyUnion(r.tree()); });
         free.topologyDifference(fixed);
         free.voxelizeActiveTiles();
 

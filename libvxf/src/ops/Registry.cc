@@ -594,8 +594,11 @@ std::string operatorTableMarkdown()
             std::string def = p.defaultValue.is_null() ? (p.summary.rfind("(optional)", 0) == 0 ? "optional" : "required") : "default " + p.defaultValue.dump();
             params += fmt::format("{}`{}` ({}, {})", params.empty() ? "" : "<br>", p.name, describeType(p), def);
         }
-        std::string summary = op.summary;
-        out += fmt::format("| `{}` | {} | {} |\n", op.name, summary, params);
+        const auto escape = [](std::string text) { // a bare | would split the table's cell
+            for (std::size_t at = text.find('|'); at != std::string::npos; at = text.find('|', at + 2)) text.replace(at, 1, "\\|");
+            return text;
+        };
+        out += fmt::format("| `{}` | {} | {} |\n", op.name, escape(op.summary), escape(params));
     }
     return out;
 }

@@ -1,0 +1,91 @@
+#include <vxf/ops/Registry.h>
+
+#include <vxf/core/Error.h>
+
+#include <catch2/catch.hpp>
+
+#include <regex>
+#include <set>
+
+using nlohmann::json;
+
+TEST_CASE("the registry: every operator named, summarized and typed once", "[ops][registry]")
+{
+    std::set<std::string> names;
+    const std::regex snake("[a-z][a-z0-9_]*");
+    for (const auto& op : vxf::ops::registry()) {
+        INFO(op.name);
+        CHECK(names.insert(op.name).second);
+        CHECK(std::regex_match(op.name, snake));
+        CHECK(!op.summary.empty());
+        CHECK(op.run);
+        std::set<std::string> params;
+        json sample = json::object(); // every default, and a value of its type for each required parameter
+        for (const auto& p : op.params) {
+            INFO(p.name);
+            CHECK(params.insert(p.name).second);
+            CHECK(std::regex_match(p.name, snake));
+            CHECK(!p.summary.empty());
+            if (!p.defaultValue.is_null()) {
+                sample[p.name] = p.defaultValue;
+            } else if (p.type == vxf::ops::ParamType::Color) {
+                sample[p.name] = 1.0;
+            } else if (p.type == vxf::ops::ParamType::Text) {
+                sample[p.name] = "density";
+            }
+        }
+        CHECK_NOTHROW(vxf::ops::checkArgs(op, sample));
+    }
+    for (const char* expected : {"add", "sub", "mul", "div", "pow", "blend", "blur", "blur_special", "normalize", "denormalize",
+             "gradient", "remove", "include", "select", "edit", "diff", "apply_diff", "split", "merge", "rename", "copy"}) {
+        INFO(expected);
+        CHECK(names.count(expected));
+    }
+}
+
+TEST_CASE("bad parameters are errors naming the operator and the parameter", "[ops][registry]")
+{
+    const auto& blur = vxf::ops::findOperator("blur");
+    CHECK_THROWS_WITH(vxf::ops::checkArgs(blur, {{"grid", "d"}, {"radious", 2}}),
+        Catch::Contains("blur: unknown parameter 'radious'") && Catch::Contains("radius"));
+    CHECK_THROWS_WITH(vxf::ops::checkArgs(blur, {{"grid", "d"}, {"radius", 0}}),
+        Catch::Contains("blur: parameter 'radius' is 0, out of range") && Catch::Contains("[1, 64]"));
+    CHECK_THROWS_WITH(vxf::ops::checkArgs(blur, {{"grid", "d"}, {"radius", 1.5}}), Catch::Contains("parameter 'radius' is 1.5"));
+    CHECK_THROWS_WITH(vxf::ops::checkArgs(blur, {{"grid", "d"}, {"kind", "gauss"}}), Catch::Contains("one of box|distance"));
+    CHECK_THROWS_WITH(vxf::ops::checkArgs(blur, json::object()), Catch::Contains("blur: parameter 'grid' is required"));
+    const auto args = vxf::ops::checkArgs(blur, {{"grid", "d"}});
+    CHECK(args.integer("radius") == 1); // default filled in
+    CHECK_FALSE(args.has("mask"));       // optional, absent
+    CHECK_THROWS_WITH(vxf::ops::findOperator("blurr"), Catch::Contains("no operator named 'blurr'") && Catch::Contains("blur_special"));
+
+    const auto& mul = vxf::ops::findOperator("mul");
+    const auto& value = mul.params[1];
+    CHECK(vxf::ops::parseParamText(mul, value, "2") == json(2.0));
+    CHECK(vxf::ops::parseParamText(mul, value, "1,0.5,2") == json::array({1.0, 0.5, 2.0}));
+    CHECK_THROWS_WITH(vxf::ops::parseParamText(mul, value, "1,2"), Catch::Contains("mul: parameter 'value': cannot read '1,2'"));
+    CHECK_THROWS_WITH(vxf::ops::parseParamText(mul, value, "two"), Catch::Contains("cannot read 'two'"));
+    CHECK_THROWS_WITH(vxf::ops::checkArgs(mul, {{"grid", "d"}, {"value", json::array({1, 2})}}), Catch::Contains("parameter 'value' is [1,2]"));
+}
+
+TEST_CASE("an operator runs on a voxel set and leaves the other grids untouched", "[ops][registry]")
+{
+    vxf::VoxelSet set;
+    auto density = openvdb::FloatGrid::create(0.0f);
+    density->setName("density");
+    density->tree().setValueOn(openvdb::Coord(0), 0.5f);
+    auto other = openvdb::FloatGrid::create(0.0f);
+    other->setName("other");
+    other->tree().setValueOn(openvdb::Coord(0), 7.0f);
+    set.put(density);
+    set.put(other);
+    const auto& mul = vxf::ops::findOperator("mul");
+    const auto args = vxf::ops::checkArgs(mul, {{"grid", "density"}, {"value", 4}, {"out", "bright"}});
+    vxf::ops::OpContext context{set, args, nullptr};
+    CHECK(mul.run(context).find("mul on 'bright'") != std::string::npos);
+    CHECK(set.get<openvdb::FloatGrid>("bright")->tree().getValue(openvdb::Coord(0)) == 2.0f);
+    CHECK(set.get<openvdb::FloatGrid>("density")->tree().getValue(openvdb::Coord(0)) == 0.5f);
+    CHECK(set.get<openvdb::FloatGrid>("other")->tree().getValue(openvdb::Coord(0)) == 7.0f);
+    const auto missing = vxf::ops::checkArgs(mul, {{"grid", "nothing"}, {"value", 4}});
+    vxf::ops::OpContext bad{set, missing, nullptr};
+    CHECK_THROWS_WITH(mul.run(bad), Catch::Contains("mul: no grid named 'nothing'") && Catch::Contains("density"));
+}
