@@ -4,8 +4,7 @@
 
 #include <vxf/core/GridStats.h>
 #include <vxf/light/DirectLight.h>
-#include <vxf/pipeline/SceneGeometry.h>
-#include <vxf/pipeline/SceneMedium.h>
+#include <vxf/pipeline/LightScene.h>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -40,21 +39,10 @@ public:
         const auto start = std::chrono::steady_clock::now();
         const Scene scene = loadScene(mScene);
         VoxelSet set = readVoxelSet(mInput);
-        const Material material = sceneMaterial(scene);
-        attachMaterialGrids(set, material);
-        if (mediaCount(scene) > 1 && !(set.find("sigma_a") && set.find("sigma_s"))) {
-            throw UsageError(fmt::format("{}: the scene has {} media but {} has no per-voxel sigma_a and sigma_s; "
-                                         "voxelize them together with `vxf run`", mScene, mediaCount(scene), mInput));
-        }
-        const Medium medium(set, material);
-        const RayScene occluders = sceneGeometry(scene, GeometryRoles::Occluders);
-        DirectLightOptions options = mOptions;
-        options.occluders = occluders.empty() ? nullptr : &occluders;
-        const DirectLightReport report = computeDirectLight(set, medium, scene.lights, options, &progress);
+        const DirectLightReport report = lightScene(set, scene, mOptions, &progress);
         nlohmann::json params = {{"command", "light"}, {"input", mInput}, {"scene", mScene}, {"step", mOptions.march.step},
             {"cutoff", mOptions.march.cutoff}};
         set.setProvenance("light", params.dump());
-        recordMaterial(set, material);
         writeVoxelSet(mOutput, set, mWrite);
         if (mQuiet) return;
         std::cout << fmt::format("lit {} -> {} ({} active voxels)\n", mInput, mOutput, gridStats(*set.find("direct")).activeVoxels);

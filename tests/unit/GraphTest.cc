@@ -98,3 +98,35 @@ TEST_CASE("recorded commands become a graph that replays them", "[graph]")
     vxf::runGraph(dir.path("p.json"), dir.path("cache"));
     CHECK(vxf::readVoxelSet(dir.path("b.vdb")).get<openvdb::FloatGrid>("density")->tree().getValue(openvdb::Coord(2, 0, 0)) == 7.0f);
 }
+
+TEST_CASE("a graph runs the pipeline stages and combines nodes (with)", "[graph]")
+{
+    vxf::test::TempDir dir;
+    vxf::test::spit(dir.path("s.json"), R"({
+  "objects": [{"mesh": "builtin:sphere", "material": {"albedo": 0.8, "mean_free_path": 0.3}}],
+  "lights": [{"type": "point", "position": [0, 0, 2], "intensity": 3}],
+  "camera": {"position": [0, -4, 0], "look_at": [0, 0, 0]}
+})");
+    vxf::test::spit(dir.path("p.json"), R"({
+  "nodes": {
+    "vox": {"op": "voxelize", "params": {"mesh": "builtin:sphere", "dim": 16}},
+    "lit": {"op": "light", "input": "vox", "params": {"scene": "s.json"}},
+    "sc": {"op": "scatter", "input": "lit", "params": {"passes": 1, "directions": 4}},
+    "glow": {"op": "mul", "input": "sc", "params": {"grid": "scatter", "value": 2}},
+    "mixed": {"op": "blend", "input": "sc", "with": "glow", "params": {"grid": "scatter", "with": "scatter", "mode": "mix"}}
+  },
+  "outputs": {"mixed": "mixed.vdb", "sc": "sc.vdb"}
+})");
+    const auto report = vxf::runGraph(dir.path("p.json"), dir.path("cache"));
+    CHECK(report.nodes.size() == 5);
+    auto plain = vxf::readVoxelSet(dir.path("sc.vdb")).get<openvdb::Vec3SGrid>("scatter");
+    auto mixed = vxf::readVoxelSet(dir.path("mixed.vdb")).get<openvdb::Vec3SGrid>("scatter");
+    REQUIRE(plain->activeVoxelCount() > 0);
+    double worst = 0.0;
+    for (auto it = plain->cbeginValueOn(); it; ++it) {
+        worst = std::max(worst, double((mixed->tree().getValue(it.getCoord()) - *it * 1.5f).length()));
+    }
+    CHECK(worst < 1e-5);
+    vxf::test::spit(dir.path("q.json"), R"({"nodes": {"s": {"file": "sc.vdb"}, "v": {"op": "voxelize", "input": "s", "params": {"mesh": "builtin:box"}}}, "outputs": {"v": "v.vdb"}})");
+    CHECK_THROWS_WITH(vxf::runGraph(dir.path("q.json"), dir.path("cache")), Catch::Contains("takes no input"));
+}

@@ -11,6 +11,12 @@
 #include <vxf/ops/Gradient.h>
 #include <vxf/ops/Normalize.h>
 #include <vxf/ops/Select.h>
+#include <vxf/pipeline/LightScene.h>
+#include <vxf/pipeline/SceneGeometry.h>
+#include <vxf/scatter/Scatter.h>
+#include <vxf/voxelize/Voxelize.h>
+#include <vxf/core/ProceduralMesh.h>
+#include <vxf/io/MeshFile.h>
 
 #include <fmt/format.h>
 
@@ -561,6 +567,58 @@ std::vector<Operator> makeRegistry()
             ctx.set.put(g);
             return fmt::format("copied '{}' as '{}'", ctx.args.text("grid"), g->getName());
         }});
+
+    // Pipeline stages, so a graph can run the whole method.
+    Operator voxelizeStage{"voxelize", "a mesh (file or builtin:NAME) to `surface` and `density` (a source node: no input)",
+        {text("mesh", "mesh file (.obj .ply .off .stl) or builtin:candle|sphere|box"),
+            integer("dim", "voxels along the mesh's longest side (ignored with voxel_size)", 128, 1, 1 << 20),
+            number("voxel_size", "(optional) voxel size in world units", nullptr, 1e-30),
+            number("band", "narrow band half width, voxels", 3.0, 1.0, 1000.0)},
+        [](OpContext& ctx) {
+            const std::string mesh = ctx.args.text("mesh");
+            SceneObject object;
+            object.name = "mesh";
+            object.mesh = mesh;
+            object.objectToWorld = openvdb::Mat4d::identity();
+            VoxelizeOptions o;
+            o.voxelSize = ctx.args.has("voxel_size") ? ctx.args.number("voxel_size") : 0.0;
+            o.dim = o.voxelSize > 0.0 ? 0 : ctx.args.integer("dim");
+            o.bandWidth = float(ctx.args.number("band"));
+            ctx.set = voxelize(objectMesh(object), o, ctx.interrupter);
+            return fmt::format("voxelized {} ({})", mesh, count(*ctx.set.find("density")));
+        }};
+    voxelizeStage.source = true;
+    ops.push_back(voxelizeStage);
+
+    ops.push_back({"light", "the light stage: `direct` and `scatter_source` from a scene's lights, material and occluders",
+        {text("scene", "scene file (schemas/scene.schema.json)"), number("step", "march step, voxels", 0.5, 0.01, 64.0),
+            number("cutoff", "stop marching below this transmittance", 1e-4, 0.0, 0.5)},
+        [](OpContext& ctx) {
+            DirectLightOptions o;
+            o.march.step = ctx.args.number("step");
+            o.march.cutoff = ctx.args.number("cutoff");
+            const auto report = lightScene(ctx.set, loadScene(ctx.args.text("scene")), o, ctx.interrupter);
+            return fmt::format("lit by {} lights", report.lights.size());
+        }});
+
+    ops.push_back({"scatter", "the scatter stage: passes of source iteration into `scatter` and `illumination` (material from the file)",
+        {integer("passes", "at most this many", 16, 0, 10000), integer("directions", "per voxel", 64, 1, 65536),
+            number("step", "march step, voxels", 1.0, 0.01, 64.0), number("tolerance", "stop when a pass adds less than this fraction", 1e-3, 0.0, 1.0),
+            number("band", "adaptive band, world units (0: full resolution)", 0.0, 0.0), flag("extrapolate", "add the geometric tail"),
+            flag("keep_passes", "keep scatter_pass_K")},
+        [](OpContext& ctx) {
+            ScatterOptions o;
+            o.passes = ctx.args.integer("passes");
+            o.pass.directions = ctx.args.integer("directions");
+            o.pass.step = ctx.args.number("step");
+            o.tolerance = ctx.args.number("tolerance");
+            o.band = ctx.args.number("band");
+            o.extrapolateTail = ctx.args.flag("extrapolate");
+            o.keepPasses = ctx.args.flag("keep_passes");
+            const Medium medium(ctx.set, recordedMaterial(ctx.set));
+            const auto report = scatter(ctx.set, medium, o, ctx.interrupter);
+            return fmt::format("{} passes ({})", report.passes.size(), report.stopReason);
+        }});
     return ops;
 }
 
@@ -667,10 +725,11 @@ json pipelineSchema()
                              {"properties",
                                  {{"file", {{"type", "string"}, {"minLength", 1}, {"description", "a source node: this .vdb"}}},
                                      {"op", {{"enum", opNames}}},
-                                     {"input", {{"type", "string"}, {"minLength", 1}, {"description", "the node whose voxel set it edits"}}},
+                                     {"input", {{"type", "string"}, {"minLength", 1}, {"description", "the node whose voxel set it edits (none for a source operator such as voxelize)"}}},
+                                     {"with", {{"type", "string"}, {"minLength", 1}, {"description", "a node whose voxel set provides the operator's second input (its 'with' grid), instead of with_file"}}},
                                      {"params", {{"type", "object"}}}}},
-                             {"oneOf", json::array({{{"required", {"file"}}, {"not", {{"anyOf", json::array({{{"required", {"op"}}}, {{"required", {"input"}}}})}}}},
-                                           {{"required", {"op", "input"}}, {"not", {{"required", {"file"}}}}}})},
+                             {"oneOf", json::array({{{"required", {"file"}}, {"not", {{"anyOf", json::array({{{"required", {"op"}}}, {{"required", {"input"}}}, {{"required", {"with"}}}})}}}},
+                                           {{"required", {"op"}}, {"not", {{"required", {"file"}}}}}})},
                              {"allOf", cases}}}}},
                 {"outputs",
                     {{"type", "object"},

@@ -38,8 +38,8 @@ std::string readText(const std::string& path)
     return buffer.str();
 }
 
-/// Parameters naming files (with_file, from_file) whose bytes a node's result depends on.
-const char* const kFileParams[] = {"with_file", "from_file"};
+/// Parameters naming files whose bytes a node's result depends on.
+const char* const kFileParams[] = {"with_file", "from_file", "mesh", "scene"};
 
 class GraphRunner
 {
@@ -62,14 +62,25 @@ public:
                 node["file"] = resolve(node["file"].get<std::string>());
                 continue;
             }
-            const std::string input = node["input"].get<std::string>();
-            if (!mNodes.contains(input)) fail(it.key(), fmt::format("input '{}' is not a node of the graph", input));
+            const ops::Operator* op = nullptr;
+            try {
+                op = &ops::findOperator(node["op"].get<std::string>());
+            } catch (const UsageError& e) {
+                fail(it.key(), e.what());
+            }
+            if (op->source && node.contains("input")) fail(it.key(), fmt::format("{} builds its voxel set; it takes no input", op->name));
+            if (!op->source && !node.contains("input")) fail(it.key(), fmt::format("{} needs an input node", op->name));
+            for (const char* link : {"input", "with"}) {
+                if (node.contains(link) && !mNodes.contains(node[link].get<std::string>())) {
+                    fail(it.key(), fmt::format("{} '{}' is not a node of the graph", link, node[link].get<std::string>()));
+                }
+            }
             json params = node.value("params", json::object());
             for (const char* key : kFileParams) {
                 if (params.contains(key) && params[key].is_string()) params[key] = resolve(params[key].get<std::string>());
             }
             try {
-                node["params"] = ops::checkArgs(ops::findOperator(node["op"].get<std::string>()), params).json();
+                node["params"] = ops::checkArgs(*op, params).json();
             } catch (const UsageError& e) {
                 fail(it.key(), e.what());
             }
@@ -103,6 +114,7 @@ private:
 
     std::string resolve(const std::string& p) const
     {
+        if (p.rfind("builtin:", 0) == 0) return p;
         const fs::path path(p);
         return path.is_absolute() ? path.string() : (mFolder / path).lexically_normal().string();
     }
@@ -117,7 +129,10 @@ private:
         if (node.contains("file")) {
             key = {{"file", fileFingerprint(node["file"].get<std::string>())}};
         } else {
-            key = {{"op", node["op"]}, {"params", node["params"]}, {"input", hashOf(node["input"].get<std::string>())}};
+            key = {{"op", node["op"]}, {"params", node["params"]}};
+            for (const char* link : {"input", "with"}) {
+                if (node.contains(link)) key[link] = hashOf(node[link].get<std::string>());
+            }
             for (const char* param : kFileParams) {
                 if (node["params"].contains(param)) key[param] = fileFingerprint(node["params"][param].get<std::string>());
             }
@@ -144,10 +159,12 @@ private:
             why = "new or changed file";
             report = node["file"].get<std::string>();
         } else {
-            const std::string input = ensure(node["input"].get<std::string>());
-            VoxelSet set = readVoxelSet(input);
+            VoxelSet set;
+            if (node.contains("input")) set = readVoxelSet(ensure(node["input"].get<std::string>()));
+            json params = node["params"];
+            if (node.contains("with")) params["with_file"] = ensure(node["with"].get<std::string>());
             const ops::Operator& op = ops::findOperator(node["op"].get<std::string>());
-            const ops::Args args(op.name, node["params"]);
+            const ops::Args args(op.name, params);
             ops::OpContext context{set, args, mInterrupter};
             try {
                 report = op.run(context);

@@ -3,7 +3,7 @@
 #include <vxf/io/ContentHash.h>
 #include <vxf/io/ImageFile.h>
 #include <vxf/io/VoxelSetFile.h>
-#include <vxf/light/DirectLight.h>
+#include <vxf/pipeline/LightScene.h>
 #include <vxf/pipeline/SceneGeometry.h>
 #include <vxf/pipeline/SceneMedium.h>
 #include <vxf/render/Render.h>
@@ -114,14 +114,10 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
     } else {
         const double seconds = timed([&] {
             if (set.empty()) set = readVoxelSet(voxelFile.string());
-            const Medium medium(set, material);
-            const RayScene occluderMeshes = sceneGeometry(scene, GeometryRoles::Occluders);
             DirectLightOptions options;
             options.march.step = s.step;
-            options.occluders = occluderMeshes.empty() ? nullptr : &occluderMeshes;
-            const DirectLightReport lit = computeDirectLight(set, medium, scene.lights, options, interrupter);
+            lightScene(set, scene, options, interrupter);
             set.setProvenance("light", lightInputs.dump());
-            recordMaterial(set, material);
             writeVoxelSet(lightFile.string(), set);
         });
         record("light", "ran", "no cached lighting for these inputs", lightFile, seconds);

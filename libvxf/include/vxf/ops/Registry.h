@@ -77,9 +77,11 @@ struct Operator
     std::string name, summary;
     std::vector<Param> params;
     std::function<std::string(OpContext&)> run;
+    bool source = false; ///< builds its voxel set from nothing (voxelize): no input node
 };
 
-/// Every operator, in the order help lists them.
+/// Every operator, in the order help lists them: the artist operators, then the pipeline
+/// stages a graph can run (voxelize, light, scatter).
 const std::vector<Operator>& registry();
 
 /// The operator named @a name; vxf::UsageError listing the names otherwise.

@@ -1,0 +1,27 @@
+#include <vxf/pipeline/LightScene.h>
+
+#include <vxf/pipeline/SceneGeometry.h>
+#include <vxf/pipeline/SceneMedium.h>
+
+#include <fmt/format.h>
+
+namespace vxf {
+
+DirectLightReport lightScene(VoxelSet& set, const Scene& scene, DirectLightOptions options, Interrupter* interrupter)
+{
+    const Material material = sceneMaterial(scene);
+    attachMaterialGrids(set, material);
+    if (mediaCount(scene) > 1 && !(set.find("sigma_a") && set.find("sigma_s"))) {
+        throw UsageError(fmt::format("{}: the scene has {} media but the voxel set has no per-voxel sigma_a and sigma_s; "
+                                     "voxelize them together (vxf run, or the graph's voxelize with this scene)",
+            scene.path, mediaCount(scene)));
+    }
+    const Medium medium(set, material);
+    const RayScene occluders = sceneGeometry(scene, GeometryRoles::Occluders);
+    options.occluders = occluders.empty() ? nullptr : &occluders;
+    DirectLightReport report = computeDirectLight(set, medium, scene.lights, options, interrupter);
+    recordMaterial(set, material);
+    return report;
+}
+
+} // namespace vxf
