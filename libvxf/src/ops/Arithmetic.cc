@@ -2,7 +2,6 @@
 
 #include "Dispatch.h"
 
-#include <openvdb/tools/ValueTransformer.h>
 
 #include <cmath>
 
@@ -14,22 +13,20 @@ void arithmetic(openvdb::GridBase& grid, ArithmeticOp op, const openvdb::Vec3d& 
         using GridT = std::decay_t<decltype(g)>;
         using ValueT = typename GridT::ValueType;
         const ValueT operand = detail::fromColor<ValueT>(value);
-        openvdb::tools::foreach(g.beginValueOn(), [op, operand](const typename GridT::ValueOnIter& it) {
-            ValueT v = *it;
-            for (int c = 0; c < detail::channels(v); ++c) {
-                const double x = detail::get(v, c), y = detail::get(operand, c);
-                double r = x;
-                switch (op) {
-                case ArithmeticOp::Add: r = x + y; break;
-                case ArithmeticOp::Sub: r = x - y; break;
-                case ArithmeticOp::Mul: r = x * y; break;
-                case ArithmeticOp::Div: r = y == 0.0 ? 0.0 : x / y; break;
-                case ArithmeticOp::Pow: r = x < 0.0 ? -std::pow(-x, y) : (x == 0.0 && y < 0.0 ? 0.0 : std::pow(x, y)); break;
-                }
-                detail::ref(v, c) = detail::finite(r);
-            }
-            it.setValue(v);
-        });
+        const auto apply = [&g, &operand](auto&& op) {
+            detail::forEachActiveValue(g, [&](ValueT& v) {
+                for (int c = 0; c < detail::channels(v); ++c) detail::ref(v, c) = detail::finite(op(detail::get(v, c), detail::get(operand, c)));
+            });
+        };
+        switch (op) {
+        case ArithmeticOp::Add: apply([](double x, double y) { return x + y; }); break;
+        case ArithmeticOp::Sub: apply([](double x, double y) { return x - y; }); break;
+        case ArithmeticOp::Mul: apply([](double x, double y) { return x * y; }); break;
+        case ArithmeticOp::Div: apply([](double x, double y) { return y == 0.0 ? 0.0 : x / y; }); break;
+        case ArithmeticOp::Pow:
+            apply([](double x, double y) { return x < 0.0 ? -std::pow(-x, y) : (x == 0.0 && y < 0.0 ? 0.0 : std::pow(x, y)); });
+            break;
+        }
     });
 }
 

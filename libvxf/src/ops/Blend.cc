@@ -3,7 +3,6 @@
 #include "Dispatch.h"
 
 #include <openvdb/tools/GridTransformer.h>
-#include <openvdb/tools/ValueTransformer.h>
 
 namespace vxf::ops {
 

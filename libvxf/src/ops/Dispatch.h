@@ -4,6 +4,7 @@
 #include <vxf/core/Error.h>
 
 #include <openvdb/openvdb.h>
+#include <openvdb/tree/LeafManager.h>
 
 #include <fmt/format.h>
 
@@ -21,6 +22,50 @@ decltype(auto) dispatch(GridBaseT& grid, const char* op, F&& f)
     if (auto* g = dynamic_cast<FloatT*>(&grid)) return f(*g);
     if (auto* g = dynamic_cast<VecT*>(&grid)) return f(*g);
     throw UsageError(fmt::format("{}: grid '{}' holds {} values; it works on float and vec3s grids", op, grid.getName(), grid.valueType()));
+}
+
+/// Apply @a f (ValueT&) to every active value of @a grid in place: leaf voxels straight in
+/// their buffers (parallel over leaves), then the active tiles (one value each). Topology
+/// unchanged; deterministic (each value is changed alone).
+template<typename GridT, typename F>
+void forEachActiveValue(GridT& grid, const F& f)
+{
+    using TreeT = typename GridT::TreeType;
+    openvdb::tree::LeafManager<TreeT> leaves(grid.tree());
+    leaves.foreach([&f](typename TreeT::LeafNodeType& leaf, std::size_t) {
+        auto* values = leaf.buffer().data();
+        for (auto on = leaf.getValueMask().beginOn(); on; ++on) f(values[on.pos()]);
+    });
+    auto tiles = grid.tree().beginValueOn();
+    tiles.setMaxDepth(TreeT::RootNodeType::LEVEL - 1); // internal nodes' tiles, not leaf voxels
+    for (; tiles; ++tiles) {
+        auto v = *tiles;
+        f(v);
+        tiles.setValue(v);
+    }
+}
+
+/// Apply @a f (const Coord&, ValueT&) to every active leaf voxel (parallel over leaves) and
+/// to every active tile, given the coordinate of its first voxel and its bounding box in
+/// @a tileBox (so a tile can be evaluated at its centre).
+template<typename GridT, typename LeafF, typename TileF>
+void forEachActiveVoxel(GridT& grid, const LeafF& leafF, const TileF& tileF)
+{
+    using TreeT = typename GridT::TreeType;
+    openvdb::tree::LeafManager<TreeT> leaves(grid.tree());
+    leaves.foreach([&leafF](typename TreeT::LeafNodeType& leaf, std::size_t) {
+        auto* values = leaf.buffer().data();
+        for (auto on = leaf.getValueMask().beginOn(); on; ++on) leafF(leaf.offsetToGlobalCoord(on.pos()), values[on.pos()]);
+    });
+    auto tiles = grid.tree().beginValueOn();
+    tiles.setMaxDepth(TreeT::RootNodeType::LEVEL - 1);
+    for (; tiles; ++tiles) {
+        openvdb::CoordBBox box;
+        tiles.getBoundingBox(box);
+        auto v = *tiles;
+        tileF(box, v);
+        tiles.setValue(v);
+    }
 }
 
 /// Per-channel access for float and Vec3f values.

@@ -4,7 +4,6 @@
 
 #include <openvdb/tools/Interpolation.h>
 
-#include <optional>
 
 namespace vxf::ops {
 
@@ -39,22 +38,20 @@ openvdb::Vec3SGrid::Ptr gradient(const openvdb::GridBase& topology, const openvd
     out->setName("gradient");
     topology.apply<detail::TopologyGridTypes>([&](const auto& g) { out->tree().topologyUnion(g.tree()); });
     const openvdb::math::Transform& xform = out->transform();
-    std::optional<openvdb::tools::GridSampler<openvdb::FloatGrid, openvdb::tools::BoxSampler>> depth;
-    if (surface) depth.emplace(*surface);
+    // Thread-safe lookups: the surface is sampled through its tree (no shared accessor).
     const auto at = [&](const openvdb::Vec3d& world) {
         double t = 0.0;
         switch (o.kind) {
         case GradientKind::Directional: t = (world - o.from).dot(axis) / axis.lengthSqr(); break;
         case GradientKind::Radial: t = std::pow(std::max(0.0, (world - o.centre).length() / o.radius), o.falloff); break;
-        case GradientKind::SurfaceDistance: t = -double(depth->wsSample(world)) / o.distance; break;
+        case GradientKind::SurfaceDistance:
+            t = -double(openvdb::tools::BoxSampler::sample(surface->tree(), surface->transform().worldToIndex(world))) / o.distance;
+            break;
         }
         return openvdb::Vec3f(rampColor(o.stops, std::isfinite(t) ? t : 0.0));
     };
-    for (auto it = out->beginValueOn(); it; ++it) {
-        openvdb::CoordBBox box;
-        it.getBoundingBox(box);
-        it.setValue(at(xform.indexToWorld(box.getCenter())));
-    }
+    detail::forEachActiveVoxel(*out, [&](const openvdb::Coord& c, openvdb::Vec3f& v) { v = at(xform.indexToWorld(c)); },
+        [&](const openvdb::CoordBBox& box, openvdb::Vec3f& v) { v = at(xform.indexToWorld(box.getCenter())); });
     return out;
 }
 
