@@ -31,6 +31,7 @@ public:
         mApp->add_flag("--schema", mSchema, "Print schemas/pipeline.schema.json (generated from the operators) and exit");
         for (const auto& op : ops::registry()) {
             CLI::App* sub = mApp->add_subcommand(op.name, op.summary);
+            sub->allow_extras(); // unknown parameters are reported below, naming the operator
             Invocation& call = mCalls[op.name];
             call.app = sub;
             sub->add_option("input", call.input, "Input .vdb")->required();
@@ -79,6 +80,12 @@ private:
     void runOperator(const ops::Operator& op, const Invocation& call)
     {
         const auto start = std::chrono::steady_clock::now();
+        if (!call.app->remaining().empty()) {
+            std::string known;
+            for (const auto& p : op.params) known += (known.empty() ? "" : ", ") + p.name;
+            throw UsageError(fmt::format("{}: unknown parameter or extra argument '{}' (it takes: {})", op.name,
+                call.app->remaining().front(), known));
+        }
         nlohmann::json params = nlohmann::json::object();
         for (const auto& [name, text] : call.values) {
             const auto p = std::find_if(op.params.begin(), op.params.end(), [&](const ops::Param& q) { return q.name == name; });

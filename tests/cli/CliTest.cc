@@ -496,6 +496,7 @@ TEST_CASE("vxf op runs operators on real files, records them, and vxf graph repl
     CHECK(grid.err.find("mul: no grid named 'nope'") != std::string::npos);
     const auto unknown = run(fmt::format("{} op mul {} -o {} --grid density --value 2 --radius 3", binary("vxf"), dir.path("v.vdb"), dir.path("x.vdb")));
     CHECK(unknown.status == 2);
+    CHECK(unknown.err.find("mul: unknown parameter or extra argument '--radius'") != std::string::npos);
     CHECK_FALSE(fs::exists(dir.path("x.vdb")));
 }
 

@@ -48,3 +48,17 @@ TEST_CASE("blend: every mode per voxel, the union of active voxels, B untouched"
     CHECK(resampled->transform() == a->transform());
     CHECK_THROWS_AS(vxf::ops::blend(*a, *openvdb::Vec3SGrid::create(), {}), vxf::UsageError);
 }
+
+TEST_CASE("blend: a large tile of A over smaller tiles and voxels of B is split where B varies", "[ops]")
+{
+    auto a = openvdb::FloatGrid::create(0.0f);
+    a->tree().addTile(2, openvdb::Coord(0), 1.0f, true); // one 128³ tile of 1
+    auto b = openvdb::FloatGrid::create(0.0f);
+    b->tree().addTile(1, openvdb::Coord(8, 0, 0), 2.0f, true); // an 8³ tile of 2 inside it
+    b->tree().addTile(1, openvdb::Coord(200, 0, 0), 5.0f, true); // and one outside it
+    vxf::ops::blend(*a, *b, {});
+    CHECK(a->tree().getValue(openvdb::Coord(9, 1, 1)) == 3.0f);
+    CHECK(a->tree().getValue(openvdb::Coord(60, 60, 60)) == 1.0f);
+    CHECK(a->tree().getValue(openvdb::Coord(201, 0, 0)) == 5.0f);
+    CHECK(a->activeVoxelCount() == 128 * 128 * 128 + 512);
+}

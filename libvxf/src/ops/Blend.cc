@@ -3,6 +3,7 @@
 #include "Dispatch.h"
 
 #include <openvdb/tools/GridTransformer.h>
+#include <openvdb/tree/LeafManager.h>
 
 namespace vxf::ops {
 
@@ -45,33 +46,76 @@ void blend(openvdb::GridBase& a, const openvdb::GridBase& b, const BlendOptions&
     detail::dispatch(a, "blend", [&](auto& ga) {
         using GridT = std::decay_t<decltype(ga)>;
         using ValueT = typename GridT::ValueType;
-        auto other = static_cast<const GridT&>(b).deepCopy();
+        const GridT& gb = static_cast<const GridT&>(b);
         const BlendMode mode = options.mode;
         const double w = options.weight;
         const bool clamp = options.clampNegatives;
-        ga.tree().combineExtended(other->tree(), [&](openvdb::CombineArgs<ValueT>& args) {
-            ValueT r = args.a();
-            const ValueT bv = args.b();
-            for (int c = 0; c < detail::channels(r); ++c) {
-                double x = detail::get(args.a(), c), y = detail::get(bv, c) * scaleB;
+        const auto combine = [&](ValueT& x, const ValueT& y) {
+            for (int c = 0; c < detail::channels(x); ++c) {
+                double p = detail::get(x, c), q = detail::get(y, c) * scaleB;
                 if (clamp) {
-                    x = std::max(0.0, x);
-                    y = std::max(0.0, y);
+                    p = std::max(0.0, p);
+                    q = std::max(0.0, q);
                 }
-                double v = x;
+                double v = p;
                 switch (mode) {
-                case BlendMode::Add: v = x + y; break;
-                case BlendMode::Subtract: v = x - y; break;
-                case BlendMode::Multiply: v = x * y; break;
-                case BlendMode::Darker: v = std::min(x, y); break;
-                case BlendMode::Lighter: v = std::max(x, y); break;
-                case BlendMode::Mix: v = x * (1.0 - w) + y * w; break;
+                case BlendMode::Add: v = p + q; break;
+                case BlendMode::Subtract: v = p - q; break;
+                case BlendMode::Multiply: v = p * q; break;
+                case BlendMode::Darker: v = std::min(p, q); break;
+                case BlendMode::Lighter: v = std::max(p, q); break;
+                case BlendMode::Mix: v = p * (1.0 - w) + q * w; break;
                 }
-                detail::ref(r, c) = detail::finite(v);
+                detail::ref(x, c) = detail::finite(v);
             }
-            args.setResult(r);
-            args.setResultIsActive(args.aIsActive() || args.bIsActive());
+        };
+        // Active where either is: A's tiles become leaves where B has leaves, so every voxel
+        // where B varies is a voxel of A; where one side was inactive its stored value (the
+        // background) stands in.
+        ga.tree().topologyUnion(gb.tree());
+        using TreeT = typename GridT::TreeType;
+        {
+            // An A tile larger than the B tile (or voxel) at its corner covers B values that
+            // differ: split it into leaves first.
+            auto other = gb.getConstAccessor();
+            std::vector<openvdb::CoordBBox> split;
+            auto tiles = ga.tree().cbeginValueOn();
+            tiles.setMaxDepth(TreeT::RootNodeType::LEVEL - 1);
+            for (; tiles; ++tiles) {
+                openvdb::CoordBBox box;
+                tiles.getBoundingBox(box);
+                // Depth of the node holding B's value there: −1 background, 0 a root tile (4096³),
+                // 1 a 128³ tile, 2 an 8³ tile, 3 a voxel.
+                const int depth = other.getValueDepth(box.min());
+                const openvdb::Index64 held = depth <= 0 ? ~openvdb::Index64(0) : depth == 1 ? openvdb::Index64(128 * 128 * 128)
+                                                                             : depth == 2 ? openvdb::Index64(512) : 1;
+                if (held < box.volume()) split.push_back(box);
+            }
+            constexpr int leafDim = TreeT::LeafNodeType::DIM;
+            for (const auto& box : split) {
+                for (int x = box.min().x(); x <= box.max().x(); x += leafDim)
+                    for (int y = box.min().y(); y <= box.max().y(); y += leafDim)
+                        for (int z = box.min().z(); z <= box.max().z(); z += leafDim) ga.tree().touchLeaf(openvdb::Coord(x, y, z));
+            }
+        }
+        openvdb::tree::LeafManager<TreeT> leaves(ga.tree());
+        leaves.foreach([&](typename TreeT::LeafNodeType& leaf, std::size_t) {
+            auto other = gb.getConstAccessor();
+            auto* values = leaf.buffer().data();
+            const typename TreeT::LeafNodeType* otherLeaf = other.probeConstLeaf(leaf.origin());
+            for (auto on = leaf.getValueMask().beginOn(); on; ++on) {
+                const ValueT y = otherLeaf ? otherLeaf->getValue(on.pos()) : other.getValue(leaf.offsetToGlobalCoord(on.pos()));
+                combine(values[on.pos()], y);
+            }
         });
+        auto tiles = ga.tree().beginValueOn();
+        tiles.setMaxDepth(TreeT::RootNodeType::LEVEL - 1);
+        auto other = gb.getConstAccessor();
+        for (; tiles; ++tiles) { // B is uniform over each (it has no leaves there)
+            ValueT x = *tiles;
+            combine(x, other.getValue(tiles.getCoord()));
+            tiles.setValue(x);
+        }
     });
 }
 

@@ -17,10 +17,12 @@ struct BlendOptions
 
 /// A ← A ∘ B per voxel and channel: add, subtract (A − B), multiply, darker (min), lighter
 /// (max) or mix. Both float or both Vec3f, on the same transform (resampleLike() first
-/// otherwise). Topology: A's active values afterwards are the union of A's and B's; where
-/// one side is inactive its background value stands in (0 for vxf's grids), so multiply
-/// gives 0 there. Tiles of both stay tiles where the tree allows. Results are clamped to the
-/// finite float range. B is not modified. Throws vxf::UsageError naming the grids otherwise.
+/// otherwise). Topology: A's active values afterwards are the union of A's and B's (A's
+/// tiles become leaves where B has leaves; tiles stay tiles elsewhere); where one side is
+/// inactive its stored inactive value (the background, 0 for vxf's grids) stands in, so
+/// multiply gives 0 there. Inactive values and the background of A are unchanged. Results
+/// are clamped to the finite float range. B is not modified. Parallel over A's leaves.
+/// Throws vxf::UsageError naming the grids otherwise.
 void blend(openvdb::GridBase& a, const openvdb::GridBase& b, const BlendOptions& options);
 
 /// A copy of @a grid resampled (trilinear) onto @a like's transform, as Houdini's VDB Combine
