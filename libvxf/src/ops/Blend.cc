@@ -74,30 +74,7 @@ void blend(openvdb::GridBase& a, const openvdb::GridBase& b, const BlendOptions&
         // background) stands in.
         ga.tree().topologyUnion(gb.tree());
         using TreeT = typename GridT::TreeType;
-        {
-            // An A tile larger than the B tile (or voxel) at its corner covers B values that
-            // differ: split it into leaves first.
-            auto other = gb.getConstAccessor();
-            std::vector<openvdb::CoordBBox> split;
-            auto tiles = ga.tree().cbeginValueOn();
-            tiles.setMaxDepth(TreeT::RootNodeType::LEVEL - 1);
-            for (; tiles; ++tiles) {
-                openvdb::CoordBBox box;
-                tiles.getBoundingBox(box);
-                // Depth of the node holding B's value there: −1 background, 0 a root tile (4096³),
-                // 1 a 128³ tile, 2 an 8³ tile, 3 a voxel.
-                const int depth = other.getValueDepth(box.min());
-                const openvdb::Index64 held = depth <= 0 ? ~openvdb::Index64(0) : depth == 1 ? openvdb::Index64(128 * 128 * 128)
-                                                                             : depth == 2 ? openvdb::Index64(512) : 1;
-                if (held < box.volume()) split.push_back(box);
-            }
-            constexpr int leafDim = TreeT::LeafNodeType::DIM;
-            for (const auto& box : split) {
-                for (int x = box.min().x(); x <= box.max().x(); x += leafDim)
-                    for (int y = box.min().y(); y <= box.max().y(); y += leafDim)
-                        for (int z = box.min().z(); z <= box.max().z(); z += leafDim) ga.tree().touchLeaf(openvdb::Coord(x, y, z));
-            }
-        }
+        detail::splitTilesWhereVaries(ga.tree(), gb.tree());
         openvdb::tree::LeafManager<TreeT> leaves(ga.tree());
         leaves.foreach([&](typename TreeT::LeafNodeType& leaf, std::size_t) {
             auto other = gb.getConstAccessor();

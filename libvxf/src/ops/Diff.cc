@@ -5,6 +5,8 @@
 #include "Dispatch.h"
 
 #include <openvdb/tools/Morphology.h>
+#include <openvdb/tools/Prune.h>
+#include <openvdb/tree/LeafManager.h>
 
 namespace vxf::ops {
 
@@ -20,23 +22,46 @@ openvdb::GridBase::Ptr difference(const openvdb::GridBase& a, const openvdb::Gri
         auto d = GridT::create(openvdb::zeroVal<ValueT>());
         d->setTransform(ga.transform().copy());
         d->setName(ga.getName() + "_diff");
-        openvdb::MaskTree both;
-        both.topologyUnion(ga.tree());
-        both.topologyUnion(gb.tree());
-        auto va = ga.getConstAccessor(), vb = gb.getConstAccessor();
-        auto out = d->getAccessor();
-        for (auto it = both.cbeginValueOn(); it; ++it) {
-            openvdb::CoordBBox box;
-            it.getBoundingBox(box);
-            for (auto c = box.begin(); c; ++c) {
-                ValueT x, y;
-                const bool onA = va.probeValue(*c, x), onB = vb.probeValue(*c, y);
-                bool differs = onA != onB;
-                ValueT delta = y - x;
-                for (int ch = 0; ch < detail::channels(delta); ++ch) differs = differs || std::abs(detail::get(delta, ch)) > tolerance;
-                if (differs) out.setValueOn(*c, delta);
+        // Candidates: where either is active, split so that A and B are uniform under each tile.
+        auto& tree = d->tree();
+        tree.topologyUnion(ga.tree());
+        tree.topologyUnion(gb.tree());
+        detail::splitTilesWhereVaries(tree, ga.tree());
+        detail::splitTilesWhereVaries(tree, gb.tree());
+        const auto compare = [tolerance](bool onA, const ValueT& x, bool onB, const ValueT& y, ValueT& delta) {
+            delta = y - x;
+            bool differs = onA != onB;
+            for (int ch = 0; ch < detail::channels(delta); ++ch) differs = differs || std::abs(detail::get(delta, ch)) > tolerance;
+            return differs;
+        };
+        openvdb::tree::LeafManager<typename GridT::TreeType> leaves(tree);
+        leaves.foreach([&](typename GridT::TreeType::LeafNodeType& leaf, std::size_t) {
+            auto va = ga.getConstAccessor();
+            auto vb = gb.getConstAccessor();
+            for (auto on = leaf.beginValueOn(); on; ++on) {
+                ValueT x, y, delta;
+                const bool onA = va.probeValue(on.getCoord(), x), onB = vb.probeValue(on.getCoord(), y);
+                if (compare(onA, x, onB, y, delta)) {
+                    on.setValue(delta);
+                } else {
+                    on.setValueOff();
+                }
+            }
+        });
+        auto va = ga.getConstAccessor();
+        auto vb = gb.getConstAccessor();
+        auto tiles = tree.beginValueOn();
+        tiles.setMaxDepth(GridT::TreeType::RootNodeType::LEVEL - 1);
+        for (; tiles; ++tiles) {
+            ValueT x, y, delta;
+            const bool onA = va.probeValue(tiles.getCoord(), x), onB = vb.probeValue(tiles.getCoord(), y);
+            if (compare(onA, x, onB, y, delta)) {
+                tiles.setValue(delta);
+            } else {
+                tiles.setValueOff();
             }
         }
+        openvdb::tools::pruneInactive(tree);
         return d;
     });
 }

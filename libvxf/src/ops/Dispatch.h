@@ -8,6 +8,8 @@
 
 #include <fmt/format.h>
 
+#include <vector>
+
 namespace vxf::ops::detail {
 
 /// Every grid type whose topology operators may read (not point grids).
@@ -65,6 +67,34 @@ void forEachActiveVoxel(GridT& grid, const LeafF& leafF, const TileF& tileF)
         auto v = *tiles;
         tileF(box, v);
         tiles.setValue(v);
+    }
+}
+
+/// Split the active tiles of @a target into leaves wherever @a reference's values vary under
+/// them (a reference tile smaller than the target tile, or reference voxels), so a per-leaf
+/// pass can read one reference value per target voxel or tile.
+template<typename TreeT, typename OtherTreeT>
+void splitTilesWhereVaries(TreeT& target, const OtherTreeT& reference)
+{
+    openvdb::tree::ValueAccessor<const OtherTreeT> other(reference);
+    std::vector<openvdb::CoordBBox> split;
+    auto tiles = target.cbeginValueOn();
+    tiles.setMaxDepth(TreeT::RootNodeType::LEVEL - 1);
+    for (; tiles; ++tiles) {
+        openvdb::CoordBBox box;
+        tiles.getBoundingBox(box);
+        // Depth of the node holding the reference value there: −1 background, 0 a root tile
+        // (4096³), 1 a 128³ tile, 2 an 8³ tile, 3 a voxel.
+        const int depth = other.getValueDepth(box.min());
+        const openvdb::Index64 held = depth <= 0 ? ~openvdb::Index64(0) : depth == 1 ? openvdb::Index64(128 * 128 * 128)
+                                                                     : depth == 2 ? openvdb::Index64(512) : 1;
+        if (held < box.volume()) split.push_back(box);
+    }
+    constexpr int leafDim = TreeT::LeafNodeType::DIM;
+    for (const auto& box : split) {
+        for (int x = box.min().x(); x <= box.max().x(); x += leafDim)
+            for (int y = box.min().y(); y <= box.max().y(); y += leafDim)
+                for (int z = box.min().z(); z <= box.max().z(); z += leafDim) target.touchLeaf(openvdb::Coord(x, y, z));
     }
 }
 
