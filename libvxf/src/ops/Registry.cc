@@ -149,6 +149,16 @@ Args checkArgs(const Operator& op, const json& values)
         out[it.key()] = it.value();
     }
     for (const auto& p : op.params) {
+        if (p.when.empty() || !values.contains(p.name)) continue;
+        const auto eq = p.when.find('=');
+        const std::string key = p.when.substr(0, eq), wanted = p.when.substr(eq + 1);
+        const auto owner = std::find_if(op.params.begin(), op.params.end(), [&](const Param& q) { return q.name == key; });
+        const std::string actual = values.contains(key) ? values[key].get<std::string>() : owner->defaultValue.get<std::string>();
+        if (actual != wanted) {
+            throw UsageError(fmt::format("{}: parameter '{}' is unused with {}={} (it applies to {})", op.name, p.name, key, actual, p.when));
+        }
+    }
+    for (const auto& p : op.params) {
         if (out.contains(p.name)) continue;
         if (p.defaultValue.is_null()) {
             if (p.summary.rfind("(optional)", 0) == 0) continue;
@@ -248,6 +258,12 @@ Param typed(std::string name, ParamType type, std::string summary, json def = nu
     return {std::move(name), type, std::move(summary), std::move(def), -INFINITY, INFINITY, {}};
 }
 
+Param when(Param p, std::string condition)
+{
+    p.when = std::move(condition);
+    return p;
+}
+
 Param gridParam(const char* summary = "the grid to work on") { return text("grid", summary); }
 Param outParam() { return text("out", "(optional) write the result as this grid instead of replacing the input"); }
 Param withParam(const char* summary) { return text("with", summary); }
@@ -317,7 +333,7 @@ std::vector<Operator> makeRegistry()
     ops.push_back({"blend", "blend grid B into grid A: add, subtract, multiply, darker, lighter or mix; active where either is",
         {gridParam("grid A (the result replaces it unless out is given)"), withParam("grid B"), withFileParam(),
             choice("mode", "how to combine", {"add", "subtract", "multiply", "darker", "lighter", "mix"}, "add"),
-            number("weight", "mix: A (1 - w) + B w", 0.5, 0.0, 1.0), flag("clamp_negatives", "clamp A and B to >= 0 first"),
+            when(number("weight", "mix: A (1 - w) + B w", 0.5, 0.0, 1.0), "mode=mix"), flag("clamp_negatives", "clamp A and B to >= 0 first"),
             flag("normalize_b", "divide B by its largest |value| first"),
             flag("resample", "resample B onto A's transform when they differ (trilinear)"), outParam()},
         [](OpContext& ctx) {
@@ -394,11 +410,12 @@ std::vector<Operator> makeRegistry()
     ops.push_back({"gradient", "a colour gradient over the active voxels of a grid: directional, radial or distance from the surface",
         {choice("kind", "the gradient's shape", {"directional", "radial", "surface_distance"}, "directional"),
             text("topology", "the grid whose active voxels receive colours", "density"),
-            typed("from", ParamType::Vector, "directional: where the ramp starts", json::array({0, 0, 0})),
-            typed("to", ParamType::Vector, "directional: where it ends", json::array({0, 0, 1})),
-            typed("centre", ParamType::Vector, "radial: centre", json::array({0, 0, 0})),
-            number("radius", "radial: where the ramp ends", 1.0, 1e-30), number("falloff", "radial: exponent on the distance", 1.0, 1e-3, 1e3),
-            number("distance", "surface_distance: depth where the ramp ends (within the narrow band)", 1.0, 1e-30),
+            when(typed("from", ParamType::Vector, "directional: where the ramp starts", json::array({0, 0, 0})), "kind=directional"),
+            when(typed("to", ParamType::Vector, "directional: where it ends", json::array({0, 0, 1})), "kind=directional"),
+            when(typed("centre", ParamType::Vector, "radial: centre", json::array({0, 0, 0})), "kind=radial"),
+            when(number("radius", "radial: where the ramp ends", 1.0, 1e-30), "kind=radial"),
+            when(number("falloff", "radial: exponent on the distance", 1.0, 1e-3, 1e3), "kind=radial"),
+            when(number("distance", "surface_distance: depth where the ramp ends (within the narrow band)", 1.0, 1e-30), "kind=surface_distance"),
             typed("colors", ParamType::ColorList, "ramp colours, first to last", json::array({0, 1})),
             typed("positions", ParamType::NumberList, "(optional) ramp positions in [0, 1], one per colour (default: even)"),
             text("out", "the new grid's name", "gradient")},
@@ -451,11 +468,12 @@ std::vector<Operator> makeRegistry()
 
     ops.push_back({"select", "select active voxels by box, sphere or value range into a bool mask grid",
         {gridParam("the grid whose active voxels are candidates"), choice("shape", "how to select", {"box", "sphere", "range"}, "box"),
-            typed("min", ParamType::Vector, "box: lower corner (world)", json::array({-1, -1, -1})),
-            typed("max", ParamType::Vector, "box: upper corner (world)", json::array({1, 1, 1})),
-            typed("centre", ParamType::Vector, "sphere: centre (world)", json::array({0, 0, 0})),
-            number("radius", "sphere: radius (world)", 1.0, 0.0), number("low", "range: lowest value (every channel)", 0.0),
-            number("high", "range: highest value (every channel)", 1.0), text("out", "the mask grid's name", "mask")},
+            when(typed("min", ParamType::Vector, "box: lower corner (world)", json::array({-1, -1, -1})), "shape=box"),
+            when(typed("max", ParamType::Vector, "box: upper corner (world)", json::array({1, 1, 1})), "shape=box"),
+            when(typed("centre", ParamType::Vector, "sphere: centre (world)", json::array({0, 0, 0})), "shape=sphere"),
+            when(number("radius", "sphere: radius (world)", 1.0, 0.0), "shape=sphere"),
+            when(number("low", "range: lowest value (every channel)", 0.0), "shape=range"),
+            when(number("high", "range: highest value (every channel)", 1.0), "shape=range"), text("out", "the mask grid's name", "mask")},
         [](OpContext& ctx) {
             auto g = requireGrid(ctx.set, "select", ctx.args.text("grid"));
             const std::string shape = ctx.args.text("shape");
@@ -650,7 +668,8 @@ std::string operatorTableMarkdown()
         std::string params;
         for (const auto& p : op.params) {
             std::string def = p.defaultValue.is_null() ? (p.summary.rfind("(optional)", 0) == 0 ? "optional" : "required") : "default " + p.defaultValue.dump();
-            params += fmt::format("{}`{}` ({}, {})", params.empty() ? "" : "<br>", p.name, describeType(p), def);
+            params += fmt::format("{}`{}` ({}, {}{})", params.empty() ? "" : "<br>", p.name, describeType(p), def,
+                p.when.empty() ? "" : ", with " + p.when);
         }
         const auto escape = [](std::string text) { // a bare | would split the table's cell
             for (std::size_t at = text.find('|'); at != std::string::npos; at = text.find('|', at + 2)) text.replace(at, 1, "\\|");

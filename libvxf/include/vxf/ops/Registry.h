@@ -35,6 +35,9 @@ struct Param
     nlohmann::json defaultValue; ///< null: required
     double min = -std::numeric_limits<double>::infinity(), max = std::numeric_limits<double>::infinity();
     std::vector<std::string> choices;
+    /// "PARAM=VALUE" when the parameter means something only then (e.g. "kind=radial");
+    /// giving it otherwise is an error ("unused parameter"). Empty: always used.
+    std::string when;
 };
 
 /// Parameter values checked against an operator's declaration, defaults filled in.
@@ -87,9 +90,10 @@ const std::vector<Operator>& registry();
 /// The operator named @a name; vxf::UsageError listing the names otherwise.
 const Operator& findOperator(const std::string& name);
 
-/// Check @a values (a JSON object) against @a op: unknown parameters, wrong types, values out
-/// of range or not among the choices, and missing required ones are vxf::UsageError naming
-/// the operator and the parameter. Defaults fill what is not given.
+/// Check @a values (a JSON object) against @a op: unknown parameters, parameters unused in the
+/// chosen mode (Param::when), wrong types, values out of range or not among the choices, and
+/// missing required ones are vxf::UsageError naming the operator and the parameter. Defaults
+/// fill what is not given.
 Args checkArgs(const Operator& op, const nlohmann::json& values);
 
 /// Parse command-line text for @a param into JSON of its type (numbers, "r,g,b", "a,b,c;d,e,f",
