@@ -113,12 +113,19 @@ TEST_CASE("a graph runs the pipeline stages and combines nodes (with)", "[graph]
     "lit": {"op": "light", "input": "vox", "params": {"scene": "s.json"}},
     "sc": {"op": "scatter", "input": "lit", "params": {"passes": 1, "directions": 4}},
     "glow": {"op": "mul", "input": "sc", "params": {"grid": "scatter", "value": 2}},
-    "mixed": {"op": "blend", "input": "sc", "with": "glow", "params": {"grid": "scatter", "with": "scatter", "mode": "mix"}}
+    "mixed": {"op": "blend", "input": "sc", "with": "glow", "params": {"grid": "scatter", "with": "scatter", "mode": "mix"}},
+    "image": {"op": "render", "input": "mixed", "params": {"scene": "s.json", "image": "g.exr", "png": "g.png", "width": 16, "height": 12, "samples": 1}}
   },
-  "outputs": {"mixed": "mixed.vdb", "sc": "sc.vdb"}
+  "outputs": {"image": "mixed.vdb", "sc": "sc.vdb"}
 })");
     const auto report = vxf::runGraph(dir.path("p.json"), dir.path("cache"));
-    CHECK(report.nodes.size() == 5);
+    CHECK(report.nodes.size() == 6);
+    CHECK(std::filesystem::exists(dir.path("g.exr")));
+    CHECK(std::filesystem::exists(dir.path("g.png")));
+    std::filesystem::remove(dir.path("g.exr")); // a lost image is made again; nothing else reruns
+    const auto again = vxf::runGraph(dir.path("p.json"), dir.path("cache"));
+    CHECK(actions(again) == std::map<std::string, std::string>{{"image", "ran"}, {"mixed", "reused"}, {"sc", "reused"}});
+    CHECK(std::filesystem::exists(dir.path("g.exr")));
     auto plain = vxf::readVoxelSet(dir.path("sc.vdb")).get<openvdb::Vec3SGrid>("scatter");
     auto mixed = vxf::readVoxelSet(dir.path("mixed.vdb")).get<openvdb::Vec3SGrid>("scatter");
     REQUIRE(plain->activeVoxelCount() > 0);

@@ -16,7 +16,9 @@
 #include <vxf/scatter/Scatter.h>
 #include <vxf/voxelize/Voxelize.h>
 #include <vxf/core/ProceduralMesh.h>
+#include <vxf/io/ImageFile.h>
 #include <vxf/io/MeshFile.h>
+#include <vxf/render/Render.h>
 
 #include <fmt/format.h>
 
@@ -636,6 +638,26 @@ std::vector<Operator> makeRegistry()
             const Medium medium(ctx.set, recordedMaterial(ctx.set));
             const auto report = scatter(ctx.set, medium, o, ctx.interrupter);
             return fmt::format("{} passes ({})", report.passes.size(), report.stopReason);
+        }});
+
+    ops.push_back({"render", "the renderer: writes an OpenEXR image (and a PNG preview) of the voxel set with a scene's camera; the set passes on unchanged",
+        {text("scene", "scene file (camera, lights, objects, render settings)"), text("image", "the .exr to write"),
+            text("png", "(optional) an sRGB PNG preview to write"), integer("width", "(optional) override the scene's width", nullptr, 1, 32768),
+            integer("height", "(optional) override the scene's height", nullptr, 1, 32768),
+            integer("samples", "(optional) override the samples per pixel", nullptr, 1, 65536)},
+        [](OpContext& ctx) {
+            const Scene scene = loadScene(ctx.args.text("scene"));
+            RenderOptions o = renderOptionsFrom(scene.settings);
+            if (ctx.args.has("width")) o.width = ctx.args.integer("width");
+            if (ctx.args.has("height")) o.height = ctx.args.integer("height");
+            if (ctx.args.has("samples")) o.samples = ctx.args.integer("samples");
+            const Medium medium(ctx.set, recordedMaterial(ctx.set));
+            const RayScene visible = sceneGeometry(scene, GeometryRoles::All);
+            const RayScene occluders = sceneGeometry(scene, GeometryRoles::Occluders);
+            const RenderedImage image = vxf::render(ctx.set, medium, scene, o, {&visible, &occluders}, ctx.interrupter);
+            writeExr(ctx.args.text("image"), image);
+            if (ctx.args.has("png")) writePng(ctx.args.text("png"), image);
+            return fmt::format("rendered {}x{} to {}", o.width, o.height, ctx.args.text("image"));
         }});
     return ops;
 }

@@ -40,6 +40,8 @@ std::string readText(const std::string& path)
 
 /// Parameters naming files whose bytes a node's result depends on.
 const char* const kFileParams[] = {"with_file", "from_file", "mesh", "scene"};
+/// Parameters naming files a node writes (resolved like the others, not fingerprinted).
+const char* const kOutputParams[] = {"image", "png"};
 
 class GraphRunner
 {
@@ -77,6 +79,9 @@ public:
             }
             json params = node.value("params", json::object());
             for (const char* key : kFileParams) {
+                if (params.contains(key) && params[key].is_string()) params[key] = resolve(params[key].get<std::string>());
+            }
+            for (const char* key : kOutputParams) {
                 if (params.contains(key) && params[key].is_string()) params[key] = resolve(params[key].get<std::string>());
             }
             try {
@@ -147,7 +152,11 @@ private:
         if (auto done = mFiles.find(name); done != mFiles.end()) return done->second;
         const std::string file = (mCache / (name + "-" + hashOf(name) + ".vdb")).string();
         const json& node = mNodes[name];
-        if (fs::exists(file)) {
+        bool outputsExist = true; // a node writing an image reruns when the image is gone
+        for (const char* key : kOutputParams) {
+            if (node.contains("params") && node["params"].contains(key)) outputsExist = outputsExist && fs::exists(node["params"][key].get<std::string>());
+        }
+        if (fs::exists(file) && outputsExist) {
             mReport.nodes.push_back({name, "reused", node.contains("file") ? "the file is unchanged" : "its operator, parameters and inputs are unchanged", "", 0.0});
             return mFiles[name] = file;
         }
