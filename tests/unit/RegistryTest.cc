@@ -1,6 +1,9 @@
 #include <vxf/ops/Registry.h>
 
 #include <vxf/core/Error.h>
+#include <vxf/io/VoxelSetFile.h>
+
+#include "TestSupport.h"
 
 #include <catch2/catch.hpp>
 
@@ -96,4 +99,41 @@ TEST_CASE("an operator runs on a voxel set and leaves the other grids untouched"
     const auto missing = vxf::ops::checkArgs(mul, {{"grid", "nothing"}, {"value", 4}});
     vxf::ops::OpContext bad{set, missing, nullptr};
     CHECK_THROWS_WITH(mul.run(bad), Catch::Contains("mul: no grid named 'nothing'") && Catch::Contains("density"));
+}
+
+TEST_CASE("rename and copy: grids between files, resampled when asked; backgrounds kept", "[ops][registry]")
+{
+    vxf::test::TempDir dir;
+    vxf::VoxelSet other(openvdb::math::Transform::createLinearTransform(0.5));
+    auto warm = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
+    warm->setName("warm");
+    warm->setTransform(other.transformPtr());
+    warm->tree().fill(openvdb::CoordBBox(openvdb::Coord(-4), openvdb::Coord(4)), openvdb::Vec3f(1, 0.5f, 0.25f), true);
+    other.put(warm);
+    vxf::writeVoxelSet(dir.path("other.vdb"), other);
+
+    vxf::VoxelSet set(openvdb::math::Transform::createLinearTransform(0.25));
+    auto density = openvdb::FloatGrid::create(0.0f);
+    density->setName("density");
+    density->setTransform(set.transformPtr());
+    density->tree().setValueOn(openvdb::Coord(1), 1.0f);
+    set.put(density);
+    const auto run = [&](const char* name, const json& params) {
+        const auto& op = vxf::ops::findOperator(name);
+        const auto args = vxf::ops::checkArgs(op, params);
+        vxf::ops::OpContext context{set, args, nullptr};
+        return op.run(context);
+    };
+    CHECK_THROWS_WITH(run("copy", {{"grid", "warm"}, {"from_file", dir.path("other.vdb")}}), Catch::Contains("resample"));
+    run("copy", {{"grid", "warm"}, {"from_file", dir.path("other.vdb")}, {"to", "tint"}, {"resample", true}});
+    auto tint = set.get<openvdb::Vec3SGrid>("tint");
+    CHECK(tint->transform() == set.transform());
+    CHECK(tint->tree().getValue(openvdb::Coord(0)) == openvdb::Vec3f(1, 0.5f, 0.25f)); // world 0 lies inside the box
+    CHECK(tint->background() == openvdb::Vec3f(0.0f));
+    run("rename", {{"grid", "tint"}, {"to", "Cd"}});
+    CHECK(set.find("Cd"));
+    CHECK_FALSE(set.find("tint"));
+    CHECK_THROWS_WITH(run("rename", {{"grid", "Cd"}, {"to", "density"}}), Catch::Contains("exists already"));
+    run("mul", {{"grid", "density"}, {"value", 3}});
+    CHECK(set.get<openvdb::FloatGrid>("density")->background() == 0.0f);
 }
