@@ -86,6 +86,10 @@ private:
             throw UsageError(fmt::format("{}: unknown parameter or extra argument '{}' (it takes: {})", op.name,
                 call.app->remaining().front(), known));
         }
+        if (!call.record.empty() && std::filesystem::weakly_canonical(call.input) == std::filesystem::weakly_canonical(call.output)) {
+            throw UsageError(fmt::format("{}: --record needs an output file other than the input (a graph replaying it would "
+                                         "read its own output)", op.name));
+        }
         nlohmann::json params = nlohmann::json::object();
         for (const auto& [name, text] : call.values) {
             const auto p = std::find_if(op.params.begin(), op.params.end(), [&](const ops::Param& q) { return q.name == name; });
