@@ -240,24 +240,24 @@ namespace {
 
 Param number(std::string name, std::string summary, json def, double lo = -INFINITY, double hi = INFINITY)
 {
-    return {std::move(name), ParamType::Number, std::move(summary), std::move(def), lo, hi, {}};
+    return {std::move(name), ParamType::Number, std::move(summary), std::move(def), lo, hi, {}, {}};
 }
 Param integer(std::string name, std::string summary, json def, double lo, double hi)
 {
-    return {std::move(name), ParamType::Integer, std::move(summary), std::move(def), lo, hi, {}};
+    return {std::move(name), ParamType::Integer, std::move(summary), std::move(def), lo, hi, {}, {}};
 }
-Param flag(std::string name, std::string summary) { return {std::move(name), ParamType::Boolean, std::move(summary), false, -INFINITY, INFINITY, {}}; }
+Param flag(std::string name, std::string summary) { return {std::move(name), ParamType::Boolean, std::move(summary), false, -INFINITY, INFINITY, {}, {}}; }
 Param text(std::string name, std::string summary, json def = nullptr)
 {
-    return {std::move(name), ParamType::Text, std::move(summary), std::move(def), -INFINITY, INFINITY, {}};
+    return {std::move(name), ParamType::Text, std::move(summary), std::move(def), -INFINITY, INFINITY, {}, {}};
 }
 Param choice(std::string name, std::string summary, std::vector<std::string> choices, json def)
 {
-    return {std::move(name), ParamType::Choice, std::move(summary), std::move(def), -INFINITY, INFINITY, std::move(choices)};
+    return {std::move(name), ParamType::Choice, std::move(summary), std::move(def), -INFINITY, INFINITY, std::move(choices), {}};
 }
 Param typed(std::string name, ParamType type, std::string summary, json def = nullptr)
 {
-    return {std::move(name), type, std::move(summary), std::move(def), -INFINITY, INFINITY, {}};
+    return {std::move(name), type, std::move(summary), std::move(def), -INFINITY, INFINITY, {}, {}};
 }
 
 Param when(Param p, std::string condition)
