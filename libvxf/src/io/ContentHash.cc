@@ -20,13 +20,17 @@ std::uint64_t fnv1a(const std::string& bytes, std::uint64_t h)
 
 std::string hashHex(const std::string& text) { return fmt::format("{:016x}", fnv1a(text)); }
 
+std::string readFileBytes(const std::string& path)
+{
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw Error(fmt::format("{}: cannot open", path));
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
 std::string fileFingerprint(const std::string& path)
 {
     if (path.rfind("builtin:", 0) == 0) return path;
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw Error(fmt::format("{}: cannot open", path));
-    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    return hashHex(bytes);
+    return hashHex(readFileBytes(path));
 }
 
 } // namespace vxf

@@ -13,7 +13,6 @@ std::array<openvdb::FloatGrid::Ptr, 3> splitChannels(const openvdb::Vec3SGrid& g
     for (int c = 0; c < 3; ++c) {
         auto g = openvdb::FloatGrid::create(grid.background()[c]);
         g->setTransform(grid.transform().copy());
-        g->setName(grid.getName() + "." + "xyz"[c]);
         for (auto meta = grid.beginMeta(); meta != grid.endMeta(); ++meta) g->insertMeta(meta->first, *meta->second);
         g->setName(grid.getName() + "." + "xyz"[c]);
         g->tree().topologyUnion(grid.tree());

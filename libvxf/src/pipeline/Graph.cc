@@ -14,7 +14,6 @@
 #include <fstream>
 #include <map>
 #include <set>
-#include <sstream>
 
 namespace vxf {
 
@@ -28,15 +27,6 @@ const json& pipelineSchemaJson()
 }
 
 namespace {
-
-std::string readText(const std::string& path)
-{
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw Error(fmt::format("{}: cannot open", path));
-    std::stringstream buffer;
-    buffer << in.rdbuf();
-    return buffer.str();
-}
 
 /// Parameters naming files whose bytes a node's result depends on.
 const char* const kFileParams[] = {"with_file", "from_file", "mesh", "scene"};
@@ -52,7 +42,7 @@ public:
         , mCache(cacheDir)
         , mInterrupter(interrupter)
     {
-        const json document = parseJsonText(readText(path), path);
+        const json document = parseJsonText(readFileBytes(path), path);
         static const JsonSchema schema(pipelineSchemaJson(), "schemas/pipeline.schema.json");
         schema.check(document, path);
         mNodes = document["nodes"];
@@ -209,7 +199,7 @@ void recordStep(const std::string& graphPath, const std::string& op, const json&
     const std::string& output)
 {
     json graph = {{"nodes", json::object()}, {"outputs", json::object()}};
-    if (fs::exists(graphPath)) graph = parseJsonText(readText(graphPath), graphPath);
+    if (fs::exists(graphPath)) graph = parseJsonText(readFileBytes(graphPath), graphPath);
     const fs::path folder = fs::absolute(graphPath).parent_path();
     const auto relative = [&](const std::string& p) {
         const fs::path abs = fs::absolute(p).lexically_normal();

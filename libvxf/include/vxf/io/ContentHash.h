@@ -10,6 +10,9 @@ namespace vxf {
 /// machines (std::hash is not).
 std::uint64_t fnv1a(const std::string& bytes, std::uint64_t seed = 0xcbf29ce484222325ull);
 
+/// The whole file at @a path as bytes; vxf::Error naming the file when it cannot be read.
+std::string readFileBytes(const std::string& path);
+
 /// fnv1a of @a text as 16 hex digits.
 std::string hashHex(const std::string& text);
 
