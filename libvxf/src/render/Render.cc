@@ -290,7 +290,10 @@ RenderedImage render(const VoxelSet& set, const Medium& medium, const Scene& sce
                                 t = h->distance + eps; // the medium's own surfaces: the march covers them
                             }
                         }
-                        const Gathered g = marcher.march(hit, dir, behindDistance);
+                        // From half a voxel before the hit: the voxels the surface cuts hold
+                        // medium on its outer side too (their volume fraction).
+                        const double back = std::min(0.5 * medium.voxelSize(), distance);
+                        const Gathered g = marcher.march(hit - dir * back, dir, behindDistance + back);
                         sumDirect += g.direct;
                         sumScatter += g.scatter;
                         for (int c = 0; c < 3; ++c) {

@@ -2,9 +2,12 @@
 
 #include <openvdb/tools/LevelSetUtil.h>
 #include <openvdb/tools/MeshToVolume.h>
+#include <openvdb/tools/Prune.h>
+#include <openvdb/tree/LeafManager.h>
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace vxf {
@@ -100,8 +103,25 @@ VoxelSet voxelize(const TriangleMesh& mesh, const VoxelizeOptions& options, Inte
     {
         InterruptStep step(interrupter, "making density");
         density = surface->deepCopy();
-        // Fog volume: 0 outside, ramp −φ/(band·dx) across the inner band, active tiles of 1 inside.
+        // Fog volume with active tiles of 1 inside (OpenVDB fills the interior) ...
         openvdb::tools::sdfToFogVolume(*density);
+        // ... and, in the band, each voxel's volume fraction clamp(½ − φ/dx, 0, 1) instead of
+        // sdfToFogVolume's ramp −φ/(band·dx), which thinned the medium by band/2 voxels each
+        // side. Trilinear lookups of the fraction cross ½ at the surface, so a ray's optical
+        // depth is its chord through the mesh at any voxel size.
+        density->tree().topologyUnion(surface->tree());
+        const float dx = float(surface->voxelSize()[0]);
+        openvdb::tree::LeafManager<openvdb::FloatTree> leaves(density->tree());
+        leaves.foreach([&](openvdb::FloatTree::LeafNodeType& leaf, std::size_t) {
+            auto phi = surface->getConstAccessor();
+            for (auto it = leaf.beginValueOn(); it; ++it) {
+                const float fraction = std::clamp(0.5f - phi.getValue(it.getCoord()) / dx, 0.0f, 1.0f);
+                it.setValue(fraction);
+                if (fraction == 0.0f) it.setValueOff();
+            }
+        });
+        openvdb::tools::pruneInactive(density->tree());
+        openvdb::tools::prune(density->tree()); // leaves of 1 become tiles
         density->setName("density");
         density->setGridClass(openvdb::GRID_FOG_VOLUME);
     }

@@ -30,8 +30,9 @@ double resolveVoxelSize(const openvdb::BBoxd& bounds, const VoxelizeOptions& opt
 ///
 /// Produces `surface`, a narrow-band level set (active voxels within bandWidth voxels of the
 /// surface on each side, inactive tiles of ±background elsewhere) and `density`, a fog
-/// volume: 1 inside (deep interior kept as active tiles, never voxelized), a smooth 0 → 1
-/// ramp across the inner band, inactive 0 outside. The index space is voxelLattice() of the
+/// volume: 1 inside (deep interior kept as active tiles, never voxelized), in the band each
+/// voxel's volume fraction clamp(½ − φ/dx, 0, 1) (so the medium ends at the mesh surface:
+/// trilinear lookups cross ½ there), inactive 0 outside. The index space is voxelLattice() of the
 /// mesh's bounds, or options.lattice.
 /// Results do not depend on the number of threads. Throws vxf::UsageError for bad options,
 /// vxf::Error for an empty mesh, vxf::Interrupted when cancelled.
