@@ -1,4 +1,4 @@
-// `vxf scatter IN.vdb -o OUT.vdb [--passes N] [--directions D] [--step H] [--tolerance E] [--keep-passes] [--band W] [--from-pass K]`
+// `vxf scatter IN.vdb -o OUT.vdb [--passes N] [--directions D] [--step H] [--tolerance E] [--keep-passes] [--band W] [--from-pass K] [--fine-passes N [--coarse-factor F]]`
 #include "CliSupport.h"
 #include "Commands.h"
 
@@ -38,6 +38,12 @@ public:
                "Adaptive narrow band, world units: full resolution within W of the surface, the tree's 8^3 and 128^3 "
                "tiles deeper (default 0: full resolution everywhere)")
             ->check(CLI::NonNegativeNumber);
+        mApp->add_option("--fine-passes", mOptions.finePasses,
+               "Run the passes after the first N on a coarser lattice: high orders are smooth (default 0: all passes "
+               "at full resolution)")
+            ->check(CLI::Range(0, 10000));
+        mApp->add_option("--coarse-factor", mOptions.coarseFactor, "How much coarser that lattice is: 2, 4 or 8 (default 4)")
+            ->check(CLI::IsMember({2, 4, 8}));
         mApp->add_flag("--keep-passes", mOptions.keepPasses, "Keep each pass as scatter_pass_K");
         mApp->add_option("--from-pass", mOptions.fromPass, "Continue from scatter_pass_K (as edited) instead of scatter_source")
             ->check(CLI::Range(1, 10000));
@@ -59,6 +65,7 @@ public:
         nlohmann::json params = {{"command", "scatter"}, {"input", mInput}, {"passes", mOptions.passes},
             {"directions", mOptions.pass.directions}, {"step", mOptions.pass.step}, {"tolerance", mOptions.tolerance},
             {"keep_passes", mOptions.keepPasses}, {"band", mOptions.band}, {"extrapolate", mOptions.extrapolateTail}, {"from_pass", mOptions.fromPass},
+            {"fine_passes", mOptions.finePasses}, {"coarse_factor", mOptions.coarseFactor},
             {"rotate_per_voxel", mOptions.pass.rotatePerVoxel}, {"passes_run", report.passes.size()}};
         set.setProvenance("scatter", params.dump());
         recordMaterial(set, material);
@@ -71,8 +78,8 @@ public:
         }
         std::cout << "  pass   energy (sum of fluence over voxels, r g b)        ratio   seconds\n";
         for (const auto& p : report.passes) {
-            std::cout << fmt::format("  {:>4}   {:>12.5g} {:>12.5g} {:>12.5g}   {:>7.4f}   {:>7.3f}\n", p.index, p.energy[0],
-                p.energy[1], p.energy[2], p.ratio, p.seconds);
+            std::cout << fmt::format("  {:>4}   {:>12.5g} {:>12.5g} {:>12.5g}   {:>7.4f}   {:>7.3f}{}\n", p.index, p.energy[0],
+                p.energy[1], p.energy[2], p.ratio, p.seconds, p.coarse ? "   (coarse)" : "");
         }
         std::cout << fmt::format("  seconds total {:.3f}\n", secondsSince(start));
     }

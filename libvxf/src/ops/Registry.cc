@@ -625,9 +625,13 @@ std::vector<Operator> makeRegistry()
         {integer("passes", "at most this many", 16, 0, 10000), integer("directions", "per voxel", 64, 1, 65536),
             number("step", "march step, voxels", 1.0, 0.01, 64.0), number("tolerance", "stop when a pass adds less than this fraction", 1e-3, 0.0, 1.0),
             number("band", "adaptive band, world units (0: full resolution)", 0.0, 0.0), flag("extrapolate", "add the geometric tail"),
-            flag("keep_passes", "keep scatter_pass_K")},
+            flag("keep_passes", "keep scatter_pass_K"),
+            integer("fine_passes", "passes at full resolution before the rest run on a coarser lattice (0: all)", 0, 0, 10000),
+            integer("coarse_factor", "how much coarser (2, 4 or 8)", 4, 2, 8)},
         [](OpContext& ctx) {
             ScatterOptions o;
+            o.finePasses = ctx.args.integer("fine_passes");
+            o.coarseFactor = ctx.args.integer("coarse_factor");
             o.passes = ctx.args.integer("passes");
             o.pass.directions = ctx.args.integer("directions");
             o.pass.step = ctx.args.number("step");

@@ -217,6 +217,8 @@ Scene parseScene(const std::string& text, const std::string& path)
         s.tolerance = v.value("tolerance", s.tolerance);
         s.extrapolate = v.value("extrapolate", s.extrapolate);
         s.scatterBand = v.value("band", s.scatterBand);
+        s.finePasses = v.value("fine_passes", s.finePasses);
+        s.coarseFactor = v.value("coarse_factor", s.coarseFactor);
     }
     if (document.contains("render")) {
         const json& v = document["render"];

@@ -1,8 +1,12 @@
 #include <vxf/scatter/Scatter.h>
 
 #include <vxf/scatter/AdaptiveBand.h>
+#include <vxf/scatter/CoarseLevel.h>
+
+#include <vxf/core/Error.h>
 
 #include <openvdb/tools/Composite.h>
+#include <openvdb/tools/Morphology.h>
 #include <openvdb/tools/ValueTransformer.h>
 #include <openvdb/tree/LeafManager.h>
 
@@ -24,6 +28,8 @@ ScatterOptions scatterOptionsFrom(const SceneSettings& s)
     o.pass.directions = s.directions;
     o.pass.step = s.step;
     o.band = s.scatterBand;
+    o.finePasses = s.finePasses;
+    o.coarseFactor = s.coarseFactor;
     return o;
 }
 
@@ -94,30 +100,55 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
     }
 
     const bool scatters = maxChannel(medium.material().sigmaS) > 0.0 || set.find("sigma_s");
+    if (options.finePasses > 0 && options.coarseFactor != 2 && options.coarseFactor != 4 && options.coarseFactor != 8) {
+        throw UsageError(fmt::format("coarse factor must be 2, 4 or 8, got {}", options.coarseFactor));
+    }
     double previous = 0.0;
     if (!scatters) {
         report.stopReason = "the medium does not scatter (sigma_s = 0)";
     } else {
+        // The lattice the passes run on: the voxel set's, or after options.finePasses a coarse one.
+        const Medium* levelMedium = &medium;
+        CoarseMedium coarse;
+        openvdb::Vec3SGrid::Ptr levelSum = sum; // Σ φ_k on the level (sum itself while fine)
+        double levelVoxels = 1.0;               // fine voxels per level voxel (energies in fine units)
+        const auto energy = [&levelVoxels](const openvdb::Vec3SGrid& g) { return gridEnergy(g) * levelVoxels; };
         openvdb::Vec3SGrid::Ptr last, beforeLast;
         for (int pass = 0; pass < options.passes; ++pass) {
             const auto start = std::chrono::steady_clock::now();
-            auto phi = scatterPass(medium, *j, options.pass, interrupter);
+            if (options.finePasses > 0 && levelMedium == &medium && k >= options.finePasses) {
+                const int f = options.coarseFactor;
+                coarse = coarsenMedium(medium, f);
+                j = blockAverage(*j, f, coarse.transform);
+                // One voxel more all round, so interpolating back near the surface meets values.
+                openvdb::tools::dilateActiveValues(j->tree(), 1, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::EXPAND_TILES);
+                levelSum = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
+                levelSum->setTransform(coarse.transform);
+                levelSum->tree().topologyUnion(j->tree());
+                levelMedium = coarse.medium.get();
+                levelVoxels = double(f) * f * f;
+                last = beforeLast = nullptr; // the tail's ratio is taken on one level
+            }
+            auto phi = scatterPass(*levelMedium, *j, options.pass, interrupter);
             ++k;
             ScatterReport::Pass info;
             info.index = k;
-            info.energy = gridEnergy(*phi);
+            info.energy = energy(*phi);
             info.ratio = previous > 0.0 ? maxChannel(info.energy) / previous : 0.0;
+            info.coarse = levelMedium != &medium;
             previous = maxChannel(info.energy);
-            if (options.keepPasses) set.put(named(phi->deepCopy(), fmt::format("scatter_pass_{}", k)));
-            j = sourceFromFluence(medium, *phi);
+            if (options.keepPasses) {
+                set.put(named(info.coarse ? prolong(*phi, *sum) : phi->deepCopy(), fmt::format("scatter_pass_{}", k)));
+            }
+            j = sourceFromFluence(*levelMedium, *phi);
             if (options.extrapolateTail) {
                 beforeLast = last;
                 last = phi->deepCopy();
             }
-            openvdb::tools::compSum(*sum, *phi);
+            openvdb::tools::compSum(*levelSum, *phi);
             info.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
             report.passes.push_back(info);
-            const double total = maxChannel(gridEnergy(*sum));
+            const double total = maxChannel(levelSum == sum ? gridEnergy(*sum) : gridEnergy(*sum) + energy(*levelSum));
             if (total <= 0.0) {
                 report.stopReason = "the source is zero";
                 break;
@@ -137,19 +168,24 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
             // (A voxel whose own settled ratio exceeds the global one is underestimated.)
             const double global = std::min(0.99, std::max(0.0, report.passes.back().ratio));
             report.tailFactor = global / (1.0 - global);
-            auto previous = beforeLast->getConstAccessor();
+            auto before = beforeLast->getConstAccessor();
             const float cap = float(global);
-            openvdb::tools::foreach(last->beginValueOn(), [&previous, cap](const openvdb::Vec3STree::ValueOnIter& it) {
-                const openvdb::Vec3f before = previous.getValue(it.getCoord());
+            openvdb::tools::foreach(last->beginValueOn(), [&before, cap](const openvdb::Vec3STree::ValueOnIter& it) {
+                const openvdb::Vec3f b = before.getValue(it.getCoord());
                 openvdb::Vec3f tail = *it;
                 for (int c = 0; c < 3; ++c) {
-                    const float r = before[c] > 0.0f ? std::clamp(tail[c] / before[c], 0.0f, cap) : cap;
+                    const float r = b[c] > 0.0f ? std::clamp(tail[c] / b[c], 0.0f, cap) : cap;
                     tail[c] *= r / (1.0f - r);
                 }
                 it.setValue(tail);
             }, /*threaded=*/false);
-            openvdb::tools::compSum(*sum, *last);
+            openvdb::tools::compSum(*levelSum, *last);
             report.stopReason += fmt::format("; geometric tail extrapolated per voxel (global ratio {:.4f})", global);
+        }
+        if (levelSum != sum) {
+            auto interpolated = prolong(*levelSum, *sum);
+            openvdb::tools::compSum(*sum, *interpolated);
+            report.stopReason += fmt::format("; passes after {} on a {}x coarser lattice", options.finePasses, options.coarseFactor);
         }
     }
 

@@ -24,6 +24,9 @@ public:
     const openvdb::CoordBBox& activeBounds() const { return mBounds; }
     const openvdb::FloatGrid& density() const { return *mDensity; }
     const Material& material() const { return mMaterial; }
+    /// The per-voxel coefficient grids, or null when the material's constants apply.
+    const openvdb::Vec3SGrid* sigmaAGrid() const { return mSigmaA.get(); }
+    const openvdb::Vec3SGrid* sigmaSGrid() const { return mSigmaS.get(); }
 
     /// Per-thread trilinear lookups.
     class Sampler

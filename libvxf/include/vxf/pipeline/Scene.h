@@ -83,6 +83,7 @@ struct SceneSettings
     double step = 1.0, tolerance = 1e-3;
     bool extrapolate = false;
     double scatterBand = 0.0; ///< 0: full resolution everywhere
+    int finePasses = 0, coarseFactor = 4; ///< passes after finePasses on a coarser lattice (0: none)
     int width = 640, height = 360, samples = 4, gatherDirections = 64;
     bool gather = false, surface = true;
     openvdb::Vec3d background{0.0};

@@ -22,6 +22,12 @@ struct ScatterOptions
     /// r = φ_K/φ_{K−1} per voxel and channel, capped by the global energy ratio of the last
     /// two passes (itself ≤ 0.99). Makes albedo ≈ 1 converge in few passes.
     bool extrapolateTail = false;
+    /// Passes after the first `finePasses` run on a lattice `coarseFactor` times coarser
+    /// (coarsenMedium; the source is block-averaged onto it, their sum interpolated back):
+    /// high scattering orders are smooth, and a coarse pass costs about coarseFactor⁴ less.
+    /// 0: every pass at full resolution.
+    int finePasses = 0;
+    int coarseFactor = 4; ///< 2, 4 or 8
     /// Adaptive narrow band (world units): full resolution within this distance of the
     /// surface, 8³ and 128³ tiles deeper (see coarsenBeyondBand). 0: full resolution everywhere.
     double band = 0.0;
@@ -36,6 +42,7 @@ struct ScatterReport
         openvdb::Vec3d energy{0.0};   ///< Σ over voxels of φ_K (tiles weighted by their voxels)
         double ratio = 0.0;           ///< energy (max channel) relative to the previous pass
         double seconds = 0.0;
+        bool coarse = false;          ///< ran on the coarse lattice
     };
     std::vector<Pass> passes;
     std::string stopReason;
@@ -56,7 +63,9 @@ openvdb::Vec3d gridEnergy(const openvdb::Vec3SGrid& grid);
 /// and the sum from `scatter_pass_1..K`. Stops after options.passes, or when a pass adds
 /// less than the tolerance, or at once when the medium does not scatter (σs = 0: `scatter`
 /// is 0). Topology: that of `scatter_source`, with the deep interior made tiles when options.band > 0
-/// (`scatter_source` itself is left as it was). Throws vxf::Error naming a missing grid.
+/// (`scatter_source` itself is left as it was). With options.finePasses, passes after those
+/// run on the coarse lattice (their `scatter_pass_K` interpolated back to the fine topology).
+/// Throws vxf::Error naming a missing grid, vxf::UsageError for a bad coarseFactor.
 ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions& options = {},
     Interrupter* interrupter = nullptr);
 

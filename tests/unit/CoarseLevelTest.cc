@@ -1,0 +1,105 @@
+#include <vxf/scatter/CoarseLevel.h>
+#include <vxf/scatter/Scatter.h>
+
+#include "TestSupport.h"
+
+#include <catch2/catch.hpp>
+
+TEST_CASE("a coarse voxel covers a block of fine voxels, centre on centre", "[coarse]")
+{
+    const auto fine = openvdb::math::Transform::createLinearTransform(0.1);
+    for (int f : {2, 4, 8}) {
+        const auto coarse = vxf::coarseTransform(*fine, f);
+        CHECK(coarse->voxelSize()[0] == Approx(0.1 * f));
+        // Coarse voxel (1, -1, 0) covers fine f..2f−1, −f..−1, 0..f−1: its centre is theirs.
+        const openvdb::Vec3d centre = coarse->indexToWorld(openvdb::Vec3d(1, -1, 0));
+        const openvdb::Vec3d expected = fine->indexToWorld(openvdb::Vec3d(1.5 * f - 0.5, -0.5 * f - 0.5, 0.5 * f - 0.5));
+        CHECK((centre - expected).length() < 1e-12);
+    }
+}
+
+TEST_CASE("block averages keep the total; voxels and tiles alike", "[coarse]")
+{
+    auto fine = openvdb::FloatGrid::create(0.0f);
+    fine->setTransform(openvdb::math::Transform::createLinearTransform(0.5));
+    fine->tree().fill(openvdb::CoordBBox(openvdb::Coord(-16), openvdb::Coord(-9)), 1.0f, true); // one active tile
+    fine->tree().setValueOn(openvdb::Coord(3, 5, -7), 0.25f);
+    fine->tree().setValueOn(openvdb::Coord(-1, 0, 2), 0.75f);
+    double total = 0.0;
+    for (auto it = fine->cbeginValueOn(); it; ++it) total += double(*it) * double(it.getVoxelCount());
+    for (int f : {2, 4, 8}) {
+        const auto coarse = vxf::blockAverage(*fine, f, vxf::coarseTransform(fine->transform(), f));
+        double sum = 0.0;
+        for (auto it = coarse->cbeginValueOn(); it; ++it) sum += double(*it) * double(it.getVoxelCount()) * f * f * f;
+        INFO("factor " << f);
+        CHECK(sum == Approx(total).epsilon(1e-6));
+        // The tile fills whole blocks: 1 there; the lone voxel (−1, 0, 2) is 0.75 of one f³ block.
+        CHECK(coarse->tree().getValue(openvdb::Coord(-16 / f)) == Approx(1.0));
+        CHECK(coarse->tree().getValue(openvdb::Coord(-1, 0, 2 / f)) == Approx(0.75 / (f * f * f)));
+    }
+}
+
+TEST_CASE("prolongation interpolates a linear field exactly", "[coarse]")
+{
+    const auto fineXform = openvdb::math::Transform::createLinearTransform(0.25);
+    const auto coarseXform = vxf::coarseTransform(*fineXform, 4);
+    const auto field = [](const openvdb::Vec3d& w) { return float(1.0 + 2.0 * w.x() - 0.5 * w.y() + 3.0 * w.z()); };
+    auto coarse = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
+    coarse->setTransform(coarseXform);
+    for (int i = -4; i <= 4; ++i)
+        for (int j = -4; j <= 4; ++j)
+            for (int k = -4; k <= 4; ++k) {
+                coarse->tree().setValueOn(openvdb::Coord(i, j, k), openvdb::Vec3f(field(coarseXform->indexToWorld(openvdb::Coord(i, j, k)))));
+            }
+    auto fine = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
+    fine->setTransform(fineXform);
+    for (int i = -8; i <= 8; i += 3)
+        for (int j = -8; j <= 8; j += 5)
+            for (int k = -8; k <= 8; k += 2) fine->tree().setValueOn(openvdb::Coord(i, j, k), openvdb::Vec3f(-1.0f));
+    const auto out = vxf::prolong(*coarse, *fine);
+    CHECK(out->activeVoxelCount() == fine->activeVoxelCount());
+    for (auto it = out->cbeginValueOn(); it; ++it) {
+        const float expected = field(fineXform->indexToWorld(it.getCoord()));
+        INFO(it.getCoord());
+        CHECK((*it).y() == Approx(expected).margin(1e-4));
+    }
+}
+
+TEST_CASE("coarse passes converge the series of a high albedo to its closed form", "[coarse][scatter]")
+{
+    // A homogeneous ball of radius 1 at dx 1/16, σt = 20, albedo 0.9, lit uniformly (φ0 = 1):
+    // at the centre, far from the boundary, Σ_k a^k = a/(1−a) = 9.
+    const vxf::Material m = vxf::test::albedoMaterial(20.0, 0.9);
+    const double dx = 1.0 / 16.0;
+    vxf::VoxelSet set(openvdb::math::Transform::createLinearTransform(dx));
+    auto density = openvdb::FloatGrid::create(0.0f);
+    density->setName("density");
+    auto source = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
+    source->setName("scatter_source");
+    for (auto* g : std::initializer_list<openvdb::GridBase*>{density.get(), source.get()}) g->setTransform(set.transformPtr());
+    for (int i = -16; i <= 16; ++i)
+        for (int j = -16; j <= 16; ++j)
+            for (int k = -16; k <= 16; ++k) {
+                const openvdb::Coord c(i, j, k);
+                if (c.asVec3d().length() * dx > 1.0) continue;
+                density->tree().setValueOn(c, 1.0f);
+                source->tree().setValueOn(c, openvdb::Vec3f(float(m.sigmaS[0] / (4.0 * M_PI))));
+            }
+    set.put(density);
+    set.put(source);
+    vxf::ScatterOptions options;
+    options.passes = 300;
+    options.tolerance = 1e-4;
+    options.pass.directions = 32;
+    options.finePasses = 2;
+    options.coarseFactor = 2;
+    const auto report = vxf::scatter(set, vxf::Medium(set, m), options);
+    CHECK(report.passes.size() > 40); // 0.9^k falls below 1e-4 of the sum after ~70 passes
+    CHECK_FALSE(report.passes[1].coarse);
+    CHECK(report.passes[2].coarse);
+    const float centre = set.get<openvdb::Vec3SGrid>("scatter")->tree().getValue(openvdb::Coord(0)).x();
+    CHECK(centre == Approx(9.0).epsilon(0.03));
+
+    options.coarseFactor = 3;
+    CHECK_THROWS_WITH(vxf::scatter(set, vxf::Medium(set, m), options), "coarse factor must be 2, 4 or 8, got 3");
+}
