@@ -153,9 +153,12 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
                 report.stopReason = "the source is zero";
                 break;
             }
-            if (options.tolerance > 0.0 && previous < options.tolerance * total) {
-                report.stopReason = fmt::format("pass {} added {:.2g} of the total, below the tolerance {:.2g}", k,
-                    previous / total, options.tolerance);
+            // The rest of the series, were it geometric from here: φ_K·r/(1−r). (A bare "this
+            // pass added little" test stops albedo 0.99 with a tenth of the light still missing.)
+            const double r = info.ratio;
+            if (options.tolerance > 0.0 && k > 1 && r < 1.0 && previous * r / (1.0 - r) < options.tolerance * total) {
+                report.stopReason = fmt::format("after pass {} the rest of the series is about {:.2g} of the sum "
+                    "(pass ratio {:.4f}), below the tolerance {:.2g}", k, previous * r / (1.0 - r) / total, r, options.tolerance);
                 break;
             }
         }

@@ -15,7 +15,9 @@ namespace vxf {
 struct ScatterOptions
 {
     int passes = 16;          ///< at most this many passes
-    double tolerance = 1e-3;  ///< stop when a pass adds less than this fraction of the sum so far (0: never)
+    /// Stop when the estimated rest of the series, φ_K·r/(1−r) with r the last pass's energy
+    /// ratio, is below this fraction of the sum so far (0: never).
+    double tolerance = 1e-3;
     bool keepPasses = false;  ///< keep each pass as `scatter_pass_K`
     int fromPass = 0;         ///< continue from `scatter_pass_K` (0: from `scatter_source`)
     /// After the last pass, add the geometric tail of the series: φ_K·r/(1−r) with
