@@ -75,14 +75,26 @@ TEST_CASE("albedo near 1 stays finite and bounded; tolerance stops the passes", 
     options.tolerance = 0.2;
     options.pass.directions = 24;
     const auto report = vxf::scatter(set, medium, options);
-    CHECK(report.passes.size() < 6);
-    CHECK(report.stopReason.find("below the tolerance") != std::string::npos);
+    // Each pass keeps most of the light (ratio near 1), so the rest of the series, φ_K·r/(1−r),
+    // stays far above 20% of the sum: the tolerance must not stop it (it used to, when it
+    // only asked whether the last pass added little).
+    CHECK(report.passes.size() == 6);
+    CHECK(report.stopReason == "reached 6 passes");
     for (std::size_t p = 1; p < report.passes.size(); ++p) CHECK(report.passes[p].ratio <= 1.0);
     bool bounded = true;
     for (auto it = set.get<openvdb::Vec3SGrid>("scatter")->cbeginValueOn(); it; ++it) {
         bounded = bounded && std::isfinite((*it)[0]) && (*it)[0] >= 0.0f && (*it)[0] <= 6.0f;
     }
     CHECK(bounded);
+
+    // Albedo 0.5: the series is short, and the tolerance stops it.
+    const vxf::Material low = vxf::test::albedoMaterial(8.0, 0.5);
+    vxf::VoxelSet lowSet = uniformSphere(low, 1.0);
+    options.passes = 30;
+    options.tolerance = 0.01;
+    const auto lowReport = vxf::scatter(lowSet, vxf::Medium(lowSet, low), options);
+    CHECK(lowReport.passes.size() < 12);
+    CHECK(lowReport.stopReason.find("below the tolerance") != std::string::npos);
 }
 
 TEST_CASE("no scattering when sigma_s is zero", "[scatter]")
