@@ -1,4 +1,4 @@
-// `vxf render S.json --volume V.vdb -o IMAGE.exr [--png PREVIEW.png] [--level-set] [--no-surface]`
+// `vxf render S.json --volume V.vdb -o IMAGE.exr [--png PREVIEW.png] [--level-set] [--no-surface] [--direct-from-lights]`
 #include "CliSupport.h"
 #include "Commands.h"
 
@@ -37,6 +37,9 @@ public:
         mApp->add_option("--mode", mMode, "view or gather (overrides the scene)")->check(CLI::IsMember({"view", "gather"}));
         mApp->add_flag("--level-set", mLevelSet, "Hit the volume's `surface` level set instead of the scene's meshes");
         mApp->add_flag("--no-surface", [this](std::int64_t) { mNoSurface = true; }, "Leave out the surface term");
+        mApp->add_flag("--direct-from-lights", [this](std::int64_t) { mDirectFromLights = true; },
+            "March single scattering to the lights at every step instead of reading the `direct` grid (exact in dense "
+            "media at any voxel size; edits of `direct` do not show)");
         mApp->add_flag("--half", mHalf, "16-bit half EXR channels");
     }
 
@@ -59,6 +62,7 @@ public:
         if (mSamples) options.samples = mSamples;
         if (!mMode.empty()) options.gather = mMode == "gather";
         if (mNoSurface) options.surface = false;
+        if (mDirectFromLights) options.directFromLights = true;
         RayScene visible, occluders;
         if (!mLevelSet) visible = sceneGeometry(scene, GeometryRoles::All);
         occluders = sceneGeometry(scene, GeometryRoles::Occluders);
@@ -74,7 +78,7 @@ private:
     std::string mScene, mVolume, mOutput, mPng, mMode;
     double mExposure = 0.0;
     int mWidth = 0, mHeight = 0, mSamples = 0;
-    bool mHalf = false, mLevelSet = false, mNoSurface = false;
+    bool mHalf = false, mLevelSet = false, mNoSurface = false, mDirectFromLights = false;
 };
 
 } // namespace

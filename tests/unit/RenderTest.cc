@@ -191,3 +191,47 @@ TEST_CASE("surface term: Lambert + normalized Blinn-Phong in closed form, occlud
     CHECK(plain.combined[lit][0] == 0.0f);
     CHECK(plain.alpha[lit] == 1.0f);
 }
+
+TEST_CASE("direct from the lights: a thick sphere lit along the view gives sigma_s E / (8 pi sigma_t)", "[render]")
+{
+    // A directional light E shining along the camera's view (+y) into a thick sphere: at depth
+    // s the light and the view ray have crossed the same medium, so
+    // L = ∫ e^{−σt s}·σs E e^{−σt s}/(4π) ds = σs E / (8π σt). The direct grid is zero, so
+    // only the marched light can give it; with the grid the direct layer is zero.
+    vxf::Material m;
+    m.sigmaA = openvdb::Vec3d(2.0, 4.0, 8.0);
+    m.sigmaS = openvdb::Vec3d(8.0, 6.0, 2.0); // σt = 10: 0.33 per voxel at dim 64
+    const vxf::VoxelSet set = litSphere(0.0);
+    const vxf::Medium medium(set, m);
+    vxf::Scene scene = frontView();
+    vxf::Light sun;
+    sun.type = vxf::Light::Type::Directional;
+    sun.direction = openvdb::Vec3d(0, 1, 0);
+    sun.intensity = 2.0;
+    scene.lights.push_back(sun);
+    vxf::RenderOptions options;
+    options.width = options.height = 31;
+    options.samples = 1;
+    options.surface = false;
+    const std::size_t centre = 15 * 31 + 15;
+    CHECK(vxf::render(set, medium, scene, options).direct[centre] == openvdb::Vec3f(0.0f));
+    options.directFromLights = true;
+    const vxf::RenderedImage image = vxf::render(set, medium, scene, options);
+    for (int c = 0; c < 3; ++c) {
+        CHECK(image.direct[centre][c] == Approx(m.sigmaS[c] * 2.0 / (8.0 * M_PI * 10.0)).epsilon(0.02));
+    }
+
+    // A constant environment L around a nearly transparent sphere: φ = 4πL everywhere, so
+    // L_view = σs·L·chord. Its 64 directions give one random sample per step, weighted by 64.
+    vxf::Material thin;
+    thin.sigmaA = openvdb::Vec3d(0.001);
+    thin.sigmaS = openvdb::Vec3d(0.004);
+    const vxf::Medium thinMedium(set, thin);
+    vxf::Light sky;
+    sky.type = vxf::Light::Type::Environment;
+    sky.samples = 64;
+    sky.intensity = 1.5;
+    scene.lights = {sky};
+    const vxf::RenderedImage lit = vxf::render(set, thinMedium, scene, options);
+    CHECK(lit.direct[centre].x() == Approx(0.004 * 1.5 * 2.0).epsilon(0.02));
+}

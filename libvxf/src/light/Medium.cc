@@ -36,6 +36,12 @@ openvdb::Vec3d Medium::Sampler::sigmaS(const openvdb::Vec3d& ijk)
     return mMedium.mMaterial.sigmaS * double(openvdb::tools::BoxSampler::sample(mDensity, ijk));
 }
 
+openvdb::Vec3d Medium::Sampler::sigmaS(const openvdb::Coord& ijk)
+{
+    if (mSigmaS) return openvdb::Vec3d(mSigmaS->getValue(ijk));
+    return mMedium.mMaterial.sigmaS * double(mDensity.getValue(ijk));
+}
+
 openvdb::Vec3d Medium::Sampler::sigmaT(const openvdb::Vec3d& ijk)
 {
     if (!mSigmaA && !mSigmaS) {

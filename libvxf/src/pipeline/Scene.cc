@@ -227,6 +227,7 @@ Scene parseScene(const std::string& text, const std::string& path)
         s.samples = v.value("samples", s.samples);
         s.gather = v.value("mode", std::string("view")) == "gather";
         s.gatherDirections = v.value("gather_directions", s.gatherDirections);
+        s.directFromLights = v.value("direct", std::string("grid")) == "lights";
         s.surface = v.value("surface", s.surface);
         if (v.contains("background")) s.background = reader.rgb(v["background"]);
     }

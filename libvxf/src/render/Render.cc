@@ -29,12 +29,20 @@ struct Gathered
 class Marcher
 {
 public:
-    Marcher(const VoxelSet& set, const Medium& medium, const RenderOptions& options)
+    /// With @a lights (options.directFromLights), single scattering is marched to them at
+    /// every step instead of read from the `direct` grid.
+    Marcher(const VoxelSet& set, const Medium& medium, const RenderOptions& options,
+        const std::vector<LightSampler>* lights = nullptr, const RayScene* occluders = nullptr)
         : mMedium(medium)
         , mSampler(medium)
+        , mShadowSampler(medium)
         , mOptions(options)
+        , mLights(lights)
+        , mOccluders(occluders)
     {
-        if (auto d = set.find("direct")) mDirect.emplace(set.get<openvdb::Vec3SGrid>("direct")->getConstAccessor());
+        mShadowMarch.step = options.step;
+        mShadowMarch.cutoff = options.cutoff;
+        if (set.find("direct") && !mLights) mDirect.emplace(set.get<openvdb::Vec3SGrid>("direct")->getConstAccessor());
         if (auto s = set.find("scatter")) mScatter.emplace(set.get<openvdb::Vec3SGrid>("scatter")->getConstAccessor());
         mBounds = marchBounds(medium);
         mTauCutoff = -std::log(std::max(options.cutoff, std::numeric_limits<double>::min()));
@@ -42,7 +50,7 @@ public:
 
     /// March from world point @a start along unit world direction @a dir, at most @a maxDistance (world).
     Gathered march(const openvdb::Vec3d& start, const openvdb::Vec3d& dir,
-        double maxDistance = std::numeric_limits<double>::infinity())
+        double maxDistance = std::numeric_limits<double>::infinity(), std::uint64_t key = 0)
     {
         Gathered g;
         if (mMedium.activeBounds().empty()) return g;
@@ -61,15 +69,20 @@ public:
             const openvdb::Vec3d sigmaT = mSampler.sigmaT(p);
             if (sigmaT[0] <= 0.0 && sigmaT[1] <= 0.0 && sigmaT[2] <= 0.0) continue;
             g.touched = true;
-            const openvdb::Vec3d sigmaS = mSampler.sigmaS(p);
-            const openvdb::Vec3d phiDirect = mDirect ? openvdb::Vec3d(openvdb::tools::BoxSampler::sample(*mDirect, p)) : openvdb::Vec3d(0.0);
-            const openvdb::Vec3d phiScatter = mScatter ? openvdb::Vec3d(openvdb::tools::BoxSampler::sample(*mScatter, p)) : openvdb::Vec3d(0.0);
+            // σs·φ: the fluence grids hold φ per voxel, so their emission σs·φ is interpolated
+            // as one per-voxel quantity (as the scatter passes do); interpolating σs and φ
+            // apart would square the ramp where both fall to zero at the surface.
+            openvdb::Vec3d emitDirect(0.0), emitScatter(0.0);
+            if (mLights) {
+                emitDirect = mSampler.sigmaS(p) * fluenceFromLights(xform.indexToWorld(p), mixBits(key + std::uint64_t(i)));
+            }
+            interpolateEmission(p, emitDirect, emitScatter);
             for (int c = 0; c < 3; ++c) {
                 // J = σs φ / 4π; ΔL = T·J·(1 − e^{−σt h})/σt; T ·= e^{−σt h}.
                 const double od = std::max(0.0, sigmaT[c]) * hWorld;
-                const double weight = g.transmittance[c] * stepIntegral(sigmaT[c], hWorld) * sigmaS[c] / (4.0 * M_PI);
-                g.direct[c] += weight * phiDirect[c];
-                g.scatter[c] += weight * phiScatter[c];
+                const double weight = g.transmittance[c] * stepIntegral(sigmaT[c], hWorld) / (4.0 * M_PI);
+                g.direct[c] += weight * emitDirect[c];
+                g.scatter[c] += weight * emitScatter[c];
                 g.transmittance[c] *= std::exp(-od);
                 tau[c] += od;
             }
@@ -82,9 +95,48 @@ public:
     }
 
 private:
+    /// Adds the trilinear interpolation of σs·φ of the eight voxels around index point @a p,
+    /// for the `direct` (when read from the grid) and `scatter` grids.
+    void interpolateEmission(const openvdb::Vec3d& p, openvdb::Vec3d& direct, openvdb::Vec3d& scatter)
+    {
+        if (!mDirect && !mScatter) return;
+        const openvdb::Coord base = openvdb::Coord::floor(p);
+        const openvdb::Vec3d f = p - base.asVec3d();
+        for (int corner = 0; corner < 8; ++corner) {
+            const openvdb::Coord c = base.offsetBy(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
+            const double w = ((corner & 1) ? f[0] : 1.0 - f[0]) * ((corner & 2) ? f[1] : 1.0 - f[1]) * ((corner & 4) ? f[2] : 1.0 - f[2]);
+            if (w <= 0.0) continue;
+            const openvdb::Vec3d sigmaS = mSampler.sigmaS(c) * w;
+            if (mDirect) direct += sigmaS * openvdb::Vec3d(mDirect->getValue(c));
+            if (mScatter) scatter += sigmaS * openvdb::Vec3d(mScatter->getValue(c));
+        }
+    }
+
+    /// φ0 at world point @a x: Σ over the lights of fluence × transmittance × visibility. A light
+    /// of many samples (area, environment) gives one of them per call, chosen by @a key and
+    /// weighted by their count: one shadow march per light and step, unbiased, its noise
+    /// averaged over the steps and camera samples.
+    openvdb::Vec3d fluenceFromLights(const openvdb::Vec3d& x, std::uint64_t key)
+    {
+        openvdb::Vec3d phi(0.0);
+        for (std::size_t l = 0; l < mLights->size(); ++l) {
+            (*mLights)[l].sample(x, key, 0.5 * mMedium.voxelSize(), mLightSamples);
+            if (mLightSamples.empty()) continue;
+            const std::size_t n = mLightSamples.size();
+            const std::size_t pick = std::min(n - 1, std::size_t(unitHash(key, l, 11) * double(n)));
+            const LightSample& s = mLightSamples[pick];
+            phi += s.fluence * double(n) * sampleTransmittance(s, mShadowSampler, mMedium, x, mShadowMarch, mOccluders);
+        }
+        return phi;
+    }
+
     const Medium& mMedium;
-    Medium::Sampler mSampler;
+    Medium::Sampler mSampler, mShadowSampler;
     const RenderOptions& mOptions;
+    const std::vector<LightSampler>* mLights;
+    const RayScene* mOccluders;
+    MarchOptions mShadowMarch;
+    std::vector<LightSample> mLightSamples;
     std::optional<openvdb::Vec3SGrid::ConstAccessor> mDirect, mScatter;
     openvdb::BBoxd mBounds;
     double mTauCutoff;
@@ -103,6 +155,7 @@ RenderOptions renderOptionsFrom(const SceneSettings& s)
     o.background = s.background;
     o.step = s.step;
     o.surface = s.surface;
+    o.directFromLights = s.directFromLights;
     return o;
 }
 
@@ -187,6 +240,12 @@ RenderedImage render(const VoxelSet& set, const Medium& medium, const Scene& sce
             }
         }
     }
+    std::vector<LightSampler> volumeLights; // the lights single scattering is marched to
+    if (options.directFromLights) {
+        for (const Light& l : scene.lights) {
+            if (l.type != Light::Type::Volume && l.power() != openvdb::Vec3d(0.0)) volumeLights.emplace_back(l);
+        }
+    }
     const Camera& camera = scene.camera;
 
     RenderedImage image;
@@ -218,7 +277,7 @@ RenderedImage render(const VoxelSet& set, const Medium& medium, const Scene& sce
     std::atomic<bool> cancelled{false};
     tbb::parallel_for(tbb::blocked_range<int>(0, options.height), [&](const tbb::blocked_range<int>& rows) {
         auto intersector = prototype;
-        Marcher marcher(set, medium, options);
+        Marcher marcher(set, medium, options, options.directFromLights ? &volumeLights : nullptr, meshes.occluders);
         SurfaceShader shader(medium, lights, meshes.occluders);
         const auto surfaceTerm = [&](const SceneObject* object, const openvdb::Vec3d& x, const openvdb::Vec3d& normal,
                                      const openvdb::Vec3d& dir, std::uint64_t key) {
@@ -293,7 +352,7 @@ RenderedImage render(const VoxelSet& set, const Medium& medium, const Scene& sce
                         // From half a voxel before the hit: the voxels the surface cuts hold
                         // medium on its outer side too (their volume fraction).
                         const double back = std::min(0.5 * medium.voxelSize(), distance);
-                        const Gathered g = marcher.march(hit - dir * back, dir, behindDistance + back);
+                        const Gathered g = marcher.march(hit - dir * back, dir, behindDistance + back, key);
                         sumDirect += g.direct;
                         sumScatter += g.scatter;
                         for (int c = 0; c < 3; ++c) {
@@ -314,7 +373,7 @@ RenderedImage render(const VoxelSet& set, const Medium& medium, const Scene& sce
                         const double phi = 2.0 * M_PI * unitHash(pixel, std::uint64_t(s) << 32 | std::uint64_t(k), 3);
                         const double r = std::sqrt(a);
                         const openvdb::Vec3d w = (t1 * (r * std::cos(phi)) + t2 * (r * std::sin(phi)) + inward * std::sqrt(std::max(0.0, 1.0 - a))).unit();
-                        const Gathered g = marcher.march(hit, w);
+                        const Gathered g = marcher.march(hit, w, std::numeric_limits<double>::infinity(), mixBits(key + std::uint64_t(k) * 7919u));
                         if (!g.touched) continue; // left the volume: dropped, the rest re-weighted
                         gd += g.direct;
                         gs += g.scatter;

@@ -55,7 +55,7 @@ openvdb::Vec3SGrid::Ptr sourceFromFluence(const Medium& medium, const openvdb::V
     leaves.foreach([&](openvdb::Vec3STree::LeafNodeType& leaf, std::size_t) {
         Medium::Sampler sampler(medium);
         for (auto it = leaf.beginValueOn(); it; ++it) {
-            it.setValue(openvdb::Vec3f(sampler.sigmaS(it.getCoord().asVec3d()) * openvdb::Vec3d(*it) / (4.0 * M_PI)));
+            it.setValue(openvdb::Vec3f(sampler.sigmaS(it.getCoord()) * openvdb::Vec3d(*it) / (4.0 * M_PI)));
         }
     });
     Medium::Sampler sampler(medium);
@@ -64,7 +64,7 @@ openvdb::Vec3SGrid::Ptr sourceFromFluence(const Medium& medium, const openvdb::V
         openvdb::CoordBBox box;
         it.getBoundingBox(box);
         const openvdb::Coord centre = box.min() + openvdb::Coord(box.dim().x() / 2);
-        it.setValue(openvdb::Vec3f(sampler.sigmaS(centre.asVec3d()) * openvdb::Vec3d(*it) / (4.0 * M_PI)));
+        it.setValue(openvdb::Vec3f(sampler.sigmaS(centre) * openvdb::Vec3d(*it) / (4.0 * M_PI)));
     }
     return j;
 }

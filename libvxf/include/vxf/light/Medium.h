@@ -37,6 +37,8 @@ public:
         openvdb::Vec3d sigmaT(const openvdb::Vec3d& ijk);
         /// σs at index-space position @a ijk (1/world unit).
         openvdb::Vec3d sigmaS(const openvdb::Vec3d& ijk);
+        /// σs of voxel @a ijk itself, not interpolated (1/world unit).
+        openvdb::Vec3d sigmaS(const openvdb::Coord& ijk);
 
     private:
         const Medium& mMedium;

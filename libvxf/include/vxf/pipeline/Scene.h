@@ -86,6 +86,7 @@ struct SceneSettings
     int finePasses = 0, coarseFactor = 4; ///< passes after finePasses on a coarser lattice (0: none)
     int width = 640, height = 360, samples = 4, gatherDirections = 64;
     bool gather = false, surface = true;
+    bool directFromLights = false; ///< render "direct": "lights" (single scattering marched per step)
     openvdb::Vec3d background{0.0};
     std::vector<std::string> outputs{"image"};
 };

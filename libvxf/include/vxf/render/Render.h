@@ -17,6 +17,12 @@ struct RenderOptions
     bool gather = false;        ///< false: "view" mode (physical); true: the thesis's final gather
     int gatherDirections = 64;  ///< cosine-weighted directions per hit in gather mode
     bool surface = true;        ///< add the surface term of objects whose surface reflects
+    /// Single scattering marched to the lights at every step of a camera ray (shadow rays
+    /// through the medium and occluders), instead of interpolated from the `direct` grid:
+    /// exact where the direct light falls off within a voxel (dense media, coarse voxels),
+    /// at the cost of one shadow march per light and step (a light of many samples gives one,
+    /// chosen at random and weighted by their count); ignores edits of `direct`.
+    bool directFromLights = false;
     openvdb::Vec3d background{0.0};
     double step = 1.0;          ///< march step, voxels
     double cutoff = 1e-4;       ///< stop marching below this transmittance
@@ -49,8 +55,10 @@ struct RenderMeshes
 ///   attenuated by the medium (sampleTransmittance), from just off the surface.
 /// - Volume term at a medium's surface, view mode: the ray marches on through the medium
 ///   along the same direction (index-matched boundary): L = ∫ T·J dt + T_exit·L_behind, with
-///   J = σs·φ/(4π) per layer (φ = `direct` for the direct layer, `scatter` for the scatter
-///   layer, their sum for combined; each step integrated analytically); L_behind is the first
+///   J = σs·φ/(4π) per layer (φ = `direct` for the direct layer (or, with
+///   options.directFromLights, the lights' fluence marched per step), `scatter` for the scatter
+///   layer, their sum for combined; σs·φ of the grids interpolated as one per-voxel quantity,
+///   as the scatter passes do; each step integrated analytically); L_behind is the first
 ///   occluder behind (its surface term) or the background, and the march stops there. Gather
 ///   mode: the average of such marches over a cosine-weighted hemisphere of directions into
 ///   the volume, dropping those that leave it at once.
