@@ -114,11 +114,13 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
         double levelVoxels = 1.0;               // fine voxels per level voxel (energies in fine units)
         const auto energy = [&levelVoxels](const openvdb::Vec3SGrid& g) { return gridEnergy(g) * levelVoxels; };
         openvdb::Vec3SGrid::Ptr last, beforeLast;
+        openvdb::Vec3SGrid::Ptr fineSource; // J_N, the fine source when the passes went coarse
         for (int pass = 0; pass < options.passes; ++pass) {
             const auto start = std::chrono::steady_clock::now();
             if (options.finePasses > 0 && levelMedium == &medium && k >= options.finePasses) {
                 const int f = options.coarseFactor;
                 coarse = coarsenMedium(medium, f);
+                fineSource = j;
                 j = blockAverage(*j, f, coarse.transform);
                 // One voxel more all round, so interpolating back near the surface meets values.
                 openvdb::tools::dilateActiveValues(j->tree(), 1, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::EXPAND_TILES);
@@ -186,9 +188,19 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
             report.stopReason += fmt::format("; geometric tail extrapolated per voxel (global ratio {:.4f})", global);
         }
         if (levelSum != sum) {
-            auto interpolated = prolong(*levelSum, *sum);
-            openvdb::tools::compSum(*sum, *interpolated);
-            report.stopReason += fmt::format("; passes after {} on a {}x coarser lattice", options.finePasses, options.coarseFactor);
+            // Back on the fine lattice by one more fine gather, not by interpolating the coarse
+            // sum: Σ_{k>N} φ_k = K(Σ_{k≥N} J_k) ≈ K(J_N + σs·prolong(Σ coarse φ)/4π). The sources
+            // are smooth, so the coarse lattice carries them well; the fluence they give falls
+            // off within a mean free path of the surface, which only the fine gather resolves.
+            // (It adds the order after the last coarse pass too.)
+            const auto start = std::chrono::steady_clock::now();
+            auto tailSource = sourceFromFluence(medium, *prolong(*levelSum, *sum));
+            openvdb::tools::compSum(*tailSource, *fineSource); // fineSource is not needed after
+            auto tail = scatterPass(medium, *tailSource, options.pass, interrupter);
+            openvdb::tools::compSum(*sum, *tail);
+            report.fineGatherSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            report.stopReason += fmt::format("; passes after {} on a {}x coarser lattice, their sum gathered once more on the fine one",
+                options.finePasses, options.coarseFactor);
         }
     }
 

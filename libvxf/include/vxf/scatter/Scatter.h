@@ -25,8 +25,9 @@ struct ScatterOptions
     /// two passes (itself ≤ 0.99). Makes albedo ≈ 1 converge in few passes.
     bool extrapolateTail = false;
     /// Passes after the first `finePasses` run on a lattice `coarseFactor` times coarser
-    /// (coarsenMedium; the source is block-averaged onto it, their sum interpolated back):
-    /// high scattering orders are smooth, and a coarse pass costs about coarseFactor⁴ less.
+    /// (coarsenMedium; the source is block-averaged onto it, their sum brought back by one
+    /// fine gather): high scattering orders are smooth, and a coarse pass costs about
+    /// coarseFactor⁴ less.
     /// 0: every pass at full resolution.
     int finePasses = 0;
     int coarseFactor = 4; ///< 2, 4 or 8
@@ -50,6 +51,7 @@ struct ScatterReport
     std::string stopReason;
     double tailFactor = 0.0; ///< r/(1−r) of the global energy ratio (0: no extrapolation); per voxel it varies
     AdaptiveBandReport band;  ///< the resolution the passes ran at
+    double fineGatherSeconds = 0.0; ///< after coarse passes: the fine gather of their sum
 };
 
 /// Scatter options from a scene's settings (keepPasses when "scatter_passes" is an output).
@@ -66,7 +68,9 @@ openvdb::Vec3d gridEnergy(const openvdb::Vec3SGrid& grid);
 /// less than the tolerance, or at once when the medium does not scatter (σs = 0: `scatter`
 /// is 0). Topology: that of `scatter_source`, with the deep interior made tiles when options.band > 0
 /// (`scatter_source` itself is left as it was). With options.finePasses, passes after those
-/// run on the coarse lattice (their `scatter_pass_K` interpolated back to the fine topology).
+/// run on the coarse lattice (their `scatter_pass_K` interpolated back to the fine topology)
+/// and their sum returns to the fine lattice as a source: `scatter` adds one fine gather of
+/// J_N + σs·(Σ coarse φ)/4π, which resolves the light near the surface at full resolution.
 /// Throws vxf::Error naming a missing grid, vxf::UsageError for a bad coarseFactor.
 ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions& options = {},
     Interrupter* interrupter = nullptr);
