@@ -51,7 +51,8 @@ struct ScatterReport
     std::string stopReason;
     double tailFactor = 0.0; ///< r/(1−r) of the global energy ratio (0: no extrapolation); per voxel it varies
     AdaptiveBandReport band;  ///< the resolution the passes ran at
-    double fineGatherSeconds = 0.0; ///< after coarse passes: the fine gather of their sum
+    double fineGatherSeconds = 0.0; ///< after coarse passes: the fine gathers and the correction cycle
+    int correctionPasses = 0;       ///< coarse passes of the correction cycle
 };
 
 /// Scatter options from a scene's settings (keepPasses when "scatter_passes" is an output).
@@ -70,7 +71,9 @@ openvdb::Vec3d gridEnergy(const openvdb::Vec3SGrid& grid);
 /// (`scatter_source` itself is left as it was). With options.finePasses, passes after those
 /// run on the coarse lattice (their `scatter_pass_K` interpolated back to the fine topology)
 /// and their sum returns to the fine lattice as a source: `scatter` adds one fine gather of
-/// J_N + σs·(Σ coarse φ)/4π, which resolves the light near the surface at full resolution.
+/// J_N + σs·(Σ coarse φ)/4π, which resolves the light near the surface at full resolution,
+/// and a second coarse cycle solves for what the coarse lattice's slightly different
+/// operator left out (two more fine gathers); see Scatter.cc.
 /// Throws vxf::Error naming a missing grid, vxf::UsageError for a bad coarseFactor.
 ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions& options = {},
     Interrupter* interrupter = nullptr);
