@@ -235,47 +235,51 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
             auto source = sourceFromFluence(medium, *coarseTail);
             openvdb::tools::compSum(*source, *fineSource); // fineSource is not needed after
             auto g = scatterPass(medium, *source, options.pass, interrupter);
-            auto difference = g->deepCopy(); // g − P ê
-            openvdb::tools::foreach(coarseTail->beginValueOn(), [](const openvdb::Vec3STree::ValueOnIter& it) { it.setValue(-*it); });
-            openvdb::tools::compSum(*difference, *coarseTail);
-            openvdb::tools::compSum(*sum, *g);
-            auto rho = scatterPass(medium, *sourceFromFluence(medium, *difference), options.pass, interrupter);
-            auto rhoSource = sourceFromFluence(medium, *rho);
             int correctionPasses = 0;
-            auto correction = prolong(*coarseSeries(*rhoSource, correctionPasses), *sum);
-            source = sourceFromFluence(medium, *correction);
-            openvdb::tools::compSum(*source, *rhoSource);
-            openvdb::tools::compSum(*rho, *scatterPass(medium, *source, options.pass, interrupter)); // δ
-            // δ is a difference of two estimates: it may not take a fluence below zero (where
-            // the sum is tiny, at the medium's edge); where the sum is negative already (an
-            // artist's negative source) it adds as it is.
-            {
-                // On the sum's topology (δ is computed on the same); a tile takes δ at its centre.
-                const auto corrected = [](const openvdb::Vec3f& a, const openvdb::Vec3f& d) {
-                    openvdb::Vec3f v = a + d;
-                    for (int c = 0; c < 3; ++c) {
-                        if (a[c] >= 0.0f) v[c] = std::max(v[c], 0.0f);
-                    }
-                    return v;
-                };
-                openvdb::tree::LeafManager<openvdb::Vec3STree> leaves(sum->tree());
-                leaves.foreach([&rho, &corrected](openvdb::Vec3STree::LeafNodeType& leaf, std::size_t) {
+            auto difference = options.coarseCorrection ? g->deepCopy() : nullptr; // to be g − P ê
+            openvdb::tools::compSum(*sum, *g);
+            if (options.coarseCorrection) {
+                openvdb::tools::foreach(coarseTail->beginValueOn(), [](const openvdb::Vec3STree::ValueOnIter& it) { it.setValue(-*it); });
+                openvdb::tools::compSum(*difference, *coarseTail);
+                auto rho = scatterPass(medium, *sourceFromFluence(medium, *difference), options.pass, interrupter);
+                auto rhoSource = sourceFromFluence(medium, *rho);
+                auto correction = prolong(*coarseSeries(*rhoSource, correctionPasses), *sum);
+                source = sourceFromFluence(medium, *correction);
+                openvdb::tools::compSum(*source, *rhoSource);
+                openvdb::tools::compSum(*rho, *scatterPass(medium, *source, options.pass, interrupter)); // δ
+                // δ is a difference of two estimates: it may not take a fluence below zero (where
+                // the sum is tiny, at the medium's edge); where the sum is negative already (an
+                // artist's negative source) it adds as it is.
+                {
+                    // On the sum's topology (δ is computed on the same); a tile takes δ at its centre.
+                    const auto corrected = [](const openvdb::Vec3f& a, const openvdb::Vec3f& d) {
+                        openvdb::Vec3f v = a + d;
+                        for (int c = 0; c < 3; ++c) {
+                            if (a[c] >= 0.0f) v[c] = std::max(v[c], 0.0f);
+                        }
+                        return v;
+                    };
+                    openvdb::tree::LeafManager<openvdb::Vec3STree> leaves(sum->tree());
+                    leaves.foreach([&rho, &corrected](openvdb::Vec3STree::LeafNodeType& leaf, std::size_t) {
+                        auto delta = rho->getConstAccessor();
+                        for (auto it = leaf.beginValueOn(); it; ++it) it.setValue(corrected(*it, delta.getValue(it.getCoord())));
+                    });
                     auto delta = rho->getConstAccessor();
-                    for (auto it = leaf.beginValueOn(); it; ++it) it.setValue(corrected(*it, delta.getValue(it.getCoord())));
-                });
-                auto delta = rho->getConstAccessor();
-                for (auto it = sum->tree().beginValueOn(); it; ++it) {
-                    if (!it.isTileValue()) continue;
-                    openvdb::CoordBBox box;
-                    it.getBoundingBox(box);
-                    it.setValue(corrected(*it, delta.getValue(box.min() + openvdb::Coord(box.dim().x() / 2))));
+                    for (auto it = sum->tree().beginValueOn(); it; ++it) {
+                        if (!it.isTileValue()) continue;
+                        openvdb::CoordBBox box;
+                        it.getBoundingBox(box);
+                        it.setValue(corrected(*it, delta.getValue(box.min() + openvdb::Coord(box.dim().x() / 2))));
+                    }
                 }
             }
             report.correctionPasses = correctionPasses;
             report.fineGatherSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-            report.stopReason += fmt::format("; passes after {} on a {}x coarser lattice, their sum gathered on the fine one, "
-                "corrected by a second cycle ({} coarse passes, 3 fine gathers in all, {:.2f} s)",
-                options.finePasses, options.coarseFactor, correctionPasses, report.fineGatherSeconds);
+            report.stopReason += fmt::format("; passes after {} on a {}x coarser lattice, their sum gathered on the fine one", options.finePasses, options.coarseFactor);
+            if (options.coarseCorrection) {
+                report.stopReason += fmt::format(", corrected by a second cycle ({} coarse passes, 3 fine gathers in all, {:.2f} s)",
+                    correctionPasses, report.fineGatherSeconds);
+            }
         }
     }
 

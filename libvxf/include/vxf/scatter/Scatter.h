@@ -31,6 +31,9 @@ struct ScatterOptions
     /// 0: every pass at full resolution.
     int finePasses = 0;
     int coarseFactor = 4; ///< 2, 4 or 8
+    /// After the coarse passes, the second cycle that corrects their bias (see scatter()).
+    /// Off only to measure what it buys.
+    bool coarseCorrection = true;
     /// Adaptive narrow band (world units): full resolution within this distance of the
     /// surface, 8³ and 128³ tiles deeper (see coarsenBeyondBand). 0: full resolution everywhere.
     double band = 0.0;
