@@ -5,6 +5,34 @@
 
 #include <catch2/catch.hpp>
 
+namespace {
+
+/// A homogeneous ball of radius 1, @a cells voxels per unit (density 1), lit uniformly:
+/// φ0 = 1, so `scatter_source` = σs/(4π).
+vxf::VoxelSet uniformlyLitBall(const vxf::Material& m, int cells)
+{
+    const double dx = 1.0 / cells;
+    vxf::VoxelSet set(openvdb::math::Transform::createLinearTransform(dx));
+    auto density = openvdb::FloatGrid::create(0.0f);
+    density->setName("density");
+    auto source = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
+    source->setName("scatter_source");
+    for (auto* g : std::initializer_list<openvdb::GridBase*>{density.get(), source.get()}) g->setTransform(set.transformPtr());
+    for (int i = -cells; i <= cells; ++i)
+        for (int j = -cells; j <= cells; ++j)
+            for (int k = -cells; k <= cells; ++k) {
+                const openvdb::Coord c(i, j, k);
+                if (c.asVec3d().length() * dx > 1.0) continue;
+                density->tree().setValueOn(c, 1.0f);
+                source->tree().setValueOn(c, openvdb::Vec3f(float(m.sigmaS[0] / (4.0 * M_PI))));
+            }
+    set.put(density);
+    set.put(source);
+    return set;
+}
+
+} // namespace
+
 TEST_CASE("a coarse voxel covers a block of fine voxels, centre on centre", "[coarse]")
 {
     const auto fine = openvdb::math::Transform::createLinearTransform(0.1);
@@ -70,23 +98,7 @@ TEST_CASE("coarse passes converge the series of a high albedo to its closed form
     // A homogeneous ball of radius 1 at dx 1/16, σt = 20, albedo 0.9, lit uniformly (φ0 = 1):
     // at the centre, far from the boundary, Σ_k a^k = a/(1−a) = 9.
     const vxf::Material m = vxf::test::albedoMaterial(20.0, 0.9);
-    const double dx = 1.0 / 16.0;
-    vxf::VoxelSet set(openvdb::math::Transform::createLinearTransform(dx));
-    auto density = openvdb::FloatGrid::create(0.0f);
-    density->setName("density");
-    auto source = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
-    source->setName("scatter_source");
-    for (auto* g : std::initializer_list<openvdb::GridBase*>{density.get(), source.get()}) g->setTransform(set.transformPtr());
-    for (int i = -16; i <= 16; ++i)
-        for (int j = -16; j <= 16; ++j)
-            for (int k = -16; k <= 16; ++k) {
-                const openvdb::Coord c(i, j, k);
-                if (c.asVec3d().length() * dx > 1.0) continue;
-                density->tree().setValueOn(c, 1.0f);
-                source->tree().setValueOn(c, openvdb::Vec3f(float(m.sigmaS[0] / (4.0 * M_PI))));
-            }
-    set.put(density);
-    set.put(source);
+    vxf::VoxelSet set = uniformlyLitBall(m, 16);
     vxf::ScatterOptions options;
     options.passes = 300;
     options.tolerance = 1e-4;
@@ -113,22 +125,7 @@ TEST_CASE("the coarse cycle's correction brings coarse passes to the plain itera
     const vxf::Material m = vxf::test::albedoMaterial(10.0, 0.99);
     const double dx = 1.0 / 8.0;
     const auto run = [&](int finePasses, bool correction) {
-        vxf::VoxelSet set(openvdb::math::Transform::createLinearTransform(dx));
-        auto density = openvdb::FloatGrid::create(0.0f);
-        density->setName("density");
-        auto source = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
-        source->setName("scatter_source");
-        for (auto* g : std::initializer_list<openvdb::GridBase*>{density.get(), source.get()}) g->setTransform(set.transformPtr());
-        for (int i = -8; i <= 8; ++i)
-            for (int j = -8; j <= 8; ++j)
-                for (int k = -8; k <= 8; ++k) {
-                    const openvdb::Coord c(i, j, k);
-                    if (c.asVec3d().length() * dx > 1.0) continue;
-                    density->tree().setValueOn(c, 1.0f);
-                    source->tree().setValueOn(c, openvdb::Vec3f(float(m.sigmaS[0] / (4.0 * M_PI))));
-                }
-        set.put(density);
-        set.put(source);
+        vxf::VoxelSet set = uniformlyLitBall(m, 8);
         vxf::ScatterOptions options;
         options.passes = 5000;
         options.tolerance = 1e-5;
