@@ -75,6 +75,33 @@ openvdb::Vec3SGrid::Ptr named(openvdb::Vec3SGrid::Ptr grid, const std::string& n
     return grid;
 }
 
+/// sum += δ on @a sum's topology (δ is computed on the same; a tile takes δ at its centre).
+/// δ is a difference of two estimates: it may not take a fluence below zero (where the sum is
+/// tiny, at the medium's edge); where the sum is negative already (an artist's negative
+/// source) it adds as it is.
+void addCorrection(openvdb::Vec3SGrid& sum, const openvdb::Vec3SGrid& delta)
+{
+    const auto corrected = [](const openvdb::Vec3f& a, const openvdb::Vec3f& d) {
+        openvdb::Vec3f v = a + d;
+        for (int c = 0; c < 3; ++c) {
+            if (a[c] >= 0.0f) v[c] = std::max(v[c], 0.0f);
+        }
+        return v;
+    };
+    openvdb::tree::LeafManager<openvdb::Vec3STree> leaves(sum.tree());
+    leaves.foreach([&delta, &corrected](openvdb::Vec3STree::LeafNodeType& leaf, std::size_t) {
+        auto d = delta.getConstAccessor();
+        for (auto it = leaf.beginValueOn(); it; ++it) it.setValue(corrected(*it, d.getValue(it.getCoord())));
+    });
+    auto d = delta.getConstAccessor();
+    for (auto it = sum.tree().beginValueOn(); it; ++it) {
+        if (!it.isTileValue()) continue;
+        openvdb::CoordBBox box;
+        it.getBoundingBox(box);
+        it.setValue(corrected(*it, d.getValue(box.min() + openvdb::Coord(box.dim().x() / 2))));
+    }
+}
+
 } // namespace
 
 ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions& options, Interrupter* interrupter)
@@ -247,31 +274,7 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
                 source = sourceFromFluence(medium, *correction);
                 openvdb::tools::compSum(*source, *rhoSource);
                 openvdb::tools::compSum(*rho, *scatterPass(medium, *source, options.pass, interrupter)); // δ
-                // δ is a difference of two estimates: it may not take a fluence below zero (where
-                // the sum is tiny, at the medium's edge); where the sum is negative already (an
-                // artist's negative source) it adds as it is.
-                {
-                    // On the sum's topology (δ is computed on the same); a tile takes δ at its centre.
-                    const auto corrected = [](const openvdb::Vec3f& a, const openvdb::Vec3f& d) {
-                        openvdb::Vec3f v = a + d;
-                        for (int c = 0; c < 3; ++c) {
-                            if (a[c] >= 0.0f) v[c] = std::max(v[c], 0.0f);
-                        }
-                        return v;
-                    };
-                    openvdb::tree::LeafManager<openvdb::Vec3STree> leaves(sum->tree());
-                    leaves.foreach([&rho, &corrected](openvdb::Vec3STree::LeafNodeType& leaf, std::size_t) {
-                        auto delta = rho->getConstAccessor();
-                        for (auto it = leaf.beginValueOn(); it; ++it) it.setValue(corrected(*it, delta.getValue(it.getCoord())));
-                    });
-                    auto delta = rho->getConstAccessor();
-                    for (auto it = sum->tree().beginValueOn(); it; ++it) {
-                        if (!it.isTileValue()) continue;
-                        openvdb::CoordBBox box;
-                        it.getBoundingBox(box);
-                        it.setValue(corrected(*it, delta.getValue(box.min() + openvdb::Coord(box.dim().x() / 2))));
-                    }
-                }
+                addCorrection(*sum, *rho);
             }
             report.correctionPasses = correctionPasses;
             report.fineGatherSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
