@@ -1,5 +1,8 @@
 #include <vxf/light/Transmittance.h>
 
+#include <vxf/core/ProceduralMesh.h>
+#include <vxf/voxelize/Voxelize.h>
+
 #include "TestSupport.h"
 
 #include <catch2/catch.hpp>
@@ -95,4 +98,49 @@ TEST_CASE("transmittance to the boundary through a concave gap counts only the m
     const double expected = std::exp(-1.0 * 0.1 * (4.0 + 0.5 + 10.0));
     const openvdb::Vec3d t = vxf::transmittanceToBoundary(sampler, medium, openvdb::Vec3d(5, 0, 0), openvdb::Vec3d(1, 0, 0), {});
     CHECK(t.x() == Approx(expected).margin(1e-4));
+}
+
+TEST_CASE("a march step's part inside the surface ends at the zero crossing", "[light][transmittance]")
+{
+    double lo = 0.0, hi = 0.0;
+    CHECK_FALSE(vxf::insidePart(2.0, 0.5, 3.0, 0.25, lo, hi)); // outside
+    REQUIRE(vxf::insidePart(2.0, -0.5, 3.0, -0.25, lo, hi));   // inside: all of it
+    CHECK(lo == 2.0);
+    CHECK(hi == 3.0);
+    REQUIRE(vxf::insidePart(2.0, 0.75, 3.0, -0.25, lo, hi)); // entering at 2.75
+    CHECK(lo == Approx(2.75));
+    CHECK(hi == 3.0);
+    REQUIRE(vxf::insidePart(2.0, -0.25, 3.0, 0.25, lo, hi)); // leaving at 2.5
+    CHECK(lo == 2.0);
+    CHECK(hi == Approx(2.5));
+}
+
+TEST_CASE("through a voxelized sphere, transmittance follows the exact surface", "[light][transmittance]")
+{
+    // Sphere of radius 1 at voxel size 0.1 (σt·dx = 0.4): a voxel's volume fraction read
+    // trilinearly smears the boundary over a voxel; with the `surface` level set the medium
+    // ends where the mesh does, so chords and depths below a voxel come out right.
+    const double radius = 1.0, dx = 0.1, sigmaT = 4.0;
+    vxf::VoxelizeOptions options;
+    options.voxelSize = dx;
+    const vxf::VoxelSet set = vxf::voxelize(vxf::makeSphere(openvdb::Vec3d(0.0), radius, 128, 256), options);
+    const vxf::Medium medium(set, vxf::test::greyMaterial(sigmaT, 0.0));
+    REQUIRE(medium.surface() != nullptr);
+    vxf::Medium::Sampler sampler(medium);
+    const auto tau = [&](const openvdb::Vec3d& from, const openvdb::Vec3d& to) {
+        const openvdb::Vec3d t = vxf::transmittance(sampler, medium, from / dx, to / dx, {0.5, 1e-12});
+        return -std::log(t.x());
+    };
+    // Chords at offsets b from the centre, down to grazing: optical depth σt·2√(1 − b²).
+    for (double b : {0.0, 0.5, 0.8, 0.95}) {
+        const double chord = 2.0 * std::sqrt(radius * radius - b * b);
+        INFO("offset " << b);
+        CHECK(tau(openvdb::Vec3d(-2.0, b, 0.013), openvdb::Vec3d(2.0, b, 0.013)) == Approx(sigmaT * chord).epsilon(0.02));
+    }
+    // From a point a fraction of a voxel under the surface straight out: σt·depth.
+    const openvdb::Vec3d out = openvdb::Vec3d(1.0, 0.7, 0.4).unit();
+    for (double depth : {0.02, 0.05, 0.1, 0.3}) {
+        INFO("depth " << depth);
+        CHECK(tau(out * (radius - depth), out * 2.0) == Approx(sigmaT * depth).epsilon(0.1));
+    }
 }

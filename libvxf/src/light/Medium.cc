@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+
 namespace vxf {
 
 Medium::Medium(const VoxelSet& set, const Material& material)
@@ -19,6 +21,12 @@ Medium::Medium(const VoxelSet& set, const Material& material)
             (std::string(name) == "sigma_a" ? mSigmaA : mSigmaS) = typed;
         }
     }
+    if (auto grid = set.find("surface")) {
+        auto typed = openvdb::gridConstPtrCast<openvdb::FloatGrid>(grid);
+        if (typed && typed->getGridClass() == openvdb::GRID_LEVEL_SET && typed->transform() == mDensity->transform()) {
+            mSurface = typed;
+        }
+    }
     mBounds = mDensity->evalActiveVoxelBoundingBox();
 }
 
@@ -28,6 +36,29 @@ Medium::Sampler::Sampler(const Medium& medium)
 {
     if (medium.mSigmaA) mSigmaA.emplace(medium.mSigmaA->getConstAccessor());
     if (medium.mSigmaS) mSigmaS.emplace(medium.mSigmaS->getConstAccessor());
+    if (medium.mSurface) mSurface.emplace(medium.mSurface->getConstAccessor());
+}
+
+double Medium::Sampler::signedDistance(const openvdb::Vec3d& ijk)
+{
+    if (!mSurface) return -1.0;
+    return double(openvdb::tools::BoxSampler::sample(*mSurface, ijk)) / mMedium.voxelSize();
+}
+
+double Medium::Sampler::interiorScale(const openvdb::Vec3d& ijk, double distanceBound)
+{
+    // The eight voxels lie within √3/2 of ijk: below −½ (whole) when ijk is below −1.37.
+    if (!mSurface || distanceBound < -1.5) return 1.0;
+    const openvdb::Coord base = openvdb::Coord::floor(ijk);
+    const openvdb::Vec3d f = ijk - base.asVec3d();
+    const double dx = mMedium.voxelSize();
+    double fraction = 0.0;
+    for (int corner = 0; corner < 8; ++corner) {
+        const openvdb::Coord c = base.offsetBy(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
+        const double w = ((corner & 1) ? f[0] : 1.0 - f[0]) * ((corner & 2) ? f[1] : 1.0 - f[1]) * ((corner & 4) ? f[2] : 1.0 - f[2]);
+        fraction += w * std::clamp(0.5 - double(mSurface->getValue(c)) / dx, 0.0, 1.0);
+    }
+    return 1.0 / std::max(fraction, kMinFraction);
 }
 
 openvdb::Vec3d Medium::Sampler::sigmaS(const openvdb::Vec3d& ijk)

@@ -62,11 +62,22 @@ public:
         if (std::isfinite(maxDistance)) t1 = maxDistance / mMedium.voxelSize(); // index units (uniform voxels)
         if (!clipRay(mBounds, o, d, t0, t1)) return g;
         const int steps = std::max(1, int(std::ceil((t1 - t0) / std::max(mOptions.step, 1e-3))));
-        const double h = (t1 - t0) / steps, hWorld = h * mMedium.voxelSize();
+        const double h = (t1 - t0) / steps;
         openvdb::Vec3d tau(0.0);
+        double ta = t0, sa = mSampler.signedDistance(o + d * t0);
         for (int i = 0; i < steps; ++i) {
-            const openvdb::Vec3d p = o + d * (t0 + (i + 0.5) * h);
-            const openvdb::Vec3d sigmaT = mSampler.sigmaT(p);
+            // Only the part of the step inside the surface holds medium (sharp boundary).
+            const double tb = t0 + (i + 1) * h, sb = mSampler.signedDistance(o + d * tb);
+            double lo, hi;
+            const bool inside = insidePart(ta, sa, tb, sb, lo, hi);
+            const double distanceBound = std::max(sa, sb) + 0.5 * (tb - ta); // SDFs are 1-Lipschitz
+            ta = tb;
+            sa = sb;
+            if (!inside) continue;
+            const openvdb::Vec3d p = o + d * (0.5 * (lo + hi));
+            const double hWorld = (hi - lo) * mMedium.voxelSize();
+            const double interior = mSampler.interiorScale(p, distanceBound);
+            const openvdb::Vec3d sigmaT = mSampler.sigmaT(p) * interior;
             if (sigmaT[0] <= 0.0 && sigmaT[1] <= 0.0 && sigmaT[2] <= 0.0) continue;
             g.touched = true;
             // σs·φ: the fluence grids hold φ per voxel, so their emission σs·φ is interpolated
@@ -77,6 +88,8 @@ public:
                 emitDirect = mSampler.sigmaS(p) * fluenceFromLights(xform.indexToWorld(p), mixBits(key + std::uint64_t(i)));
             }
             interpolateEmission(p, emitDirect, emitScatter);
+            emitDirect *= interior;
+            emitScatter *= interior;
             for (int c = 0; c < 3; ++c) {
                 // J = σs φ / 4π; ΔL = T·J·(1 − e^{−σt h})/σt; T ·= e^{−σt h}.
                 const double od = std::max(0.0, sigmaT[c]) * hWorld;
@@ -349,8 +362,9 @@ RenderedImage render(const VoxelSet& set, const Medium& medium, const Scene& sce
                                 t = h->distance + eps; // the medium's own surfaces: the march covers them
                             }
                         }
-                        // From half a voxel before the hit: the voxels the surface cuts hold
-                        // medium on its outer side too (their volume fraction).
+                        // From half a voxel before the hit: without a `surface` level set the
+                        // voxels the surface cuts hold medium on its outer side too (their
+                        // volume fraction); with one, the march skips what lies outside it.
                         const double back = std::min(0.5 * medium.voxelSize(), distance);
                         const Gathered g = marcher.march(hit - dir * back, dir, behindDistance + back, key);
                         sumDirect += g.direct;

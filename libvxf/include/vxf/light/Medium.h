@@ -15,7 +15,7 @@ namespace vxf {
 class Medium
 {
 public:
-    /// Uses `density` (required) and `sigma_a`, `sigma_s` (optional) from @a set.
+    /// Uses `density` (required) and `sigma_a`, `sigma_s`, `surface` (optional) from @a set.
     Medium(const VoxelSet& set, const Material& material);
 
     const openvdb::math::Transform& transform() const { return mDensity->transform(); }
@@ -27,6 +27,9 @@ public:
     /// The per-voxel coefficient grids, or null when the material's constants apply.
     const openvdb::Vec3SGrid* sigmaAGrid() const { return mSigmaA.get(); }
     const openvdb::Vec3SGrid* sigmaSGrid() const { return mSigmaS.get(); }
+    /// The `surface` level set bounding the medium (sharp boundary), or null: then the medium
+    /// ends where the interpolated density does.
+    const openvdb::FloatGrid* surface() const { return mSurface.get(); }
 
     /// Per-thread trilinear lookups.
     class Sampler
@@ -39,16 +42,32 @@ public:
         openvdb::Vec3d sigmaS(const openvdb::Vec3d& ijk);
         /// σs of voxel @a ijk itself, not interpolated (1/world unit).
         openvdb::Vec3d sigmaS(const openvdb::Coord& ijk);
+        /// Signed distance to the surface at @a ijk (voxels, negative inside, trilinear);
+        /// −1 everywhere when the medium has no surface.
+        double signedDistance(const openvdb::Vec3d& ijk);
+        /// Sharp boundary: a voxel's coefficients and fluence-weighted emission are averages over
+        /// its cube, of which only the volume fraction f = clamp(½ − φ/dx, 0, 1) lies inside the
+        /// surface; dividing their trilinear interpolation by that of f gives the value inside
+        /// the surface at @a ijk (exact for a uniform medium). Returns 1/max(f, kMinFraction);
+        /// 1 without a surface.
+        /// @a distanceBound: an upper bound of the signed distance (voxels) at @a ijk, so that
+        /// points deep inside (all eight voxels whole) skip the lookups.
+        double interiorScale(const openvdb::Vec3d& ijk, double distanceBound = 0.0);
 
     private:
         const Medium& mMedium;
         openvdb::FloatGrid::ConstAccessor mDensity;
         std::optional<openvdb::Vec3SGrid::ConstAccessor> mSigmaA, mSigmaS;
+        std::optional<openvdb::FloatGrid::ConstAccessor> mSurface;
     };
+
+    /// interiorScale's floor on the volume fraction (where an edit put density outside the surface).
+    static constexpr double kMinFraction = 0.1;
 
 private:
     openvdb::FloatGrid::ConstPtr mDensity;
     openvdb::Vec3SGrid::ConstPtr mSigmaA, mSigmaS;
+    openvdb::FloatGrid::ConstPtr mSurface;
     Material mMaterial;
     openvdb::CoordBBox mBounds;
 };

@@ -30,6 +30,20 @@ inline double stepIntegral(double sigmaT, double h)
     return od > 1e-8 ? -std::expm1(-od) / s : h * (1.0 - 0.5 * od);
 }
 
+/// The part [@a lo, @a hi] of the march step [@a ta, @a tb] inside the medium's surface, from
+/// the signed distances @a sa, @a sb at its ends (linear between them, so a step of at most a
+/// voxel meets the zero crossing of the trilinear level set to second order); false when the
+/// step lies outside. Without a surface (distances −1) the whole step is inside.
+inline bool insidePart(double ta, double sa, double tb, double sb, double& lo, double& hi)
+{
+    lo = ta;
+    hi = tb;
+    if (sa >= 0.0 && sb >= 0.0) return false;
+    if (sa > 0.0) lo = ta + (tb - ta) * sa / (sa - sb);
+    else if (sb > 0.0) hi = ta + (tb - ta) * sa / (sa - sb);
+    return hi > lo;
+}
+
 /// T(a, b) = exp(−∫ σt ds) on the segment from @a fromIjk to @a toIjk (index space),
 /// per channel. Only the medium counts: σt is 0 outside it, so a segment may leave and
 /// re-enter a concave mesh. Midpoint rule over equal steps of at most options.step voxels;
