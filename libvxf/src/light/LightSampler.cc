@@ -78,9 +78,30 @@ LightSampler::LightSampler(const Light& light)
     }
 }
 
-void LightSampler::sample(const openvdb::Vec3d& x, std::uint64_t key, double minDistance, std::vector<LightSample>& out) const
+std::size_t LightSampler::count() const
+{
+    switch (mLight.type) {
+    case Light::Type::Point:
+    case Light::Type::Spot:
+    case Light::Type::Directional: return 1;
+    case Light::Type::Environment: return mDirections.size();
+    case Light::Type::Area: {
+        const int n = std::max(0, mLight.samples);
+        if (mLight.shape == Light::Shape::Sphere) return std::size_t(n);
+        const int side = std::max(1, int(std::lround(std::sqrt(double(n)))));
+        return std::size_t(side) * std::size_t(side);
+    }
+    case Light::Type::Volume: return 0;
+    }
+    return 0;
+}
+
+void LightSampler::sample(const openvdb::Vec3d& x, std::uint64_t key, double minDistance, std::vector<LightSample>& out,
+    std::size_t first, std::size_t last) const
 {
     out.clear();
+    last = std::min(last, count());
+    if (first >= last) return;
     const Light& light = mLight;
     const openvdb::Vec3d power = light.power();
     // A sample from the point q carrying intensity·f(r).
@@ -117,7 +138,7 @@ void LightSampler::sample(const openvdb::Vec3d& x, std::uint64_t key, double min
     }
     case Light::Type::Environment: {
         // φ = ∫ L T dω ≈ Σ_i T(ω_i) ∫_{cell i} L dω.
-        for (std::size_t i = 0; i < mDirections.size(); ++i) {
+        for (std::size_t i = first; i < last; ++i) {
             if (mRadiance[i] == openvdb::Vec3d(0.0)) continue;
             LightSample s;
             s.direction = mDirections[i];
@@ -131,7 +152,7 @@ void LightSampler::sample(const openvdb::Vec3d& x, std::uint64_t key, double min
         const int n = light.samples;
         if (light.shape == Light::Shape::Sphere) {
             const double area = 4.0 * M_PI * light.radius * light.radius;
-            for (int i = 0; i < n; ++i) {
+            for (int i = int(first); i < int(last); ++i) {
                 // Stratified in z (equal-area bands) and jittered in angle.
                 const double z = 1.0 - 2.0 * (i + unitHash(key, std::uint64_t(i), 1)) / n;
                 const double phi = 2.0 * M_PI * unitHash(key, std::uint64_t(i), 2);
@@ -147,9 +168,9 @@ void LightSampler::sample(const openvdb::Vec3d& x, std::uint64_t key, double min
         openvdb::Vec3d u, v;
         frame(light.direction, u, v);
         const int side = std::max(1, int(std::lround(std::sqrt(double(n)))));
-        const int count = side * side;
+        const int cells = side * side;
         const double area = light.shape == Light::Shape::Disk ? M_PI * light.radius * light.radius : light.width * light.height;
-        for (int i = 0; i < count; ++i) {
+        for (int i = int(first); i < int(last); ++i) {
             const double a = (i % side + unitHash(key, std::uint64_t(i), 3)) / side;
             const double b = (i / side + unitHash(key, std::uint64_t(i), 4)) / side;
             openvdb::Vec3d q;
@@ -161,7 +182,7 @@ void LightSampler::sample(const openvdb::Vec3d& x, std::uint64_t key, double min
             }
             const openvdb::Vec3d toX = x - q;
             const double cosTheta = toX.length() > 0.0 ? light.direction.dot(toX) / toX.length() : 0.0;
-            if (cosTheta > 0.0) fromPoint(q, power * cosTheta * (area / count)); // one-sided emitter
+            if (cosTheta > 0.0) fromPoint(q, power * cosTheta * (area / cells)); // one-sided emitter
         }
         return;
     }

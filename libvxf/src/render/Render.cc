@@ -133,11 +133,13 @@ private:
     {
         openvdb::Vec3d phi(0.0);
         for (std::size_t l = 0; l < mLights->size(); ++l) {
-            (*mLights)[l].sample(x, key, 0.5 * mMedium.voxelSize(), mLightSamples);
-            if (mLightSamples.empty()) continue;
-            const std::size_t n = mLightSamples.size();
+            const LightSampler& light = (*mLights)[l];
+            const std::size_t n = light.count();
+            if (n == 0) continue;
             const std::size_t pick = std::min(n - 1, std::size_t(unitHash(key, l, 11) * double(n)));
-            const LightSample& s = mLightSamples[pick];
+            light.sample(x, key, 0.5 * mMedium.voxelSize(), mLightSamples, pick, pick + 1);
+            if (mLightSamples.empty()) continue; // a sample that carries nothing
+            const LightSample& s = mLightSamples.front();
             phi += s.fluence * double(n) * sampleTransmittance(s, mShadowSampler, mMedium, x, mShadowMarch, mOccluders);
         }
         return phi;
