@@ -42,18 +42,12 @@ openvdb::Vec3d march(Medium::Sampler& sampler, const Medium& medium, const openv
     // Beer-Lambert with σt constant over each step: τ += σt·h, T = exp(−τ).
     // Only the part of each step inside the surface holds medium (sharp boundary).
     openvdb::Vec3d tau(0.0);
-    double ta = t0, sa = sampler.signedDistance(origin + unit * t0);
+    InsideSteps inside(sampler, origin, unit, t0, h);
+    InsideStep step;
     for (int i = 0; i < steps; ++i) {
-        const double tb = t0 + (i + 1) * h, sb = sampler.signedDistance(origin + unit * tb);
-        double lo, hi;
-        const bool inside = insidePart(ta, sa, tb, sb, lo, hi);
-        const double distanceBound = std::max(sa, sb) + 0.5 * (tb - ta); // SDFs are 1-Lipschitz
-        ta = tb;
-        sa = sb;
-        if (!inside) continue;
-        const openvdb::Vec3d p = origin + unit * (0.5 * (lo + hi));
-        const openvdb::Vec3d sigmaT = sampler.sigmaT(p) * sampler.interiorScale(p, distanceBound);
-        const double hWorld = (hi - lo) * medium.voxelSize();
+        if (!inside.next(step)) continue;
+        const openvdb::Vec3d sigmaT = sampler.sigmaT(step.midpoint) * step.interior;
+        const double hWorld = step.length * medium.voxelSize();
         for (int c = 0; c < 3; ++c) tau[c] += std::max(0.0, sigmaT[c]) * hWorld;
         if (std::min({tau[0], tau[1], tau[2]}) > tauCutoff) return openvdb::Vec3d(0.0);
     }

@@ -64,19 +64,14 @@ public:
         const int steps = std::max(1, int(std::ceil((t1 - t0) / std::max(mOptions.step, 1e-3))));
         const double h = (t1 - t0) / steps;
         openvdb::Vec3d tau(0.0);
-        double ta = t0, sa = mSampler.signedDistance(o + d * t0);
+        InsideSteps inside(mSampler, o, d, t0, h);
+        InsideStep step;
         for (int i = 0; i < steps; ++i) {
             // Only the part of the step inside the surface holds medium (sharp boundary).
-            const double tb = t0 + (i + 1) * h, sb = mSampler.signedDistance(o + d * tb);
-            double lo, hi;
-            const bool inside = insidePart(ta, sa, tb, sb, lo, hi);
-            const double distanceBound = std::max(sa, sb) + 0.5 * (tb - ta); // SDFs are 1-Lipschitz
-            ta = tb;
-            sa = sb;
-            if (!inside) continue;
-            const openvdb::Vec3d p = o + d * (0.5 * (lo + hi));
-            const double hWorld = (hi - lo) * mMedium.voxelSize();
-            const double interior = mSampler.interiorScale(p, distanceBound);
+            if (!inside.next(step)) continue;
+            const openvdb::Vec3d& p = step.midpoint;
+            const double hWorld = step.length * mMedium.voxelSize();
+            const double interior = step.interior;
             const openvdb::Vec3d sigmaT = mSampler.sigmaT(p) * interior;
             if (sigmaT[0] <= 0.0 && sigmaT[1] <= 0.0 && sigmaT[2] <= 0.0) continue;
             g.touched = true;

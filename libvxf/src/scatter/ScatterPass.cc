@@ -62,20 +62,14 @@ openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGr
             openvdb::Vec3d radiance(0.0), T(1.0), tau(0.0);
             const int steps = std::max(1, int(std::ceil(tExit / h)));
             const double hStep = tExit / steps;
-            double ta = 0.0, sa = sampler.signedDistance(x);
+            InsideSteps inside(sampler, x, d, 0.0, hStep);
+            InsideStep step;
             for (int i = 0; i < steps; ++i) {
                 // Only the part of each step inside the surface holds medium (sharp boundary).
-                const double tb = (i + 1) * hStep, sb = sampler.signedDistance(x + d * tb);
-                double lo, hi;
-                const bool inside = insidePart(ta, sa, tb, sb, lo, hi);
-                const double distanceBound = std::max(sa, sb) + 0.5 * (tb - ta); // SDFs are 1-Lipschitz
-                ta = tb;
-                sa = sb;
-                if (!inside) continue;
-                const openvdb::Vec3d p = x + d * (0.5 * (lo + hi));
-                const double interior = sampler.interiorScale(p, distanceBound), hWorld = (hi - lo) * dx;
-                const openvdb::Vec3d sigmaT = sampler.sigmaT(p) * interior;
-                const openvdb::Vec3d J = openvdb::Vec3d(openvdb::tools::BoxSampler::sample(j, p)) * interior;
+                if (!inside.next(step)) continue;
+                const double hWorld = step.length * dx;
+                const openvdb::Vec3d sigmaT = sampler.sigmaT(step.midpoint) * step.interior;
+                const openvdb::Vec3d J = openvdb::Vec3d(openvdb::tools::BoxSampler::sample(j, step.midpoint)) * step.interior;
                 // ΔL = T·J·(1 − e^{−σt h})/σt; T ·= e^{−σt h}.
                 for (int ch = 0; ch < 3; ++ch) {
                     const double od = std::max(0.0, sigmaT[ch]) * hWorld;

@@ -3,6 +3,7 @@
 
 #include <vxf/light/Medium.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace vxf {
@@ -43,6 +44,48 @@ inline bool insidePart(double ta, double sa, double tb, double sb, double& lo, d
     else if (sb > 0.0) hi = ta + (tb - ta) * sa / (sa - sb);
     return hi > lo;
 }
+
+/// One march step's part inside the medium's surface: its midpoint (index space), its length
+/// (voxels) and Medium::Sampler::interiorScale there.
+struct InsideStep
+{
+    openvdb::Vec3d midpoint{0.0};
+    double length = 0.0;
+    double interior = 1.0;
+};
+
+/// The equal steps of @a h voxels along origin + t·direction from t = @a t0, each clipped to the
+/// surface by insidePart (one signed-distance lookup per step end; interiorScale skipped deep
+/// inside). Without a surface every step is whole, with interior scale 1.
+class InsideSteps
+{
+public:
+    InsideSteps(Medium::Sampler& sampler, const openvdb::Vec3d& origin, const openvdb::Vec3d& direction, double t0, double h)
+        : mSampler(sampler), mOrigin(origin), mDirection(direction), mT(t0), mH(h)
+        , mDistance(sampler.signedDistance(origin + direction * t0))
+    {
+    }
+
+    /// Advance one step; false when it lies outside the surface (@a step is then unchanged).
+    bool next(InsideStep& step)
+    {
+        const double ta = mT, sa = mDistance;
+        mT += mH;
+        mDistance = mSampler.signedDistance(mOrigin + mDirection * mT);
+        double lo, hi;
+        if (!insidePart(ta, sa, mT, mDistance, lo, hi)) return false;
+        step.midpoint = mOrigin + mDirection * (0.5 * (lo + hi));
+        step.length = hi - lo;
+        // The midpoint lies within h/2 of a step end, and signed distances are 1-Lipschitz.
+        step.interior = mSampler.interiorScale(step.midpoint, std::max(sa, mDistance) + 0.5 * mH);
+        return true;
+    }
+
+private:
+    Medium::Sampler& mSampler;
+    openvdb::Vec3d mOrigin, mDirection;
+    double mT, mH, mDistance;
+};
 
 /// T(a, b) = exp(−∫ σt ds) on the segment from @a fromIjk to @a toIjk (index space),
 /// per channel. Only the medium counts: σt is 0 outside it, so a segment may leave and
