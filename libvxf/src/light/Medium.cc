@@ -2,10 +2,59 @@
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
+#include <openvdb/tools/Morphology.h>
+#include <openvdb/tree/LeafManager.h>
+#include <tbb/enumerable_thread_specific.h>
 
 #include <algorithm>
+#include <vector>
 
 namespace vxf {
+
+namespace {
+
+/// The level set the marches clip to: @a surface where it resolves the medium, and "whole voxel
+/// inside" (φ ≤ −dx) within one voxel of where it does not. A boundary voxel (volume fraction
+/// in (0, 1)) is resolved when a whole voxel (φ ≤ −½dx) lies among its 26 neighbours, as on
+/// any surface at least about a voxel from the medial axis (the neighbour towards the inside
+/// is a voxel deeper). Thinner features — sheets, fibres and rims of a voxel or less — have
+/// no whole voxel, and the trilinear zero crossing between centres loses them (a sub-voxel
+/// sheet vanishes); there the voxels' volume fractions alone carry the medium (soft edge: no
+/// clipping, interior scale 1). The dilation by one voxel covers every cell that reads an
+/// unresolved voxel. Returns @a surface itself when every boundary voxel is resolved.
+openvdb::FloatGrid::ConstPtr marchSurface(const openvdb::FloatGrid::ConstPtr& surface)
+{
+    const float dx = float(surface->voxelSize()[0]);
+    openvdb::tree::LeafManager<const openvdb::FloatTree> leaves(surface->tree());
+    tbb::enumerable_thread_specific<std::vector<openvdb::Coord>> found;
+    leaves.foreach([&](const openvdb::FloatTree::LeafNodeType& leaf, size_t) {
+        openvdb::FloatGrid::ConstAccessor phi = surface->getConstAccessor();
+        for (auto it = leaf.cbeginValueOn(); it; ++it) {
+            const float v = *it;
+            if (v <= -0.5f * dx || v >= 0.5f * dx) continue; // whole or empty voxel
+            const openvdb::Coord c = it.getCoord();
+            bool resolved = false;
+            for (int n = 0; n < 27 && !resolved; ++n) {
+                resolved = phi.getValue(c.offsetBy(n % 3 - 1, (n / 3) % 3 - 1, n / 9 - 1)) <= -0.5f * dx;
+            }
+            if (!resolved) found.local().push_back(c);
+        }
+    });
+    openvdb::BoolTree unresolved(false);
+    for (const auto& coords : found) {
+        for (const openvdb::Coord& c : coords) unresolved.setValueOn(c, true);
+    }
+    if (unresolved.empty()) return surface;
+    openvdb::tools::dilateActiveValues(unresolved, 1, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
+    openvdb::FloatGrid::Ptr march = surface->deepCopy();
+    openvdb::FloatGrid::Accessor out = march->getAccessor();
+    for (auto it = unresolved.cbeginValueOn(); it; ++it) {
+        out.setValue(it.getCoord(), std::min(out.getValue(it.getCoord()), -dx));
+    }
+    return march;
+}
+
+} // namespace
 
 Medium::Medium(const VoxelSet& set, const Material& material)
     : mDensity(set.get<openvdb::FloatGrid>("density"))
@@ -23,8 +72,11 @@ Medium::Medium(const VoxelSet& set, const Material& material)
     }
     if (auto grid = set.find("surface")) {
         auto typed = openvdb::gridConstPtrCast<openvdb::FloatGrid>(grid);
-        if (typed && typed->getGridClass() == openvdb::GRID_LEVEL_SET && typed->transform() == mDensity->transform()) {
-            mSurface = typed;
+        if (typed && typed->getGridClass() == openvdb::GRID_LEVEL_SET) {
+            if (typed->transform() != mDensity->transform()) {
+                throw Error("grid 'surface' does not share the transform of 'density'; resample it or remove it (then the medium ends where the density does)");
+            }
+            mSurface = marchSurface(typed);
         }
     }
     mBounds = mDensity->evalActiveVoxelBoundingBox();

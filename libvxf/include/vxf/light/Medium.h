@@ -15,7 +15,8 @@ namespace vxf {
 class Medium
 {
 public:
-    /// Uses `density` (required) and `sigma_a`, `sigma_s`, `surface` (optional) from @a set.
+    /// Uses `density` (required) and `sigma_a`, `sigma_s`, `surface` (optional) from @a set;
+    /// throws vxf::Error when an optional grid has the wrong type or another transform.
     Medium(const VoxelSet& set, const Material& material);
 
     const openvdb::math::Transform& transform() const { return mDensity->transform(); }
@@ -27,8 +28,10 @@ public:
     /// The per-voxel coefficient grids, or null when the material's constants apply.
     const openvdb::Vec3SGrid* sigmaAGrid() const { return mSigmaA.get(); }
     const openvdb::Vec3SGrid* sigmaSGrid() const { return mSigmaS.get(); }
-    /// The `surface` level set bounding the medium (sharp boundary), or null: then the medium
-    /// ends where the interpolated density does.
+    /// The level set bounding the medium (sharp boundary), or null: then the medium ends where
+    /// the interpolated density does. It is the voxel set's `surface` where that resolves the
+    /// medium, and inside within a voxel of features too thin for it (about a voxel or less),
+    /// whose voxels' volume fractions then carry the medium as without a surface.
     const openvdb::FloatGrid* surface() const { return mSurface.get(); }
 
     /// Per-thread trilinear lookups.
