@@ -159,8 +159,13 @@ int main(int argc, char** argv)
         print(runChain(fmt::format("sigma_t {:g} per unit, albedo 0.9", sigmaT), sphere, albedoMaterial(sigmaT, 0.9), 64, coarsePasses()));
     }
     // Geometry.
-    print(runChain("one-voxel shell (box 2 x 2 x 1/32 at dim 64)",
-        vxf::makeBox(openvdb::Vec3d(-1, -1, -1.0 / 64), openvdb::Vec3d(1, 1, 1.0 / 64)), albedoMaterial(20.0, 0.9), 64, coarsePasses()));
+    // Voxel size 1/32: shells one and half a voxel thick (too thin for the level set to place
+    // both faces, so their volume fractions carry the medium).
+    for (double voxels : {1.0, 0.5}) {
+        const double half = 0.5 * voxels / 32.0;
+        print(runChain(fmt::format("shell {} voxel thick (box 2 x 2 x {} at dim 64)", voxels, 2.0 * half),
+            vxf::makeBox(openvdb::Vec3d(-1, -1, -half), openvdb::Vec3d(1, 1, half)), albedoMaterial(20.0, 0.9), 64, coarsePasses()));
+    }
     print(runChain("sphere 1e5 units from the origin", vxf::makeSphere(openvdb::Vec3d(1e5, -1e5, 1e5), 1.0, 64, 128),
         albedoMaterial(20.0, 0.9), 64, coarsePasses()));
     print(runChain("two cubes sharing an edge (non-manifold)", cubesSharingAnEdge(), albedoMaterial(10.0, 0.9), 64, coarsePasses()));
