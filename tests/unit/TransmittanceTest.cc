@@ -10,6 +10,9 @@
 
 #include <catch2/catch.hpp>
 
+#include <functional>
+#include <limits>
+
 namespace {
 
 /// A slab of density 1: voxels x in [0, n), |y|, |z| <= 20; voxel size dx.
@@ -196,4 +199,61 @@ TEST_CASE("a surface on another lattice is refused by name", "[light][transmitta
     openvdb::io::File(dir.path("mixed.vdb")).write({density, surface});
     const vxf::VoxelSet set = vxf::readVoxelSet(dir.path("mixed.vdb"));
     CHECK_THROWS_WITH(vxf::Medium(set, vxf::test::greyMaterial(1.0, 0.0)), Catch::Contains("grid 'surface' does not share the transform of 'density'"));
+}
+
+TEST_CASE("a step's emission integral is exact for quadratic emission", "[light][transmittance]")
+{
+    // ∫_0^h J(s) e^{−σt s} ds by a fine midpoint sum, for comparison.
+    const auto numeric = [](const std::function<double(double)>& J, double sigmaT, double h) {
+        const int n = 200000;
+        double sum = 0.0;
+        for (int i = 0; i < n; ++i) {
+            const double s = (i + 0.5) * h / n;
+            sum += J(s) * std::exp(-sigmaT * s);
+        }
+        return sum * h / n;
+    };
+    SECTION("Simpson's rule without extinction")
+    {
+        const vxf::EmissionWeights w = vxf::emissionWeights(0.0, 0.6);
+        CHECK(w.start == Approx(0.1));
+        CHECK(w.middle == Approx(0.4));
+        CHECK(w.end == Approx(0.1));
+        CHECK(w.total == Approx(0.6));
+    }
+    SECTION("a quadratic J at optical depths across the series/closed-form switch")
+    {
+        const double h = 0.5;
+        const auto J = [h](double s) { return 2.0 - 3.0 * (s / h) + 4.0 * (s / h) * (s / h); };
+        for (double k : {1e-6, 0.01, 0.3, 0.499, 0.501, 2.0, 30.0}) {
+            const double sigmaT = k / h;
+            const vxf::EmissionWeights w = vxf::emissionWeights(sigmaT, h);
+            INFO("sigma_t h = " << k);
+            CHECK(w.start * J(0.0) + w.middle * J(0.5 * h) + w.end * J(h) == Approx(numeric(J, sigmaT, h)).epsilon(1e-8));
+            CHECK(w.total == Approx(-std::expm1(-k) / sigmaT).epsilon(1e-12));
+        }
+    }
+    SECTION("light falling off over a mean free path: the midpoint value alone is 7% low")
+    {
+        const double sigmaT = 1.0, h = 0.77;
+        const auto J = [sigmaT](double s) { return std::exp(-sigmaT * s); };
+        const double exact = numeric(J, sigmaT, h);
+        const vxf::EmissionWeights w = vxf::emissionWeights(sigmaT, h);
+        CHECK(vxf::emissionIntegral(w, J(0.0), J(0.5 * h), J(h)) == Approx(exact).epsilon(1e-3));
+        CHECK(J(0.5 * h) * w.total < 0.94 * exact);
+    }
+    SECTION("extreme extinction stays finite and between J's bounds")
+    {
+        for (double sigmaT : {1e6, 1e300, std::numeric_limits<double>::infinity()}) {
+            const vxf::EmissionWeights w = vxf::emissionWeights(sigmaT, 0.1);
+            const double v = vxf::emissionIntegral(w, 0.0, 5.0, 100.0);
+            INFO("sigma_t " << sigmaT);
+            CHECK(std::isfinite(v));
+            CHECK(v >= 0.0);
+            CHECK(v <= 100.0 * w.total);
+        }
+        // An overshooting quadratic (J jumps at the end of a thick step) is kept in bounds.
+        const vxf::EmissionWeights thick = vxf::emissionWeights(50.0, 1.0);
+        CHECK(vxf::emissionIntegral(thick, 0.0, 0.0, 1.0) >= 0.0);
+    }
 }

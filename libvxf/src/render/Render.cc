@@ -66,31 +66,25 @@ public:
         openvdb::Vec3d tau(0.0);
         InsideSteps inside(mSampler, o, d, t0, h);
         InsideStep step;
+        Emission eStart, eMiddle, eEnd; // σs·φ at the step's start, middle and end
         for (int i = 0; i < steps; ++i) {
             // Only the part of the step inside the surface holds medium (sharp boundary).
             if (!inside.next(step)) continue;
-            const openvdb::Vec3d& p = step.midpoint;
-            const double hWorld = step.length * mMedium.voxelSize();
-            const double interior = step.interior;
-            const openvdb::Vec3d sigmaT = mSampler.sigmaT(p) * interior;
+            const std::uint64_t stepKey = key + 3 * std::uint64_t(i);
+            eStart = step.joined ? eEnd : emission(step.start, mSampler.interiorScale(step.start, step.distanceBound), stepKey);
+            eMiddle = emission(step.midpoint, step.interior, stepKey + 1);
+            eEnd = emission(step.end, mSampler.interiorScale(step.end, step.distanceBound), stepKey + 2);
+            const openvdb::Vec3d sigmaT = mSampler.sigmaT(step.midpoint) * step.interior;
             if (sigmaT[0] <= 0.0 && sigmaT[1] <= 0.0 && sigmaT[2] <= 0.0) continue;
             g.touched = true;
-            // σs·φ: the fluence grids hold φ per voxel, so their emission σs·φ is interpolated
-            // as one per-voxel quantity (as the scatter passes do); interpolating σs and φ
-            // apart would square the ramp where both fall to zero at the surface.
-            openvdb::Vec3d emitDirect(0.0), emitScatter(0.0);
-            if (mLights) {
-                emitDirect = mSampler.sigmaS(p) * fluenceFromLights(xform.indexToWorld(p), mixBits(key + std::uint64_t(i)));
-            }
-            interpolateEmission(p, emitDirect, emitScatter);
-            emitDirect *= interior;
-            emitScatter *= interior;
+            const double hWorld = step.length * mMedium.voxelSize();
             for (int c = 0; c < 3; ++c) {
-                // J = σs φ / 4π; ΔL = T·J·(1 − e^{−σt h})/σt; T ·= e^{−σt h}.
+                // J = σs φ / 4π; ΔL = T·∫ J(s) e^{−σt s} ds (J quadratic along the step); T ·= e^{−σt h}.
+                const EmissionWeights w = emissionWeights(sigmaT[c], hWorld);
+                const double weight = g.transmittance[c] / (4.0 * M_PI);
+                g.direct[c] += weight * emissionIntegral(w, eStart.direct[c], eMiddle.direct[c], eEnd.direct[c]);
+                g.scatter[c] += weight * emissionIntegral(w, eStart.scatter[c], eMiddle.scatter[c], eEnd.scatter[c]);
                 const double od = std::max(0.0, sigmaT[c]) * hWorld;
-                const double weight = g.transmittance[c] * stepIntegral(sigmaT[c], hWorld) / (4.0 * M_PI);
-                g.direct[c] += weight * emitDirect[c];
-                g.scatter[c] += weight * emitScatter[c];
                 g.transmittance[c] *= std::exp(-od);
                 tau[c] += od;
             }
@@ -103,6 +97,27 @@ public:
     }
 
 private:
+    /// σs·φ of single scattering and of the scattered light at one point.
+    struct Emission
+    {
+        openvdb::Vec3d direct{0.0}, scatter{0.0};
+    };
+
+    /// σs·φ at index point @a p inside the surface, whose interior scale is @a interior: the
+    /// grids' values interpolated, single scattering marched to the lights (one sample chosen
+    /// by @a key) when options.directFromLights. σs·φ is interpolated as one per-voxel
+    /// quantity (as the scatter passes do); interpolating σs and φ apart would square the ramp
+    /// where both fall to zero at the surface.
+    Emission emission(const openvdb::Vec3d& p, double interior, std::uint64_t key)
+    {
+        Emission e;
+        if (mLights) e.direct = mSampler.sigmaS(p) * fluenceFromLights(mMedium.transform().indexToWorld(p), mixBits(key));
+        interpolateEmission(p, e.direct, e.scatter);
+        e.direct *= interior;
+        e.scatter *= interior;
+        return e;
+    }
+
     /// Adds the trilinear interpolation of σs·φ of the eight voxels around index point @a p,
     /// for the `direct` (when read from the grid) and `scatter` grids.
     void interpolateEmission(const openvdb::Vec3d& p, openvdb::Vec3d& direct, openvdb::Vec3d& scatter)

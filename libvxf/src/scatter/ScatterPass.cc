@@ -49,6 +49,12 @@ openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGr
     const double tauCutoff = -std::log(std::max(options.cutoff, std::numeric_limits<double>::min()));
     const bool empty = medium.activeBounds().empty();
     const openvdb::BBoxd bounds = marchBounds(medium);
+    // J quadratic along each step where the medium ends at a surface; without one (coarse
+    // lattices, fixtures) its edge is the trilinear density ramp, over which σt, taken at the
+    // step's midpoint, varies as much as J: J at the ends then gives a boundary voxel too much
+    // of its own light (a 4x coarser bunny lattice leaked 1.3% per pass instead of 3%, and its
+    // series no longer matched the fine one's), so J is taken at the midpoint there.
+    const bool quadratic = medium.surface() != nullptr;
 
     // φ(x) at one index-space point.
     const auto gather = [&](Medium::Sampler& sampler, openvdb::Vec3SGrid::ConstAccessor& j, const openvdb::Coord& c) {
@@ -64,16 +70,26 @@ openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGr
             const double hStep = tExit / steps;
             InsideSteps inside(sampler, x, d, 0.0, hStep);
             InsideStep step;
+            openvdb::Vec3d jStart, jEnd; // J at the step's ends
+            const auto source = [&](const openvdb::Vec3d& p, double interior) {
+                return openvdb::Vec3d(openvdb::tools::BoxSampler::sample(j, p)) * interior;
+            };
             for (int i = 0; i < steps; ++i) {
                 // Only the part of each step inside the surface holds medium (sharp boundary).
                 if (!inside.next(step)) continue;
+                const openvdb::Vec3d jMiddle = source(step.midpoint, step.interior);
+                if (quadratic) {
+                    jStart = step.joined ? jEnd : source(step.start, sampler.interiorScale(step.start, step.distanceBound));
+                    jEnd = source(step.end, sampler.interiorScale(step.end, step.distanceBound));
+                } else {
+                    jStart = jEnd = jMiddle;
+                }
                 const double hWorld = step.length * dx;
                 const openvdb::Vec3d sigmaT = sampler.sigmaT(step.midpoint) * step.interior;
-                const openvdb::Vec3d J = openvdb::Vec3d(openvdb::tools::BoxSampler::sample(j, step.midpoint)) * step.interior;
-                // ΔL = T·J·(1 − e^{−σt h})/σt; T ·= e^{−σt h}.
+                // ΔL = T·∫ J(s) e^{−σt s} ds (J quadratic along the step); T ·= e^{−σt h}.
                 for (int ch = 0; ch < 3; ++ch) {
                     const double od = std::max(0.0, sigmaT[ch]) * hWorld;
-                    radiance[ch] += T[ch] * J[ch] * stepIntegral(sigmaT[ch], hWorld);
+                    radiance[ch] += T[ch] * emissionIntegral(emissionWeights(sigmaT[ch], hWorld), jStart[ch], jMiddle[ch], jEnd[ch]);
                     T[ch] *= std::exp(-od);
                     tau[ch] += od;
                 }

@@ -22,13 +22,48 @@ openvdb::BBoxd marchBounds(const Medium& medium);
 /// false when nothing of the interval is inside.
 bool clipRay(const openvdb::BBoxd& box, const openvdb::Vec3d& origin, const openvdb::Vec3d& direction, double& t0, double& t1);
 
-/// ∫_0^h e^{−σt s} ds = (1 − e^{−σt h})/σt for one march step of world length @a h, exact for
-/// any σt ≥ 0 (series form as σt·h → 0; never divides by zero). Negative σt counts as 0.
-inline double stepIntegral(double sigmaT, double h)
+/// Weights of the emission J at a step's start, middle and end in ∫_0^h J(s)·e^{−σt s} ds: the
+/// quadratic through the three values integrated exactly against the exponential (product
+/// integration; Simpson's rule as σt·h → 0). Exact for J quadratic along the step; for light
+/// falling off over a mean free path (J ∝ e^{−σt s}, h = 0.77 of it) it errs by 0.06% where J
+/// at the midpoint alone errs by −7%. @a total is ∫_0^h e^{−σt s} ds. Negative σt counts as 0;
+/// finite for any σt ≥ 0 including +∞.
+struct EmissionWeights
 {
-    const double s = sigmaT > 0.0 ? sigmaT : 0.0;
-    const double od = s * h;
-    return od > 1e-8 ? -std::expm1(-od) / s : h * (1.0 - 0.5 * od);
+    double start = 0.0, middle = 0.0, end = 0.0, total = 0.0;
+};
+
+inline EmissionWeights emissionWeights(double sigmaT, double h)
+{
+    // m_n = ∫_0^1 u^n e^{−k u} du; the quadratic's Lagrange basis in u = s/h gives the weights.
+    const double k = sigmaT > 0.0 ? sigmaT * h : 0.0;
+    double m0 = 0.0, m1 = 0.0, m2 = 0.0;
+    if (k < 0.5) { // series Σ_j (−k)^j / (j! (n + j + 1)): no cancellation near 0
+        double term = 1.0;
+        for (int j = 0; j < 16; ++j) {
+            m0 += term / (j + 1);
+            m1 += term / (j + 2);
+            m2 += term / (j + 3);
+            term *= -k / (j + 1);
+        }
+    } else {
+        const double e = std::exp(-k);
+        const double ek = e > 0.0 ? e * k : 0.0, ekk = e > 0.0 ? ek * k : 0.0;
+        m0 = (1.0 - e) / k;
+        m1 = (1.0 - e - ek) / (k * k);
+        m2 = (2.0 - 2.0 * e - 2.0 * ek - ekk) / (k * k * k);
+    }
+    return {h * (m0 - 3.0 * m1 + 2.0 * m2), h * (4.0 * m1 - 4.0 * m2), h * (2.0 * m2 - m1), h * m0};
+}
+
+/// ∫_0^h J(s)·e^{−σt s} ds from J at the step's start, middle and end (emissionWeights), kept
+/// between the smallest and largest of them times ∫ e^{−σt s} ds: where the quadratic
+/// overshoots (J jumping within an optically thick step) the integral stays bounded and of J's sign.
+inline double emissionIntegral(const EmissionWeights& w, double jStart, double jMiddle, double jEnd)
+{
+    const double v = w.start * jStart + w.middle * jMiddle + w.end * jEnd;
+    const double lo = std::min({jStart, jMiddle, jEnd}) * w.total, hi = std::max({jStart, jMiddle, jEnd}) * w.total;
+    return std::clamp(v, lo, hi);
 }
 
 /// The part [@a lo, @a hi] of the march step [@a ta, @a tb] inside the medium's surface, from
@@ -45,13 +80,16 @@ inline bool insidePart(double ta, double sa, double tb, double sb, double& lo, d
     return hi > lo;
 }
 
-/// One march step's part inside the medium's surface: its midpoint (index space), its length
-/// (voxels) and Medium::Sampler::interiorScale there.
+/// One march step's part inside the medium's surface (index space): its ends and midpoint,
+/// its length (voxels), Medium::Sampler::interiorScale at the midpoint, and an upper bound of
+/// the signed distance over it (for interiorScale elsewhere on the step).
 struct InsideStep
 {
-    openvdb::Vec3d midpoint{0.0};
+    openvdb::Vec3d start{0.0}, midpoint{0.0}, end{0.0};
     double length = 0.0;
     double interior = 1.0;
+    double distanceBound = 0.0;
+    bool joined = false; ///< it starts where the previous inside step ended (values there can be reused)
 };
 
 /// The equal steps of @a h voxels along origin + t·direction from t = @a t0, each clipped to the
@@ -70,14 +108,21 @@ public:
     bool next(InsideStep& step)
     {
         const double ta = mT, sa = mDistance;
+        const bool previousReachedEnd = mReachedEnd;
+        mReachedEnd = false;
         mT += mH;
         mDistance = mSampler.signedDistance(mOrigin + mDirection * mT);
         double lo, hi;
         if (!insidePart(ta, sa, mT, mDistance, lo, hi)) return false;
-        step.midpoint = mOrigin + mDirection * (0.5 * (lo + hi));
+        step.start = mOrigin + mDirection * lo;
+        step.end = mOrigin + mDirection * hi;
+        step.midpoint = 0.5 * (step.start + step.end);
         step.length = hi - lo;
-        // The midpoint lies within h/2 of a step end, and signed distances are 1-Lipschitz.
-        step.interior = mSampler.interiorScale(step.midpoint, std::max(sa, mDistance) + 0.5 * mH);
+        step.joined = previousReachedEnd && lo == ta;
+        mReachedEnd = hi == mT;
+        // Every point lies within h/2 of a step end, and signed distances are 1-Lipschitz.
+        step.distanceBound = std::max(sa, mDistance) + 0.5 * mH;
+        step.interior = mSampler.interiorScale(step.midpoint, step.distanceBound);
         return true;
     }
 
@@ -85,6 +130,7 @@ private:
     Medium::Sampler& mSampler;
     openvdb::Vec3d mOrigin, mDirection;
     double mT, mH, mDistance;
+    bool mReachedEnd = false;
 };
 
 /// T(a, b) = exp(−∫ σt ds) on the segment from @a fromIjk to @a toIjk (index space),

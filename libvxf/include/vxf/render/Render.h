@@ -58,7 +58,8 @@ struct RenderMeshes
 ///   J = σs·φ/(4π) per layer (φ = `direct` for the direct layer (or, with
 ///   options.directFromLights, the lights' fluence marched per step), `scatter` for the scatter
 ///   layer, their sum for combined; σs·φ of the grids interpolated as one per-voxel quantity,
-///   as the scatter passes do; each step integrated analytically; with a `surface` level set
+///   as the scatter passes do; σt constant over each step and σs·φ quadratic through its start,
+///   middle and end, integrated exactly (emissionWeights); with a `surface` level set
 ///   the medium ends sharply at it, Medium::Sampler::interiorScale); L_behind is the first
 ///   occluder behind (its surface term) or the background, and the march stops there. Gather
 ///   mode: the average of such marches over a cosine-weighted hemisphere of directions into
