@@ -71,16 +71,16 @@ openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGr
             InsideSteps inside(sampler, x, d, 0.0, hStep);
             InsideStep step;
             openvdb::Vec3d jStart, jEnd; // J at the step's ends
-            const auto source = [&](const openvdb::Vec3d& p, double interior) {
+            const auto sourceAt = [&](const openvdb::Vec3d& p, double interior) {
                 return openvdb::Vec3d(openvdb::tools::BoxSampler::sample(j, p)) * interior;
             };
             for (int i = 0; i < steps; ++i) {
                 // Only the part of each step inside the surface holds medium (sharp boundary).
                 if (!inside.next(step)) continue;
-                const openvdb::Vec3d jMiddle = source(step.midpoint, step.interior);
+                const openvdb::Vec3d jMiddle = sourceAt(step.midpoint, step.interior);
                 if (quadratic) {
-                    jStart = step.joined ? jEnd : source(step.start, sampler.interiorScale(step.start, step.distanceBound));
-                    jEnd = source(step.end, sampler.interiorScale(step.end, step.distanceBound));
+                    jStart = step.joined ? jEnd : sourceAt(step.start, sampler.interiorScale(step.start, step.distanceBound));
+                    jEnd = sourceAt(step.end, sampler.interiorScale(step.end, step.distanceBound));
                 } else {
                     jStart = jEnd = jMiddle;
                 }
