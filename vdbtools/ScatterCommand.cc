@@ -30,7 +30,7 @@ public:
         mApp->add_option("--directions", mOptions.pass.directions, "Directions per voxel (default 64)")->check(CLI::Range(1, 65536));
         mApp->add_option("--step", mOptions.pass.step, "March step in voxels (default 1)")->check(CLI::Range(0.01, 64.0));
         mApp->add_option("--tolerance", mOptions.tolerance,
-               "Stop when the rest of the series, estimated as phi_K r/(1-r), is below this fraction of the sum so far (default 1e-3; 0: never)")
+               "Stop when the rest of the series, estimated as phi_K r/(1-r), is known to within this fraction of the sum (the passes have settled into their slowest mode), and add it (default 1e-3; 0: never)")
             ->check(CLI::Range(0.0, 1.0));
         mApp->add_flag("--extrapolate", mOptions.extrapolateTail,
             "After the last pass add the geometric tail phi_K r/(1-r), r = phi_K/phi_(K-1) per voxel");

@@ -106,7 +106,7 @@ TEST_CASE("coarse passes converge the series of a high albedo to its closed form
     options.finePasses = 2;
     options.coarseFactor = 2;
     const auto report = vxf::scatter(set, vxf::Medium(set, m), options);
-    CHECK(report.passes.size() > 40); // 0.9^k falls below 1e-4 of the sum after ~70 passes
+    CHECK(report.passes.size() > 20); // the pass ratio settles within 1e-4 of the sum after ~40 passes
     CHECK_FALSE(report.passes[1].coarse);
     CHECK(report.passes[2].coarse);
     const float centre = set.get<openvdb::Vec3SGrid>("scatter")->tree().getValue(openvdb::Coord(0)).x();

@@ -7,11 +7,11 @@
 
 namespace {
 
-/// A homogeneous sphere of radius 1 (voxel size 1/16), direct = phi0 everywhere and
+/// A homogeneous sphere of radius 1 (voxel size 1/@a cells), direct = phi0 everywhere and
 /// scatter_source = sigma_s phi0 / 4 pi, as the light stage would write for uniform light.
-vxf::VoxelSet uniformSphere(const vxf::Material& m, double phi0)
+vxf::VoxelSet uniformSphere(const vxf::Material& m, double phi0, int cells = 16)
 {
-    const double dx = 1.0 / 16.0;
+    const double dx = 1.0 / cells;
     vxf::VoxelSet set(openvdb::math::Transform::createLinearTransform(dx));
     auto density = openvdb::FloatGrid::create(0.0f);
     density->setName("density");
@@ -22,9 +22,9 @@ vxf::VoxelSet uniformSphere(const vxf::Material& m, double phi0)
     auto source = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
     source->setName("scatter_source");
     source->setTransform(set.transformPtr());
-    for (int i = -16; i <= 16; ++i)
-        for (int j = -16; j <= 16; ++j)
-            for (int k = -16; k <= 16; ++k) {
+    for (int i = -cells; i <= cells; ++i)
+        for (int j = -cells; j <= cells; ++j)
+            for (int k = -cells; k <= cells; ++k) {
                 const openvdb::Coord c(i, j, k);
                 if (c.asVec3d().length() * dx > 1.0) continue;
                 density->tree().setValueOn(c, 1.0f);
@@ -157,4 +157,34 @@ TEST_CASE("extrapolating the geometric tail reaches the converged sum in few pas
     const float centre = set.get<openvdb::Vec3SGrid>("scatter")->tree().getValue(openvdb::Coord(0)).x();
     CHECK(centre > 7.0f);
     CHECK(centre < 9.0f * 1.02f);
+}
+
+TEST_CASE("a settled pass ratio ends the series early, with its rest added", "[scatter]")
+{
+    // Albedo 0.99, σt R = 10 at dx 1/8: each pass keeps ~95% of the light, so the rest of the
+    // series stays above 1e-3 of the sum for ~150 passes. Once the pass ratio has settled the
+    // rest is φ_K·r/(1−r) to within the tolerance; the series stops there and adds it.
+    const vxf::Material m = vxf::test::albedoMaterial(10.0, 0.99);
+    const auto run = [&](int passes, double tolerance) {
+        vxf::VoxelSet set = uniformSphere(m, 1.0, 8);
+        vxf::ScatterOptions options;
+        options.passes = passes;
+        options.tolerance = tolerance;
+        options.pass.directions = 16;
+        const auto report = vxf::scatter(set, vxf::Medium(set, m), options);
+        return std::make_pair(report, vxf::gridEnergy(*set.get<openvdb::Vec3SGrid>("scatter"))[0]);
+    };
+    const auto [full, converged] = run(300, 0.0); // 0.955^300: 1e-6 left
+    INFO("full: " << full.passes.size() << " passes, ratio " << full.passes.back().ratio << ", energy " << converged);
+    REQUIRE(full.passes.back().ratio < 0.99);
+    const auto [early, energy] = run(300, 1e-3);
+    INFO(early.stopReason);
+    CHECK(early.stopReason.find("known to within") != std::string::npos);
+    CHECK(early.stopReason.find("; added") != std::string::npos);
+    CHECK(early.tailFactor > 5.0); // it stopped with much of the series still to come...
+    CHECK(early.passes.size() < 100);
+    CHECK(energy == Approx(converged).epsilon(2e-3)); // ...and the rest it added is right
+    // The same passes without the rest: far from the sum.
+    const auto [cut, cutEnergy] = run(int(early.passes.size()), 0.0);
+    CHECK(cutEnergy < converged * 0.9);
 }

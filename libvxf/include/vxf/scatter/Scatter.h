@@ -15,8 +15,9 @@ namespace vxf {
 struct ScatterOptions
 {
     int passes = 16;          ///< at most this many passes
-    /// Stop when the estimated rest of the series, φ_K·r/(1−r) with r the last pass's energy
-    /// ratio, is below this fraction of the sum so far (0: never).
+    /// Stop when the rest of the series, φ_K·r/(1−r) with r the last pass's energy ratio (per
+    /// channel), is known to within this fraction of the sum so far, and add it (0: never).
+    /// Near albedo 1 the passes settle into the slowest mode long before the rest is small.
     double tolerance = 1e-3;
     bool keepPasses = false;  ///< keep each pass as `scatter_pass_K`
     int fromPass = 0;         ///< continue from `scatter_pass_K` (0: from `scatter_source`)
@@ -68,8 +69,8 @@ openvdb::Vec3d gridEnergy(const openvdb::Vec3SGrid& grid);
 /// read from the set, so an artist may have edited it). Writes `scatter` = Σ_{k≥1} φ_k and,
 /// when the set has `direct`, `illumination` = direct + scatter; with keepPasses also
 /// `scatter_pass_K`. With fromPass = K the iteration restarts from `scatter_pass_K` (as edited)
-/// and the sum from `scatter_pass_1..K`. Stops after options.passes, or when a pass adds
-/// less than the tolerance, or at once when the medium does not scatter (σs = 0: `scatter`
+/// and the sum from `scatter_pass_1..K`. Stops after options.passes, or when the rest
+/// of the series is known to within the tolerance (and adds it), or at once when the medium does not scatter (σs = 0: `scatter`
 /// is 0). Topology: that of `scatter_source`, with the deep interior made tiles when options.band > 0
 /// (`scatter_source` itself is left as it was). With options.finePasses, passes after those
 /// run on the coarse lattice (their `scatter_pass_K` interpolated back to the fine topology)
