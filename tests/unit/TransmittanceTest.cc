@@ -231,6 +231,18 @@ TEST_CASE("a step's emission integral is exact for quadratic emission", "[light]
             INFO("sigma_t h = " << k);
             CHECK(w.start * J(0.0) + w.middle * J(0.5 * h) + w.end * J(h) == Approx(numeric(J, sigmaT, h)).epsilon(1e-8));
             CHECK(w.total == Approx(-std::expm1(-k) / sigmaT).epsilon(1e-12));
+            CHECK(w.transmittance == Approx(std::exp(-k)).epsilon(1e-15));
+        }
+    }
+    SECTION("per channel: each channel's own weights")
+    {
+        const auto w = vxf::emissionWeights(openvdb::Vec3d(2.0, 2.0, 0.3), 0.5);
+        for (int c = 0; c < 3; ++c) {
+            const vxf::EmissionWeights one = vxf::emissionWeights(c < 2 ? 2.0 : 0.3, 0.5);
+            CHECK(w[c].start == one.start);
+            CHECK(w[c].middle == one.middle);
+            CHECK(w[c].end == one.end);
+            CHECK(w[c].transmittance == one.transmittance);
         }
     }
     SECTION("light falling off over a mean free path: the midpoint value alone is 7% low")

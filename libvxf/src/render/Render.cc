@@ -78,15 +78,14 @@ public:
             if (sigmaT[0] <= 0.0 && sigmaT[1] <= 0.0 && sigmaT[2] <= 0.0) continue;
             g.touched = true;
             const double hWorld = step.length * mMedium.voxelSize();
+            // J = σs φ / 4π; ΔL = T·∫ J(s) e^{−σt s} ds (J quadratic along the step); T ·= e^{−σt h}.
+            const std::array<EmissionWeights, 3> w = emissionWeights(sigmaT, hWorld);
             for (int c = 0; c < 3; ++c) {
-                // J = σs φ / 4π; ΔL = T·∫ J(s) e^{−σt s} ds (J quadratic along the step); T ·= e^{−σt h}.
-                const EmissionWeights w = emissionWeights(sigmaT[c], hWorld);
                 const double weight = g.transmittance[c] / (4.0 * M_PI);
-                g.direct[c] += weight * emissionIntegral(w, eStart.direct[c], eMiddle.direct[c], eEnd.direct[c]);
-                g.scatter[c] += weight * emissionIntegral(w, eStart.scatter[c], eMiddle.scatter[c], eEnd.scatter[c]);
-                const double od = std::max(0.0, sigmaT[c]) * hWorld;
-                g.transmittance[c] *= std::exp(-od);
-                tau[c] += od;
+                g.direct[c] += weight * emissionIntegral(w[c], eStart.direct[c], eMiddle.direct[c], eEnd.direct[c]);
+                g.scatter[c] += weight * emissionIntegral(w[c], eStart.scatter[c], eMiddle.scatter[c], eEnd.scatter[c]);
+                g.transmittance[c] *= w[c].transmittance;
+                tau[c] += std::max(0.0, sigmaT[c]) * hWorld;
             }
             if (std::min({tau[0], tau[1], tau[2]}) > mTauCutoff) {
                 g.transmittance = openvdb::Vec3d(0.0);

@@ -87,11 +87,11 @@ openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGr
                 const double hWorld = step.length * dx;
                 const openvdb::Vec3d sigmaT = sampler.sigmaT(step.midpoint) * step.interior;
                 // ΔL = T·∫ J(s) e^{−σt s} ds (J quadratic along the step); T ·= e^{−σt h}.
+                const std::array<EmissionWeights, 3> w = emissionWeights(sigmaT, hWorld);
                 for (int ch = 0; ch < 3; ++ch) {
-                    const double od = std::max(0.0, sigmaT[ch]) * hWorld;
-                    radiance[ch] += T[ch] * emissionIntegral(emissionWeights(sigmaT[ch], hWorld), jStart[ch], jMiddle[ch], jEnd[ch]);
-                    T[ch] *= std::exp(-od);
-                    tau[ch] += od;
+                    radiance[ch] += T[ch] * emissionIntegral(w[ch], jStart[ch], jMiddle[ch], jEnd[ch]);
+                    T[ch] *= w[ch].transmittance;
+                    tau[ch] += std::max(0.0, sigmaT[ch]) * hWorld;
                 }
                 if (std::min({tau[0], tau[1], tau[2]}) > tauCutoff) break;
             }
