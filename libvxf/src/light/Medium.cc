@@ -80,15 +80,18 @@ Medium::Medium(const VoxelSet& set, const Material& material)
         }
     }
     mBounds = mDensity->evalActiveVoxelBoundingBox();
+    // Trilinear lookups reach a voxel beyond the active voxels (marchBounds).
+    mDensityDense = DenseCopy<openvdb::FloatGrid>::create(*mDensity, 2, kDenseCopyBytes);
+    if (mSurface) mSurfaceDense = DenseCopy<openvdb::FloatGrid>::create(*mSurface, 2, kDenseCopyBytes);
 }
 
 Medium::Sampler::Sampler(const Medium& medium)
     : mMedium(medium)
-    , mDensity(medium.mDensity->getConstAccessor())
+    , mDensity(*medium.mDensity, medium.mDensityDense.get())
 {
     if (medium.mSigmaA) mSigmaA.emplace(medium.mSigmaA->getConstAccessor());
     if (medium.mSigmaS) mSigmaS.emplace(medium.mSigmaS->getConstAccessor());
-    if (medium.mSurface) mSurface.emplace(medium.mSurface->getConstAccessor());
+    if (medium.mSurface) mSurface.emplace(*medium.mSurface, medium.mSurfaceDense.get());
 }
 
 double Medium::Sampler::signedDistance(const openvdb::Vec3d& ijk)

@@ -57,7 +57,7 @@ openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGr
     const bool quadratic = medium.surface() != nullptr;
 
     // φ(x) at one index-space point.
-    const auto gather = [&](Medium::Sampler& sampler, openvdb::Vec3SGrid::ConstAccessor& j, const openvdb::Coord& c) {
+    const auto gather = [&](Medium::Sampler& sampler, const GridLookup<openvdb::Vec3SGrid>& j, const openvdb::Coord& c) {
         const openvdb::Vec3d x = c.asVec3d();
         const openvdb::Mat3d rotation = options.rotatePerVoxel ? voxelRotation(c) : openvdb::Mat3d::identity();
         openvdb::Vec3d phi(0.0);
@@ -104,6 +104,7 @@ openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGr
         return openvdb::Vec3f(phi);
     };
 
+    const auto sourceDense = DenseCopy<openvdb::Vec3SGrid>::create(source, 2, kDenseCopyBytes);
     openvdb::tree::LeafManager<openvdb::Vec3STree> leaves(fluence->tree());
     std::vector<openvdb::CoordBBox> tiles;
     for (auto it = fluence->tree().cbeginValueOn(); it; ++it) {
@@ -119,7 +120,7 @@ openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGr
     std::atomic<bool> cancelled{false};
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, total, 1), [&](const tbb::blocked_range<std::size_t>& range) {
         Medium::Sampler sampler(medium);
-        auto j = source.getConstAccessor();
+        const GridLookup<openvdb::Vec3SGrid> j(source, sourceDense.get());
         for (std::size_t item = range.begin(); item != range.end() && !cancelled; ++item) {
             if (item < leafCount) {
                 for (auto it = leaves.leaf(item).beginValueOn(); it; ++it) it.setValue(gather(sampler, j, it.getCoord()));

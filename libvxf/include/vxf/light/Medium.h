@@ -1,6 +1,7 @@
 // vxf — the participating medium of a voxel set: extinction and scattering per voxel.
 #pragma once
 
+#include <vxf/core/GridLookup.h>
 #include <vxf/core/VoxelSet.h>
 #include <vxf/pipeline/Scene.h>
 
@@ -59,9 +60,9 @@ public:
 
     private:
         const Medium& mMedium;
-        openvdb::FloatGrid::ConstAccessor mDensity;
+        GridLookup<openvdb::FloatGrid> mDensity;
         std::optional<openvdb::Vec3SGrid::ConstAccessor> mSigmaA, mSigmaS;
-        std::optional<openvdb::FloatGrid::ConstAccessor> mSurface;
+        std::optional<GridLookup<openvdb::FloatGrid>> mSurface;
     };
 
     /// interiorScale's floor on the volume fraction (where an edit put density outside the surface).
@@ -71,6 +72,8 @@ private:
     openvdb::FloatGrid::ConstPtr mDensity;
     openvdb::Vec3SGrid::ConstPtr mSigmaA, mSigmaS;
     openvdb::FloatGrid::ConstPtr mSurface;
+    /// Dense copies of density and surface for the marches' lookups (null: too large, read the trees).
+    std::shared_ptr<const DenseCopy<openvdb::FloatGrid>> mDensityDense, mSurfaceDense;
     Material mMaterial;
     openvdb::CoordBBox mBounds;
 };
