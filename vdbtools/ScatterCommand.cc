@@ -40,7 +40,7 @@ public:
             ->check(CLI::NonNegativeNumber);
         mApp->add_option("--fine-passes", mOptions.finePasses,
                "Run the passes after the first N on a coarser lattice: high orders are smooth; their sum returns by "
-               "a fine gather and a second, correcting coarse cycle (3 fine gathers) (default 0: all passes at full "
+               "a fine gather and correcting coarse cycles (two fine gathers each) (default 0: all passes at full "
                "resolution)")
             ->check(CLI::Range(0, 10000));
         mApp->add_option("--coarse-factor", mOptions.coarseFactor, "How much coarser that lattice is: 2, 4 or 8 (default 4)")

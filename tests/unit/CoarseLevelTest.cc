@@ -116,7 +116,7 @@ TEST_CASE("coarse passes converge the series of a high albedo to its closed form
     CHECK_THROWS_WITH(vxf::scatter(set, vxf::Medium(set, m), options), "coarse factor must be 2, 4 or 8, got 3");
 }
 
-TEST_CASE("the coarse cycle's correction brings coarse passes to the plain iteration's sum", "[coarse][scatter]")
+TEST_CASE("the coarse cycles' correction brings coarse passes to the plain iteration's sum", "[coarse][scatter]")
 {
     // A small thick ball (radius 1, dx 1/8, σt = 10, albedo 0.99), lit uniformly: light leaks
     // out through the surface, and a 4x coarser lattice (5³ voxels) leaks a different amount;
@@ -144,6 +144,7 @@ TEST_CASE("the coarse cycle's correction brings coarse passes to the plain itera
     const double uncorrected = run(2, false) / plain - 1.0;
     const double corrected = run(2, true) / plain - 1.0;
     INFO("uncorrected " << uncorrected << ", corrected " << corrected);
-    CHECK(std::abs(corrected) < 0.01);
-    CHECK(std::abs(uncorrected) > 3.0 * std::abs(corrected));
+    // The cycles go on until what is left is below 0.3% of the sum.
+    CHECK(std::abs(corrected) < 0.004);
+    CHECK(std::abs(uncorrected) > 6.0 * std::abs(corrected));
 }

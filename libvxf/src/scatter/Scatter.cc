@@ -46,6 +46,9 @@ openvdb::Vec3d gridEnergy(const openvdb::Vec3SGrid& grid)
 
 namespace {
 
+/// At most this many correction cycles after coarse passes (each costs two fine gathers).
+constexpr int kMaxCorrectionCycles = 6;
+
 double maxChannel(const openvdb::Vec3d& v) { return std::max({v[0], v[1], v[2]}); }
 
 /// J = σs·φ/(4π) on φ's topology.
@@ -283,7 +286,7 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
             // The coarse lattice also leaks a little more light (its surface voxels are block
             // averages), and near albedo 1 the series' 1/(1−r) magnifies a small change of r.
             // What g misses is δ = Σ_{k≥0} (KS)^k ρ with ρ = K·S(g − P ê) (δ = KSδ + KS(g − Pê),
-            // from E = KSφ_N + KSE for the exact E): a second cycle solves for it the same way.
+            // from E = KSφ_N + KSE for the exact E): correction cycles solve for it the same way.
             const auto start = std::chrono::steady_clock::now();
             const int f = options.coarseFactor;
             const auto coarseSeries = [&](const openvdb::Vec3SGrid& fineJ, int& count) {
@@ -322,26 +325,50 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
             auto source = sourceFromFluence(medium, *coarseTail);
             openvdb::tools::compSum(*source, *fineSource); // fineSource is not needed after
             auto g = scatterPass(medium, *source, options.pass, interrupter);
-            int correctionPasses = 0;
+            int correctionPasses = 0, fineGathers = 1, cycles = 0;
             auto difference = options.coarseCorrection ? g->deepCopy() : nullptr; // to be g − P ê
             openvdb::tools::compSum(*sum, *g);
-            if (options.coarseCorrection) {
+            // Each cycle solves for what the one before missed, the same way: δ_n = ρ_n + g_{n+1}
+            // with ρ_n = K·S(g_n − P ê_n) and g_{n+1} = K(S ρ_n + S·P ê_{n+1}), ê_{n+1} the coarse
+            // series of S ρ_n. What is left shrinks by a factor q = |δ_n|/|δ_{n−1}| of 0.1 to 0.6
+            // per cycle (thick bunny, albedo 0.99: the cycles add 7.6%, 3.6%, 2.2%, 0.56%, 0.04%
+            // of the sum), so they go on until the rest, |δ_n|·q/(1−q), is below the tolerance of
+            // the sum, but at least 0.3% (the coarse lattice's other errors are larger than that);
+            // one cycle alone left that bunny 6% dark.
+            const double cycleTolerance = std::max(options.tolerance, 3e-3);
+            double previousSize = 0.0;
+            std::string added; // each cycle's δ as a share of the sum
+            while (options.coarseCorrection && cycles < kMaxCorrectionCycles) {
+                ++cycles;
                 openvdb::tools::foreach(coarseTail->beginValueOn(), [](const openvdb::Vec3STree::ValueOnIter& it) { it.setValue(-*it); });
                 openvdb::tools::compSum(*difference, *coarseTail);
                 auto rho = scatterPass(medium, *sourceFromFluence(medium, *difference), options.pass, interrupter);
                 auto rhoSource = sourceFromFluence(medium, *rho);
-                auto correction = prolong(*coarseSeries(*rhoSource, correctionPasses), *sum);
-                source = sourceFromFluence(medium, *correction);
+                int passes = 0;
+                coarseTail = prolong(*coarseSeries(*rhoSource, passes), *sum);
+                correctionPasses += passes;
+                source = sourceFromFluence(medium, *coarseTail);
                 openvdb::tools::compSum(*source, *rhoSource);
-                openvdb::tools::compSum(*rho, *scatterPass(medium, *source, options.pass, interrupter)); // δ
+                g = scatterPass(medium, *source, options.pass, interrupter);
+                fineGathers += 2;
+                difference = g->deepCopy();
+                openvdb::tools::compSum(*rho, *g); // δ
+                const openvdb::Vec3d e = gridEnergy(*rho);
+                const double size = std::max({std::abs(e[0]), std::abs(e[1]), std::abs(e[2])});
                 addCorrection(*sum, *rho);
+                const double total = maxChannel(gridEnergy(*sum));
+                added += fmt::format("{}{:.2g}%", added.empty() ? "" : ", ", 100.0 * size / std::max(total, 1e-300));
+                const double q = previousSize > 0.0 ? size / previousSize : 1.0;
+                previousSize = size;
+                if (q < 1.0 && size * q / (1.0 - q) < cycleTolerance * total) break;
+                if (q >= 1.0 && cycles > 1) break; // not shrinking: more cycles would not help
             }
             report.correctionPasses = correctionPasses;
             report.fineGatherSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
             report.stopReason += fmt::format("; passes after {} on a {}x coarser lattice, their sum gathered on the fine one", options.finePasses, options.coarseFactor);
             if (options.coarseCorrection) {
-                report.stopReason += fmt::format(", corrected by a second cycle ({} coarse passes, 3 fine gathers in all, {:.2f} s)",
-                    correctionPasses, report.fineGatherSeconds);
+                report.stopReason += fmt::format(", corrected by {} more cycle{} (adding {} of the sum; {} coarse passes, {} fine gathers in all, {:.2f} s)",
+                    cycles, cycles == 1 ? "" : "s", added, correctionPasses, fineGathers, report.fineGatherSeconds);
             }
         }
     }

@@ -32,7 +32,7 @@ struct ScatterOptions
     /// 0: every pass at full resolution.
     int finePasses = 0;
     int coarseFactor = 4; ///< 2, 4 or 8
-    /// After the coarse passes, the second cycle that corrects their bias (see scatter()).
+    /// After the coarse passes, the cycles that correct their bias (see scatter()).
     /// Off only to measure what it buys.
     bool coarseCorrection = true;
     /// Adaptive narrow band (world units): full resolution within this distance of the
@@ -56,7 +56,7 @@ struct ScatterReport
     double tailFactor = 0.0; ///< r/(1−r) of the global energy ratio (0: no extrapolation); per voxel it varies
     AdaptiveBandReport band;  ///< the resolution the passes ran at
     double fineGatherSeconds = 0.0; ///< after coarse passes: the fine gathers and the correction cycle
-    int correctionPasses = 0;       ///< coarse passes of the correction cycle
+    int correctionPasses = 0;       ///< coarse passes of the correction cycles
 };
 
 /// Scatter options from a scene's settings (keepPasses when "scatter_passes" is an output).
@@ -76,8 +76,9 @@ openvdb::Vec3d gridEnergy(const openvdb::Vec3SGrid& grid);
 /// run on the coarse lattice (their `scatter_pass_K` interpolated back to the fine topology)
 /// and their sum returns to the fine lattice as a source: `scatter` adds one fine gather of
 /// J_N + σs·(Σ coarse φ)/4π, which resolves the light near the surface at full resolution,
-/// and a second coarse cycle solves for what the coarse lattice's slightly different
-/// operator left out (two more fine gathers); see Scatter.cc.
+/// and correction cycles (two fine gathers each, until what is left is below the tolerance,
+/// at least 0.3%, of the sum) solve for what the coarse lattice's slightly different
+/// operator left out; see Scatter.cc.
 /// Throws vxf::Error naming a missing grid, vxf::UsageError for a bad coarseFactor.
 ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions& options = {},
     Interrupter* interrupter = nullptr);
