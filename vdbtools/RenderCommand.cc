@@ -25,7 +25,7 @@ public:
             "Render a lit voxel set with the scene's camera: rays hit the scene's meshes (Embree; or the `surface` level "
             "set) and gather the volume (view mode: along the camera ray; gather mode: the thesis's final gather), plus "
             "the surface term (Lambert + specular) of objects with a reflecting surface. OpenEXR layers: R G B A, "
-            "surface, direct, scatter, depth, normal; optional sRGB PNG preview.");
+            "surface, direct, scatter, depth, normal, samples (camera rays per pixel); optional sRGB PNG preview.");
         mApp->add_option("scene", mScene, "Scene file (camera, render settings)")->required();
         mApp->add_option("--volume", mVolume, "Voxel set from vxf scatter (or vxf light)")->required();
         mApp->add_option("-o,--output", mOutput, "Output .exr")->required();
@@ -34,6 +34,13 @@ public:
         mApp->add_option("--width", mWidth, "Override the scene's width")->check(CLI::Range(1, 32768));
         mApp->add_option("--height", mHeight, "Override the scene's height")->check(CLI::Range(1, 32768));
         mApp->add_option("--samples", mSamples, "Override the samples per pixel")->check(CLI::Range(1, 65536));
+        mApp->add_option("--max-samples", mMaxSamples,
+               "Adaptive sampling: pixels whose first samples disagree (silhouettes, object edges, noise above "
+               "--noise-level) get more, up to this many in all (overrides the scene's max_samples)")
+            ->check(CLI::Range(1, 65536));
+        mApp->add_option("--noise-level", mNoiseLevel,
+               "Adaptive sampling's threshold: relative standard error of a pixel's mean luminance (default 0.02)")
+            ->check(CLI::PositiveNumber);
         mApp->add_option("--mode", mMode, "view or gather (overrides the scene)")->check(CLI::IsMember({"view", "gather"}));
         mApp->add_flag("--level-set", mLevelSet, "Hit the volume's `surface` level set instead of the scene's meshes");
         mApp->add_flag("--no-surface", [this](std::int64_t) { mNoSurface = true; }, "Leave out the surface term");
@@ -60,6 +67,8 @@ public:
         if (mWidth) options.width = mWidth;
         if (mHeight) options.height = mHeight;
         if (mSamples) options.samples = mSamples;
+        if (mMaxSamples) options.maxSamples = mMaxSamples;
+        if (mNoiseLevel > 0.0) options.noiseLevel = mNoiseLevel;
         if (!mMode.empty()) options.gather = mMode == "gather";
         if (mNoSurface) options.surface = false;
         if (mDirectFromLights) options.directFromLights = true;
@@ -69,15 +78,18 @@ public:
         const RenderedImage image = render(set, medium, scene, options, {&visible, &occluders}, &progress);
         writeExr(mOutput, image, mHalf);
         if (!mPng.empty()) writePng(mPng, image, mExposure);
-        std::cout << fmt::format("rendered {} ({}x{}, {} samples per pixel, {} mode) -> {}{} in {:.3f} s\n", mVolume,
-            options.width, options.height, options.samples, options.gather ? "gather" : "view", mOutput,
+        const std::string adaptive = image.refinedPixels == 0 ? std::string()
+            : fmt::format(", {} of them ({:.1f}%) refined to {}", image.refinedPixels,
+                  100.0 * double(image.refinedPixels) / (double(options.width) * options.height), options.maxSamples);
+        std::cout << fmt::format("rendered {} ({}x{}, {} samples per pixel{}, {} mode) -> {}{} in {:.3f} s\n", mVolume,
+            options.width, options.height, options.samples, adaptive, options.gather ? "gather" : "view", mOutput,
             mPng.empty() ? "" : " + " + mPng, secondsSince(start));
     }
 
 private:
     std::string mScene, mVolume, mOutput, mPng, mMode;
-    double mExposure = 0.0;
-    int mWidth = 0, mHeight = 0, mSamples = 0;
+    double mExposure = 0.0, mNoiseLevel = 0.0;
+    int mWidth = 0, mHeight = 0, mSamples = 0, mMaxSamples = 0;
     bool mHalf = false, mLevelSet = false, mNoSurface = false, mDirectFromLights = false;
 };
 

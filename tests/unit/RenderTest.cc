@@ -122,7 +122,7 @@ TEST_CASE("gather mode and image files", "[render][io]")
     vxf::writePng(dir.path("a.png"), image);
     Imf::InputFile exr(dir.path("a.exr").c_str());
     const Imf::ChannelList& channels = exr.header().channels();
-    for (const char* name : {"R", "G", "B", "A", "direct.R", "scatter.B", "depth.Z", "normal.X"}) {
+    for (const char* name : {"R", "G", "B", "A", "direct.R", "scatter.B", "depth.Z", "normal.X", "samples.count"}) {
         INFO(name);
         CHECK(channels.findChannel(name) != nullptr);
     }
@@ -234,4 +234,42 @@ TEST_CASE("direct from the lights: a thick sphere lit along the view gives sigma
     scene.lights = {sky};
     const vxf::RenderedImage lit = vxf::render(set, thinMedium, scene, options);
     CHECK(lit.direct[centre].x() == Approx(0.004 * 1.5 * 2.0).epsilon(0.02));
+}
+
+TEST_CASE("adaptive sampling: more camera rays on the silhouette only, the mean unbiased", "[render]")
+{
+    vxf::Material m;
+    m.sigmaA = openvdb::Vec3d(0.1);
+    m.sigmaS = openvdb::Vec3d(0.4);
+    const vxf::VoxelSet set = litSphere(1.0);
+    const vxf::Medium medium(set, m);
+    vxf::RenderOptions options;
+    options.width = options.height = 31;
+    options.background = openvdb::Vec3d(1.0);
+    const auto renderWith = [&](int samples, int maxSamples) {
+        options.samples = samples;
+        options.maxSamples = maxSamples;
+        return vxf::render(set, medium, frontView(), options);
+    };
+    const vxf::RenderedImage plain = renderWith(4, 0), adaptive = renderWith(4, 64), truth = renderWith(1024, 0);
+    CHECK(plain.refinedPixels == 0);
+    REQUIRE(adaptive.refinedPixels > 0);
+    CHECK(adaptive.refinedPixels < 31 * 31 / 3); // the interior and the corners keep 4 rays
+
+    double plainError = 0.0, adaptiveError = 0.0, coverage = 0.0;
+    for (std::size_t p = 0; p < truth.alpha.size(); ++p) {
+        const bool edge = truth.alpha[p] > 0.0f && truth.alpha[p] < 1.0f;
+        INFO("pixel " << p << " alpha " << truth.alpha[p]);
+        if (edge && adaptive.alpha[p] > 0.0f && adaptive.alpha[p] < 1.0f) CHECK(adaptive.samples[p] == 64.0f);
+        if (!edge) CHECK(adaptive.samples[p] >= 4.0f);
+        plainError += std::pow(plain.combined[p].x() - truth.combined[p].x(), 2);
+        adaptiveError += std::pow(adaptive.combined[p].x() - truth.combined[p].x(), 2);
+        coverage += adaptive.alpha[p];
+    }
+    CHECK(adaptive.samples[15 * 31 + 15] == 4.0f);
+    CHECK(adaptive.samples[0] == 4.0f);
+    // Silhouette pixels are where 4 rays err; 64 there take most of it away.
+    CHECK(std::sqrt(adaptiveError) < 0.5 * std::sqrt(plainError));
+    // The unit disc covers π of the 3 x 3 picture: the rays stay uniform over each pixel.
+    CHECK(coverage / (31.0 * 31.0) == Approx(M_PI / 9.0).epsilon(0.01));
 }

@@ -44,6 +44,7 @@ void writeExr(const std::string& path, const RenderedImage& image, bool half)
     addVec(image.scatter, "scatter.", "RGB");
     addVec(image.normal, "normal.", "XYZ");
     addScalar(image.depth, "depth.Z");
+    if (image.samples.size() == image.depth.size()) addScalar(image.samples, "samples.count");
     writeAtomically(path, [&](const std::string& tmp) {
         try {
             Imf::OutputFile file(tmp.c_str(), header);

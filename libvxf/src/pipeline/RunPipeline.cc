@@ -165,6 +165,7 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
     const std::string stem = fs::path(scene.path).stem().string().empty() ? "scene" : fs::path(scene.path).stem().string();
     report.image = (out / (stem + ".exr")).string();
     report.preview = (out / (stem + ".png")).string();
+    std::string why = "images are always rendered from the (cached) volume";
     const double seconds = timed([&] {
         const VoxelSet volume = readVoxelSet(volumeFile.string());
         const Medium medium(volume, material);
@@ -174,8 +175,12 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
         const RenderedImage image = render(volume, medium, scene, options, {&visible, &occluders}, interrupter);
         writeExr(report.image, image);
         writePng(report.preview, image);
+        if (image.refinedPixels > 0) {
+            why += fmt::format("; {:.1f}% of the pixels refined to {} samples",
+                100.0 * double(image.refinedPixels) / (double(options.width) * options.height), options.maxSamples);
+        }
     });
-    record("render", "ran", "images are always rendered from the (cached) volume", report.image, seconds);
+    record("render", "ran", why, report.image, seconds);
     return report;
 }
 

@@ -225,6 +225,8 @@ Scene parseScene(const std::string& text, const std::string& path)
         s.width = v.value("width", s.width);
         s.height = v.value("height", s.height);
         s.samples = v.value("samples", s.samples);
+        s.maxSamples = v.value("max_samples", s.maxSamples);
+        s.noiseLevel = v.value("noise_level", s.noiseLevel);
         s.gather = v.value("mode", std::string("view")) == "gather";
         s.gatherDirections = v.value("gather_directions", s.gatherDirections);
         s.directFromLights = v.value("direct", std::string("grid")) == "lights";

@@ -174,6 +174,8 @@ RenderOptions renderOptionsFrom(const SceneSettings& s)
     o.width = s.width;
     o.height = s.height;
     o.samples = s.samples;
+    o.maxSamples = s.maxSamples;
+    o.noiseLevel = s.noiseLevel;
     o.gather = s.gather;
     o.gatherDirections = s.gatherDirections;
     o.background = s.background;
@@ -184,6 +186,54 @@ RenderOptions renderOptionsFrom(const SceneSettings& s)
 }
 
 namespace {
+
+/// What one camera ray brings back.
+struct CameraSample
+{
+    openvdb::Vec3d combined{0.0}, surface{0.0}, direct{0.0}, scatter{0.0}, normal{0.0};
+    double alpha = 0.0, depth = 0.0;
+    int object = -1; ///< what it hit first (an index in Scene::objects; 0 for the level set), -1: nothing
+};
+
+/// A pixel's camera rays so far, and whether they disagree enough to call for more.
+struct PixelSum
+{
+    openvdb::Vec3d combined{0.0}, surface{0.0}, direct{0.0}, scatter{0.0}, normal{0.0};
+    double alpha = 0.0, depth = 0.0;
+    double luminance = 0.0, luminanceSquared = 0.0;
+    int count = 0, firstObject = -2;
+    bool mixed = false; ///< the rays met different objects, or some met one and some none
+
+    void add(const CameraSample& c)
+    {
+        combined += c.combined;
+        surface += c.surface;
+        direct += c.direct;
+        scatter += c.scatter;
+        normal += c.normal;
+        alpha += c.alpha;
+        depth += c.depth;
+        const double y = 0.2126 * c.combined[0] + 0.7152 * c.combined[1] + 0.0722 * c.combined[2];
+        if (std::isfinite(y)) {
+            luminance += y;
+            luminanceSquared += y * y;
+        }
+        if (count == 0) firstObject = c.object;
+        mixed = mixed || c.object != firstObject;
+        ++count;
+    }
+
+    /// Silhouettes and object edges, or a standard error of the mean luminance above
+    /// @a noiseLevel of the mean (needs two rays or more).
+    bool disagrees(double noiseLevel) const
+    {
+        if (mixed) return true;
+        if (count < 2) return false;
+        const double mean = luminance / count;
+        const double variance = std::max(0.0, (luminanceSquared - count * mean * mean) / (count - 1));
+        return std::sqrt(variance / count) > noiseLevel * std::abs(mean);
+    }
+};
 
 /// The surface term at world point @a x with unit normal @a n facing the viewer direction @a v:
 /// Σ_samples φ_s·T·V·cosθ·(kd/π + ks·(e+8)/(8π)·(n·h)^e).
@@ -283,6 +333,7 @@ RenderedImage render(const VoxelSet& set, const Medium& medium, const Scene& sce
     image.normal.assign(n, openvdb::Vec3f(0.0f));
     image.alpha.assign(n, 0.0f);
     image.depth.assign(n, 0.0f);
+    image.samples.assign(n, 0.0f);
 
     // Camera frame.
     const openvdb::Vec3d forward = (camera.lookAt - camera.position).unit();
@@ -292,15 +343,18 @@ RenderedImage render(const VoxelSet& set, const Medium& medium, const Scene& sce
     const double tanHalf = std::tan(0.5 * camera.fovDegrees * M_PI / 180.0);
     const int side = std::max(1, int(std::lround(std::sqrt(double(options.samples)))));
     const int spp = side * side;
+    const int maxSpp = std::max(spp, options.maxSamples);
     const auto gatherDirs = std::max(1, options.gatherDirections);
     const double eps = 1e-4 * medium.voxelSize();
 
     std::optional<openvdb::tools::LevelSetRayIntersector<openvdb::FloatGrid>> prototype;
     if (surface) prototype.emplace(*surface);
     std::atomic<int> rowsDone{0};
+    std::atomic<std::size_t> refined{0};
     std::atomic<bool> cancelled{false};
     tbb::parallel_for(tbb::blocked_range<int>(0, options.height), [&](const tbb::blocked_range<int>& rows) {
         auto intersector = prototype;
+        std::size_t refinedHere = 0;
         Marcher marcher(set, medium, options, options.directFromLights ? &volumeLights : nullptr, meshes.occluders);
         SurfaceShader shader(medium, lights, meshes.occluders);
         const auto surfaceTerm = [&](const SceneObject* object, const openvdb::Vec3d& x, const openvdb::Vec3d& normal,
@@ -308,128 +362,144 @@ RenderedImage render(const VoxelSet& set, const Medium& medium, const Scene& sce
             if (lights.empty() || !object || !object->surface.reflects()) return openvdb::Vec3d(0.0);
             return shader.shade(object->surface, x, normal, -dir, key);
         };
+        // One camera ray through image point (x + u, y + v).
+        const auto trace = [&](int x, int y, double u, double v, std::uint64_t key) {
+            CameraSample c;
+            const double sx = (2.0 * (x + u) / options.width - 1.0), sy = (1.0 - 2.0 * (y + v) / options.height);
+            openvdb::Vec3d origin = camera.position, dir = forward;
+            if (camera.orthographic) {
+                origin += right * (0.5 * camera.width * sx) + up * (0.5 * camera.width / aspect * sy);
+            } else {
+                dir = (forward + right * (sx * tanHalf * aspect) + up * (sy * tanHalf)).unit();
+            }
+
+            // First surface.
+            openvdb::Vec3d hit, normal;
+            double distance = 0.0;
+            const SceneObject* object = nullptr;
+            if (useMeshes) {
+                const auto h = meshes.visible->intersect(origin, dir);
+                if (!h) {
+                    c.combined = options.background;
+                    return c;
+                }
+                distance = h->distance;
+                hit = origin + dir * distance;
+                normal = h->normal;
+                c.object = int(h->id);
+                object = &scene.objects[std::size_t(h->id)];
+            } else {
+                openvdb::math::Ray<double> ray(origin, dir);
+                if (!intersector->intersectsWS(ray, hit, normal, distance)) {
+                    c.combined = options.background;
+                    return c;
+                }
+                normal.normalize();
+                if (normal.dot(dir) > 0.0) normal = -normal;
+                c.object = 0;
+                object = levelSetObject;
+            }
+            c.alpha = 1.0;
+            c.depth = distance;
+            c.normal = normal;
+            c.surface = surfaceTerm(object, hit, normal, dir, key);
+            c.combined = c.surface;
+            if (object && object->role == SceneObject::Role::Occluder) return c; // opaque
+
+            if (!options.gather) {
+                // View mode: march on along the camera ray, up to the first occluder behind.
+                double behindDistance = std::numeric_limits<double>::infinity();
+                openvdb::Vec3d behind = options.background;
+                if (useMeshes) {
+                    double t = eps;
+                    while (auto h = meshes.visible->intersect(hit, dir, t)) {
+                        const SceneObject& o = scene.objects[std::size_t(h->id)];
+                        if (o.role == SceneObject::Role::Occluder) {
+                            behindDistance = h->distance;
+                            behind = surfaceTerm(&o, hit + dir * h->distance, h->normal, dir, key);
+                            break;
+                        }
+                        t = h->distance + eps; // the medium's own surfaces: the march covers them
+                    }
+                }
+                // From half a voxel before the hit: without a `surface` level set the
+                // voxels the surface cuts hold medium on its outer side too (their
+                // volume fraction); with one, the march skips what lies outside it.
+                const double back = std::min(0.5 * medium.voxelSize(), distance);
+                const Gathered g = marcher.march(hit - dir * back, dir, behindDistance + back, key);
+                c.direct = g.direct;
+                c.scatter = g.scatter;
+                for (int k = 0; k < 3; ++k) c.combined[k] += g.direct[k] + g.scatter[k] + g.transmittance[k] * behind[k];
+                return c;
+            }
+            // Gather mode: cosine-weighted directions about the inward normal.
+            openvdb::Vec3d t1, t2;
+            const openvdb::Vec3d inward = -normal;
+            const openvdb::Vec3d helper = std::abs(inward.x()) < 0.9 ? openvdb::Vec3d(1, 0, 0) : openvdb::Vec3d(0, 1, 0);
+            t1 = inward.cross(helper).unit();
+            t2 = inward.cross(t1);
+            int kept = 0;
+            for (int k = 0; k < gatherDirs; ++k) {
+                const double a = (k + unitHash(key, std::uint64_t(k), 2)) / gatherDirs;
+                const double phi = 2.0 * M_PI * unitHash(key, std::uint64_t(k), 3);
+                const double r = std::sqrt(a);
+                const openvdb::Vec3d w = (t1 * (r * std::cos(phi)) + t2 * (r * std::sin(phi)) + inward * std::sqrt(std::max(0.0, 1.0 - a))).unit();
+                const Gathered g = marcher.march(hit, w, std::numeric_limits<double>::infinity(), mixBits(key + std::uint64_t(k) * 7919u));
+                if (!g.touched) continue; // left the volume: dropped, the rest re-weighted
+                c.direct += g.direct;
+                c.scatter += g.scatter;
+                ++kept;
+            }
+            if (kept > 0) {
+                c.direct /= kept;
+                c.scatter /= kept;
+            }
+            c.combined += c.direct + c.scatter;
+            return c;
+        };
         for (int y = rows.begin(); y != rows.end() && !cancelled; ++y) {
             for (int x = 0; x < options.width; ++x) {
                 const std::size_t pixel = std::size_t(y) * std::size_t(options.width) + std::size_t(x);
-                openvdb::Vec3d sumCombined(0.0), sumSurface(0.0), sumDirect(0.0), sumScatter(0.0), sumNormal(0.0);
-                double sumAlpha = 0.0, sumDepth = 0.0;
+                PixelSum sum;
+                // First pass: a jittered side x side grid over the pixel.
                 for (int s = 0; s < spp; ++s) {
-                    const std::uint64_t key = std::uint64_t(pixel) * 65536u + std::uint64_t(s);
                     const double u = (s % side + unitHash(pixel, std::uint64_t(s), 0)) / side;
                     const double v = (s / side + unitHash(pixel, std::uint64_t(s), 1)) / side;
-                    const double sx = (2.0 * (x + u) / options.width - 1.0), sy = (1.0 - 2.0 * (y + v) / options.height);
-                    openvdb::Vec3d origin = camera.position, dir = forward;
-                    if (camera.orthographic) {
-                        origin += right * (0.5 * camera.width * sx) + up * (0.5 * camera.width / aspect * sy);
-                    } else {
-                        dir = (forward + right * (sx * tanHalf * aspect) + up * (sy * tanHalf)).unit();
-                    }
-
-                    // First surface.
-                    openvdb::Vec3d hit, normal;
-                    double distance = 0.0;
-                    const SceneObject* object = nullptr;
-                    if (useMeshes) {
-                        const auto h = meshes.visible->intersect(origin, dir);
-                        if (!h) {
-                            sumCombined += options.background;
-                            continue;
-                        }
-                        distance = h->distance;
-                        hit = origin + dir * distance;
-                        normal = h->normal;
-                        object = &scene.objects[std::size_t(h->id)];
-                    } else {
-                        openvdb::math::Ray<double> ray(origin, dir);
-                        if (!intersector->intersectsWS(ray, hit, normal, distance)) {
-                            sumCombined += options.background;
-                            continue;
-                        }
-                        normal.normalize();
-                        if (normal.dot(dir) > 0.0) normal = -normal;
-                        object = levelSetObject;
-                    }
-                    sumAlpha += 1.0;
-                    sumDepth += distance;
-                    sumNormal += normal;
-                    const openvdb::Vec3d surfaceLight = surfaceTerm(object, hit, normal, dir, key);
-                    sumSurface += surfaceLight;
-                    sumCombined += surfaceLight;
-                    if (object && object->role == SceneObject::Role::Occluder) continue; // opaque
-
-                    if (!options.gather) {
-                        // View mode: march on along the camera ray, up to the first occluder behind.
-                        double behindDistance = std::numeric_limits<double>::infinity();
-                        openvdb::Vec3d behind = options.background;
-                        if (useMeshes) {
-                            double t = eps;
-                            while (auto h = meshes.visible->intersect(hit, dir, t)) {
-                                const SceneObject& o = scene.objects[std::size_t(h->id)];
-                                if (o.role == SceneObject::Role::Occluder) {
-                                    behindDistance = h->distance;
-                                    behind = surfaceTerm(&o, hit + dir * h->distance, h->normal, dir, key);
-                                    break;
-                                }
-                                t = h->distance + eps; // the medium's own surfaces: the march covers them
-                            }
-                        }
-                        // From half a voxel before the hit: without a `surface` level set the
-                        // voxels the surface cuts hold medium on its outer side too (their
-                        // volume fraction); with one, the march skips what lies outside it.
-                        const double back = std::min(0.5 * medium.voxelSize(), distance);
-                        const Gathered g = marcher.march(hit - dir * back, dir, behindDistance + back, key);
-                        sumDirect += g.direct;
-                        sumScatter += g.scatter;
-                        for (int c = 0; c < 3; ++c) {
-                            sumCombined[c] += g.direct[c] + g.scatter[c] + g.transmittance[c] * behind[c];
-                        }
-                        continue;
-                    }
-                    // Gather mode: cosine-weighted directions about the inward normal.
-                    openvdb::Vec3d t1, t2;
-                    const openvdb::Vec3d inward = -normal;
-                    const openvdb::Vec3d helper = std::abs(inward.x()) < 0.9 ? openvdb::Vec3d(1, 0, 0) : openvdb::Vec3d(0, 1, 0);
-                    t1 = inward.cross(helper).unit();
-                    t2 = inward.cross(t1);
-                    openvdb::Vec3d gd(0.0), gs(0.0);
-                    int kept = 0;
-                    for (int k = 0; k < gatherDirs; ++k) {
-                        const double a = (k + unitHash(pixel, std::uint64_t(s) << 32 | std::uint64_t(k), 2)) / gatherDirs;
-                        const double phi = 2.0 * M_PI * unitHash(pixel, std::uint64_t(s) << 32 | std::uint64_t(k), 3);
-                        const double r = std::sqrt(a);
-                        const openvdb::Vec3d w = (t1 * (r * std::cos(phi)) + t2 * (r * std::sin(phi)) + inward * std::sqrt(std::max(0.0, 1.0 - a))).unit();
-                        const Gathered g = marcher.march(hit, w, std::numeric_limits<double>::infinity(), mixBits(key + std::uint64_t(k) * 7919u));
-                        if (!g.touched) continue; // left the volume: dropped, the rest re-weighted
-                        gd += g.direct;
-                        gs += g.scatter;
-                        ++kept;
-                    }
-                    if (kept > 0) {
-                        gd /= kept;
-                        gs /= kept;
-                    }
-                    sumDirect += gd;
-                    sumScatter += gs;
-                    sumCombined += gd + gs;
+                    sum.add(trace(x, y, u, v, std::uint64_t(pixel) * 65536u + std::uint64_t(s)));
                 }
-                const double inv = 1.0 / spp;
+                if (maxSpp > spp && sum.disagrees(options.noiseLevel)) {
+                    // More rays where the first ones disagree: the R2 sequence (Roberts 2018,
+                    // low discrepancy for any count), randomly shifted per pixel so that every
+                    // ray is uniform over the pixel and the mean of all of them stays unbiased.
+                    const double u0 = unitHash(pixel, 0, 4), v0 = unitHash(pixel, 0, 5);
+                    for (int s = spp; s < maxSpp; ++s) {
+                        const double u = std::fmod(u0 + (s - spp + 1) * 0.7548776662466927, 1.0);
+                        const double v = std::fmod(v0 + (s - spp + 1) * 0.5698402909980532, 1.0);
+                        sum.add(trace(x, y, u, v, std::uint64_t(pixel) * 65536u + std::uint64_t(s)));
+                    }
+                    ++refinedHere;
+                }
+                const double inv = 1.0 / sum.count;
                 const auto finite = [](openvdb::Vec3d v) {
                     for (int c = 0; c < 3; ++c) v[c] = std::isfinite(v[c]) ? v[c] : 0.0;
                     return openvdb::Vec3f(v);
                 };
-                image.combined[pixel] = finite(sumCombined * inv);
-                image.surface[pixel] = finite(sumSurface * inv);
-                image.direct[pixel] = finite(sumDirect * inv);
-                image.scatter[pixel] = finite(sumScatter * inv);
-                image.alpha[pixel] = float(sumAlpha * inv);
-                image.depth[pixel] = sumAlpha > 0.0 ? float(sumDepth / sumAlpha) : 0.0f;
-                image.normal[pixel] = sumAlpha > 0.0 ? finite(sumNormal / sumAlpha) : openvdb::Vec3f(0.0f);
+                image.combined[pixel] = finite(sum.combined * inv);
+                image.surface[pixel] = finite(sum.surface * inv);
+                image.direct[pixel] = finite(sum.direct * inv);
+                image.scatter[pixel] = finite(sum.scatter * inv);
+                image.alpha[pixel] = float(sum.alpha * inv);
+                image.depth[pixel] = sum.alpha > 0.0 ? float(sum.depth / sum.alpha) : 0.0f;
+                image.normal[pixel] = sum.alpha > 0.0 ? finite(sum.normal / sum.alpha) : openvdb::Vec3f(0.0f);
+                image.samples[pixel] = float(sum.count);
             }
             const int done = ++rowsDone;
             if (interrupter && interrupter->wasInterrupted(100 * done / options.height)) cancelled = true;
         }
+        refined += refinedHere;
     });
     if (cancelled) throw Interrupted();
+    image.refinedPixels = refined;
     return image;
 }
 

@@ -85,6 +85,8 @@ struct SceneSettings
     double scatterBand = 0.0; ///< 0: full resolution everywhere
     int finePasses = 0, coarseFactor = 4; ///< passes after finePasses on a coarser lattice (0: none)
     int width = 640, height = 360, samples = 4, gatherDirections = 64;
+    int maxSamples = 0;       ///< adaptive sampling up to this many rays per pixel (≤ samples: off)
+    double noiseLevel = 0.02; ///< refine pixels whose mean luminance has a larger relative standard error
     bool gather = false, surface = true;
     bool directFromLights = false; ///< render "direct": "lights" (single scattering marched per step)
     openvdb::Vec3d background{0.0};

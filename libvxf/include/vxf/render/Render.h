@@ -14,6 +14,12 @@ struct RenderOptions
 {
     int width = 640, height = 360;
     int samples = 4;            ///< camera rays per pixel (stratified, deterministic jitter)
+    /// Adaptive sampling: a pixel whose first `samples` rays disagree (some hit and some miss,
+    /// they hit different objects, or the standard error of their mean luminance is above
+    /// noiseLevel of the mean) gets more, up to maxSamples in all. Silhouettes and a noisy
+    /// light get the rays; smooth interiors keep `samples`. ≤ samples: off.
+    int maxSamples = 0;
+    double noiseLevel = 0.02;
     bool gather = false;        ///< false: "view" mode (physical); true: the thesis's final gather
     int gatherDirections = 64;  ///< cosine-weighted directions per hit in gather mode
     bool surface = true;        ///< add the surface term of objects whose surface reflects
@@ -34,6 +40,8 @@ struct RenderedImage
     int width = 0, height = 0;
     std::vector<openvdb::Vec3f> combined, surface, direct, scatter, normal;
     std::vector<float> alpha, depth; ///< depth: distance along the camera ray to the surface (0 where it misses)
+    std::vector<float> samples;      ///< camera rays per pixel (more where adaptive sampling refined it)
+    std::size_t refinedPixels = 0;   ///< pixels that got more than RenderOptions::samples rays
 };
 
 /// Render options from a scene's settings.
