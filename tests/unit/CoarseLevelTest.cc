@@ -133,7 +133,12 @@ TEST_CASE("the coarse cycles' correction brings coarse passes to the plain itera
         options.finePasses = finePasses;
         options.coarseFactor = 4;
         options.coarseCorrection = correction;
-        vxf::scatter(set, vxf::Medium(set, m), options);
+        const auto report = vxf::scatter(set, vxf::Medium(set, m), options);
+        if (correction) {
+            // Each cycle's share of the sum, signed, and no limit reached.
+            CHECK_THAT(report.stopReason, Catch::Contains("corrected by") && Catch::Contains("% of the sum;"));
+            CHECK_THAT(report.stopReason, !Catch::Contains("limit"));
+        }
         double shell = 0.0;
         for (auto it = set.get<openvdb::Vec3SGrid>("scatter")->cbeginValueOn(); it; ++it) {
             if (it.getCoord().asVec3d().length() * dx > 0.75) shell += (*it).x();

@@ -337,7 +337,8 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
             // one cycle alone left that bunny 6% dark.
             const double cycleTolerance = std::max(options.tolerance, 3e-3);
             double previousSize = 0.0;
-            std::string added; // each cycle's δ as a share of the sum
+            std::string added;  // each cycle's δ as a share of the sum
+            std::string ending; // why the cycles stopped, unless the rest fell below the tolerance
             while (options.coarseCorrection && cycles < kMaxCorrectionCycles) {
                 ++cycles;
                 openvdb::tools::foreach(coarseTail->beginValueOn(), [](const openvdb::Vec3STree::ValueOnIter& it) { it.setValue(-*it); });
@@ -354,21 +355,30 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
                 difference = g->deepCopy();
                 openvdb::tools::compSum(*rho, *g); // δ
                 const openvdb::Vec3d e = gridEnergy(*rho);
-                const double size = std::max({std::abs(e[0]), std::abs(e[1]), std::abs(e[2])});
+                int c = 0; // δ's largest channel, with its sign
+                for (int k = 1; k < 3; ++k) c = std::abs(e[k]) > std::abs(e[c]) ? k : c;
+                const double size = std::abs(e[c]);
                 addCorrection(*sum, *rho);
                 const double total = maxChannel(gridEnergy(*sum));
-                added += fmt::format("{}{:.2g}%", added.empty() ? "" : ", ", 100.0 * size / std::max(total, 1e-300));
+                added += fmt::format("{}{:+.2g}%", added.empty() ? "" : ", ", 100.0 * e[c] / std::max(total, 1e-300));
                 const double q = previousSize > 0.0 ? size / previousSize : 1.0;
                 previousSize = size;
-                if (q < 1.0 && size * q / (1.0 - q) < cycleTolerance * total) break;
-                if (q >= 1.0 && cycles > 1) break; // not shrinking: more cycles would not help
+                if (q < 1.0 && size * q / (1.0 - q) < cycleTolerance * total) {
+                    ending = "";
+                    break;
+                }
+                if (q >= 1.0 && cycles > 1) { // not shrinking: more cycles would not help
+                    ending = "; stopped as the last cycle's correction did not shrink";
+                    break;
+                }
+                ending = fmt::format("; stopped at the limit of {} cycles, the rest not yet below {:g} of the sum", kMaxCorrectionCycles, cycleTolerance);
             }
             report.correctionPasses = correctionPasses;
             report.fineGatherSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
             report.stopReason += fmt::format("; passes after {} on a {}x coarser lattice, their sum gathered on the fine one", options.finePasses, options.coarseFactor);
             if (options.coarseCorrection) {
-                report.stopReason += fmt::format(", corrected by {} more cycle{} (adding {} of the sum; {} coarse passes, {} fine gathers in all, {:.2f} s)",
-                    cycles, cycles == 1 ? "" : "s", added, correctionPasses, fineGathers, report.fineGatherSeconds);
+                report.stopReason += fmt::format(", corrected by {} more cycle{} (adding {} of the sum{}; {} coarse passes, {} fine gathers in all, {:.2f} s)",
+                    cycles, cycles == 1 ? "" : "s", added, ending, correctionPasses, fineGathers, report.fineGatherSeconds);
             }
         }
     }
