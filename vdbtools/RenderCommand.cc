@@ -40,7 +40,7 @@ public:
             ->check(CLI::Range(1, 65536));
         mApp->add_option("--noise-level", mNoiseLevel,
                "Adaptive sampling's threshold: relative standard error of a pixel's mean luminance (default 0.02)")
-            ->check(CLI::PositiveNumber);
+            ->check(CLI::Range(1e-6, 1.0));
         mApp->add_option("--mode", mMode, "view or gather (overrides the scene)")->check(CLI::IsMember({"view", "gather"}));
         mApp->add_flag("--level-set", mLevelSet, "Hit the volume's `surface` level set instead of the scene's meshes");
         mApp->add_flag("--no-surface", [this](std::int64_t) { mNoSurface = true; }, "Leave out the surface term");
@@ -78,9 +78,7 @@ public:
         const RenderedImage image = render(set, medium, scene, options, {&visible, &occluders}, &progress);
         writeExr(mOutput, image, mHalf);
         if (!mPng.empty()) writePng(mPng, image, mExposure);
-        const std::string adaptive = image.refinedPixels == 0 ? std::string()
-            : fmt::format(", {} of them ({:.1f}%) refined to {}", image.refinedPixels,
-                  100.0 * double(image.refinedPixels) / (double(options.width) * options.height), options.maxSamples);
+        const std::string adaptive = image.refinedPixels == 0 ? std::string() : ", " + refinedSummary(image, options);
         std::cout << fmt::format("rendered {} ({}x{}, {} samples per pixel{}, {} mode) -> {}{} in {:.3f} s\n", mVolume,
             options.width, options.height, options.samples, adaptive, options.gather ? "gather" : "view", mOutput,
             mPng.empty() ? "" : " + " + mPng, secondsSince(start));

@@ -175,10 +175,7 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
         const RenderedImage image = render(volume, medium, scene, options, {&visible, &occluders}, interrupter);
         writeExr(report.image, image);
         writePng(report.preview, image);
-        if (image.refinedPixels > 0) {
-            why += fmt::format("; {:.1f}% of the pixels refined to {} samples",
-                100.0 * double(image.refinedPixels) / (double(options.width) * options.height), options.maxSamples);
-        }
+        if (image.refinedPixels > 0) why += "; " + refinedSummary(image, options);
     });
     record("render", "ran", why, report.image, seconds);
     return report;

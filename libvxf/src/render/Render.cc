@@ -185,6 +185,13 @@ RenderOptions renderOptionsFrom(const SceneSettings& s)
     return o;
 }
 
+std::string refinedSummary(const RenderedImage& image, const RenderOptions& options)
+{
+    if (image.refinedPixels == 0) return {};
+    return fmt::format("{:.1f}% of the pixels refined to {} samples",
+        100.0 * double(image.refinedPixels) / (double(image.width) * double(image.height)), options.maxSamples);
+}
+
 namespace {
 
 /// What one camera ray brings back.
@@ -198,21 +205,20 @@ struct CameraSample
 /// A pixel's camera rays so far, and whether they disagree enough to call for more.
 struct PixelSum
 {
-    openvdb::Vec3d combined{0.0}, surface{0.0}, direct{0.0}, scatter{0.0}, normal{0.0};
-    double alpha = 0.0, depth = 0.0;
+    CameraSample total; ///< sums of every layer (object unused)
     double luminance = 0.0, luminanceSquared = 0.0;
     int count = 0, firstObject = -2;
     bool mixed = false; ///< the rays met different objects, or some met one and some none
 
     void add(const CameraSample& c)
     {
-        combined += c.combined;
-        surface += c.surface;
-        direct += c.direct;
-        scatter += c.scatter;
-        normal += c.normal;
-        alpha += c.alpha;
-        depth += c.depth;
+        total.combined += c.combined;
+        total.surface += c.surface;
+        total.direct += c.direct;
+        total.scatter += c.scatter;
+        total.normal += c.normal;
+        total.alpha += c.alpha;
+        total.depth += c.depth;
         const double y = 0.2126 * c.combined[0] + 0.7152 * c.combined[1] + 0.0722 * c.combined[2];
         if (std::isfinite(y)) {
             luminance += y;
@@ -484,13 +490,14 @@ RenderedImage render(const VoxelSet& set, const Medium& medium, const Scene& sce
                     for (int c = 0; c < 3; ++c) v[c] = std::isfinite(v[c]) ? v[c] : 0.0;
                     return openvdb::Vec3f(v);
                 };
-                image.combined[pixel] = finite(sum.combined * inv);
-                image.surface[pixel] = finite(sum.surface * inv);
-                image.direct[pixel] = finite(sum.direct * inv);
-                image.scatter[pixel] = finite(sum.scatter * inv);
-                image.alpha[pixel] = float(sum.alpha * inv);
-                image.depth[pixel] = sum.alpha > 0.0 ? float(sum.depth / sum.alpha) : 0.0f;
-                image.normal[pixel] = sum.alpha > 0.0 ? finite(sum.normal / sum.alpha) : openvdb::Vec3f(0.0f);
+                const CameraSample& t = sum.total;
+                image.combined[pixel] = finite(t.combined * inv);
+                image.surface[pixel] = finite(t.surface * inv);
+                image.direct[pixel] = finite(t.direct * inv);
+                image.scatter[pixel] = finite(t.scatter * inv);
+                image.alpha[pixel] = float(t.alpha * inv);
+                image.depth[pixel] = t.alpha > 0.0 ? float(t.depth / t.alpha) : 0.0f;
+                image.normal[pixel] = t.alpha > 0.0 ? finite(t.normal / t.alpha) : openvdb::Vec3f(0.0f);
                 image.samples[pixel] = float(sum.count);
             }
             const int done = ++rowsDone;

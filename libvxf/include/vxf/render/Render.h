@@ -6,6 +6,7 @@
 #include <vxf/light/Medium.h>
 #include <vxf/pipeline/Scene.h>
 
+#include <string>
 #include <vector>
 
 namespace vxf {
@@ -43,6 +44,9 @@ struct RenderedImage
     std::vector<float> samples;      ///< camera rays per pixel (more where adaptive sampling refined it)
     std::size_t refinedPixels = 0;   ///< pixels that got more than RenderOptions::samples rays
 };
+
+/// "P% of the pixels refined to M samples", or empty when adaptive sampling refined none.
+std::string refinedSummary(const RenderedImage& image, const RenderOptions& options);
 
 /// Render options from a scene's settings.
 RenderOptions renderOptionsFrom(const SceneSettings& settings);
