@@ -463,9 +463,9 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
             double previousSize = 0.0;
             std::string added;  // each cycle's step as a share of the sum
             std::string ending; // why the cycles stopped, unless the rest fell below the tolerance
-            // The directions so far, v_i (each cycle's δ), their images Mv_i and sources Sv_i,
-            // and ⟨v_j, Mv_i⟩_S.
-            std::vector<openvdb::Vec3SGrid::Ptr> directions, images, sources;
+            // The directions so far, v_i (each cycle's δ), their images Mv_i, and ⟨v_j, Mv_i⟩_S
+            // (2 fine grids per cycle kept: Sv_j is made again when needed).
+            std::vector<openvdb::Vec3SGrid::Ptr> directions, images;
             std::vector<std::vector<openvdb::Vec3d>> gram;
             // Σ of the steps, added to the sum at the end: a step may take the sum below zero
             // on the way (near albedo 1 the first overshoots by half), and clamping it there
@@ -482,21 +482,23 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
                 source = sourceFromFluence(medium, *coarseTail);
                 openvdb::tools::compSum(*source, *rhoSource);
                 auto delta = scatterPass(medium, *source, options.pass, interrupter);
-                auto rho = residual->deepCopy();
-                openvdb::tools::compSum(*delta, *rho); // δ = ρ + A(ρ + Pê)
+                axpy(*delta, openvdb::Vec3d(1.0), *residual); // δ = ρ + A(ρ + Pê)
                 const auto deltaSource = sourceFromFluence(medium, *delta);
                 auto deltaImage = delta->deepCopy(); // Mδ = δ − Aδ
                 axpy(*deltaImage, openvdb::Vec3d(-1.0), *scatterPass(medium, *deltaSource, options.pass, interrupter));
                 fineGathers += 2;
                 directions.push_back(delta);
                 images.push_back(deltaImage);
-                sources.push_back(deltaSource);
                 const std::size_t n = directions.size();
-                for (std::size_t j = 0; j + 1 < n; ++j) gram[j].push_back(innerProduct(*sources[j], *deltaImage));
+                std::vector<openvdb::Vec3d> along;
+                for (std::size_t j = 0; j + 1 < n; ++j) {
+                    const auto vSource = sourceFromFluence(medium, *directions[j]);
+                    gram[j].push_back(innerProduct(*vSource, *deltaImage));
+                    along.push_back(innerProduct(*vSource, *residual));
+                }
                 gram.emplace_back();
                 for (std::size_t i = 0; i < n; ++i) gram.back().push_back(innerProduct(*deltaSource, *images[i]));
-                std::vector<openvdb::Vec3d> along;
-                for (std::size_t j = 0; j < n; ++j) along.push_back(innerProduct(*sources[j], *residual));
+                along.push_back(innerProduct(*deltaSource, *residual));
                 const std::vector<openvdb::Vec3d> weights = cycleStep(gram, along);
                 auto step = scaled(weights[0], *directions[0]);
                 auto stepImage = scaled(weights[0], *images[0]);
