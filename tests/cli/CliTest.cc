@@ -220,6 +220,9 @@ TEST_CASE("command-line usage errors exit with status 2", "[cli]")
     const auto badBand = run(fmt::format("{} voxelize builtin:box -o {} --dim 8 --band 0", vxf, dir.path("x.vdb")));
     CHECK(badBand.status == 2);
     CHECK(badBand.err.find("--band") != std::string::npos);
+    const auto zeroSize = run(fmt::format("{} voxelize builtin:box -o {} --voxel-size 0", vxf, dir.path("x.vdb")));
+    CHECK(zeroSize.status == 2);
+    CHECK(zeroSize.err.find("--voxel-size: Value 0 is not a number above zero") != std::string::npos);
     CHECK(run(vxf + " frobnicate").status == 2);
     CHECK(run(vxf).status == 2);
     CHECK_FALSE(fs::exists(dir.path("x.vdb")));
@@ -344,6 +347,21 @@ TEST_CASE("vxf light lights a voxel set from a scene file", "[cli][light]")
     CHECK(notLit.status == 1);
     CHECK(notLit.err.find("records no material") != std::string::npos);
     CHECK_FALSE(fs::exists(dir.path("y.vdb")));
+
+    // A sigma_s grid on another lattice than the density's: the error names the file.
+    {
+        vxf::VoxelSet mixed = vxf::readVoxelSet(dir.path("l.vdb"));
+        auto sigma = openvdb::Vec3SGrid::create(openvdb::Vec3f(1.0f));
+        sigma->setName("sigma_s");
+        sigma->setTransform(openvdb::math::Transform::createLinearTransform(0.5));
+        sigma->fill(openvdb::CoordBBox(openvdb::Coord(-2), openvdb::Coord(2)), openvdb::Vec3f(1.0f));
+        mixed.putAsIs(sigma);
+        vxf::writeVoxelSet(dir.path("mixed.vdb"), mixed);
+        const auto mismatch = run(fmt::format("{} scatter {} -o {}", binary("vxf"), dir.path("mixed.vdb"), dir.path("z.vdb")));
+        CHECK(mismatch.status == 1);
+        CHECK(mismatch.err.find("mixed.vdb: grid 'sigma_s' does not share the transform of 'density'") != std::string::npos);
+        CHECK_FALSE(fs::exists(dir.path("z.vdb")));
+    }
 
     // A bad scene names the file and the field; nothing is written.
     vxf::test::spit(dir.path("bad.json"), R"({"objects": [{"mesh": "builtin:sphere"}], "lights": [], "camera": {"position": [0, -4, 0]}})");

@@ -56,6 +56,7 @@ VoxelSet readVoxelSet(const std::string& path)
         set.putAsIs(grid);
     }
     if (metadata) set.metadata() = *metadata;
+    set.setPath(path);
     return set;
 }
 

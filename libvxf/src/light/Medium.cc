@@ -60,12 +60,14 @@ Medium::Medium(const VoxelSet& set, const Material& material)
     : mDensity(set.get<openvdb::FloatGrid>("density"))
     , mMaterial(material)
 {
+    // Errors name the file the set came from, when it came from one.
+    const std::string file = set.path().empty() ? "" : set.path() + ": ";
     for (const char* name : {"sigma_a", "sigma_s"}) {
         if (auto grid = set.find(name)) {
             auto typed = openvdb::gridConstPtrCast<openvdb::Vec3SGrid>(grid);
-            if (!typed) throw Error(fmt::format("grid '{}' must hold vec3s values, not {}", name, grid->valueType()));
+            if (!typed) throw Error(fmt::format("{}grid '{}' must hold vec3s values, not {}", file, name, grid->valueType()));
             if (typed->transform() != mDensity->transform()) {
-                throw Error(fmt::format("grid '{}' does not share the transform of 'density'", name));
+                throw Error(fmt::format("{}grid '{}' does not share the transform of 'density'", file, name));
             }
             (std::string(name) == "sigma_a" ? mSigmaA : mSigmaS) = typed;
         }
@@ -74,7 +76,8 @@ Medium::Medium(const VoxelSet& set, const Material& material)
         auto typed = openvdb::gridConstPtrCast<openvdb::FloatGrid>(grid);
         if (typed && typed->getGridClass() == openvdb::GRID_LEVEL_SET) {
             if (typed->transform() != mDensity->transform()) {
-                throw Error("grid 'surface' does not share the transform of 'density'; resample it or remove it (then the medium ends where the density does)");
+                throw Error(file + "grid 'surface' does not share the transform of 'density'; resample it or remove it "
+                                   "(then the medium ends where the density does)");
             }
             mSurface = marchSurface(typed);
         }

@@ -68,11 +68,16 @@ public:
     std::string stage() const;      ///< "" when the file carries no vxf provenance
     std::string paramsJson() const; ///< "" when absent
 
+    /// The file this set was read from ("" when made in memory), for error messages.
+    const std::string& path() const { return mPath; }
+    void setPath(const std::string& path) { mPath = path; }
+
 private:
     openvdb::math::Transform::Ptr mTransform;
     bool mTransformGiven = false;
     openvdb::GridPtrVec mGrids;
     openvdb::MetaMap mMetadata;
+    std::string mPath;
 };
 
 template<typename GridT>
