@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include <atomic>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -16,6 +17,25 @@
 #include <unistd.h>
 
 namespace vxf::cli {
+
+namespace {
+/// A validator of numbers that satisfy @a ok, whose failure reads "Value X is not @a what".
+CLI::Validator numberThat(const std::function<bool(double)>& ok, const std::string& what, const std::string& name)
+{
+    return CLI::Validator(
+        [ok, what](std::string& text) -> std::string {
+            double value = 0.0;
+            if (!CLI::detail::lexical_cast(text, value) || !std::isfinite(value) || !ok(value)) {
+                return "Value " + text + " is not " + what;
+            }
+            return {};
+        },
+        name);
+}
+} // namespace
+
+const CLI::Validator AboveZero = numberThat([](double v) { return v > 0.0; }, "a number above zero", "POSITIVE");
+const CLI::Validator ZeroOrMore = numberThat([](double v) { return v >= 0.0; }, "a number of zero or more", "NONNEGATIVE");
 
 namespace {
 std::string gTool = "vxf";

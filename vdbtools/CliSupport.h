@@ -40,6 +40,13 @@ private:
     std::chrono::steady_clock::time_point mLastDraw;
 };
 
+/// Option check: a number above zero (CLI::PositiveNumber's message quotes its range up to
+/// 1.8e308); "Value 0 is not a number above zero".
+extern const CLI::Validator AboveZero;
+
+/// Option check: a number of zero or more.
+extern const CLI::Validator ZeroOrMore;
+
 /// Seconds since @a start.
 inline double secondsSince(std::chrono::steady_clock::time_point start)
 {

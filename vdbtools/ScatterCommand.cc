@@ -37,7 +37,7 @@ public:
         mApp->add_option("--band", mOptions.band,
                "Adaptive narrow band, world units: full resolution within W of the surface, the tree's 8^3 and 128^3 "
                "tiles deeper (default 0: full resolution everywhere)")
-            ->check(CLI::NonNegativeNumber);
+            ->check(ZeroOrMore);
         mApp->add_option("--fine-passes", mOptions.finePasses,
                "Run the passes after the first N on a coarser lattice: high orders are smooth; their sum returns by "
                "a fine gather and correcting coarse cycles (two fine gathers each) (default 0: all passes at full "

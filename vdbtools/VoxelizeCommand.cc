@@ -110,7 +110,7 @@ public:
             ->required();
         mApp->add_option("-o,--output", mRequest.output, "Output .vdb file")->required();
         auto* size = mApp->add_option("--voxel-size", mRequest.voxelize.voxelSize, "Voxel size in world units")
-                         ->check(CLI::PositiveNumber);
+                         ->check(AboveZero);
         auto* dim = mApp->add_option("--dim", mRequest.voxelize.dim, "Voxels along the longest side of the mesh")
                         ->check(CLI::Range(1, 1 << 20));
         size->excludes(dim);
