@@ -648,13 +648,17 @@ std::vector<Operator> makeRegistry()
         {text("scene", "scene file (camera, lights, objects, render settings)"), text("image", "the .exr to write"),
             text("png", "(optional) an sRGB PNG preview to write"), integer("width", "(optional) override the scene's width", nullptr, 1, 32768),
             integer("height", "(optional) override the scene's height", nullptr, 1, 32768),
-            integer("samples", "(optional) override the samples per pixel", nullptr, 1, 65536)},
+            integer("samples", "(optional) override the samples per pixel", nullptr, 1, 65536),
+            integer("max_samples", "(optional) override the scene's max_samples: adaptive, up to this many rays in a pixel whose first ones disagree", nullptr, 0, 65536),
+            number("noise_level", "(optional) override the scene's noise_level: the relative standard error a pixel may keep", nullptr, 1e-6, 1.0)},
         [](OpContext& ctx) {
             const Scene scene = loadScene(ctx.args.text("scene"));
             RenderOptions o = renderOptionsFrom(scene.settings);
             if (ctx.args.has("width")) o.width = ctx.args.integer("width");
             if (ctx.args.has("height")) o.height = ctx.args.integer("height");
             if (ctx.args.has("samples")) o.samples = ctx.args.integer("samples");
+            if (ctx.args.has("max_samples")) o.maxSamples = ctx.args.integer("max_samples");
+            if (ctx.args.has("noise_level")) o.noiseLevel = ctx.args.number("noise_level");
             const Medium medium(ctx.set, recordedMaterial(ctx.set));
             const RayScene visible = sceneGeometry(scene, GeometryRoles::All);
             const RayScene occluders = sceneGeometry(scene, GeometryRoles::Occluders);
