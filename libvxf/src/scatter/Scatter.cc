@@ -132,31 +132,35 @@ openvdb::Vec3SGrid::Ptr named(openvdb::Vec3SGrid::Ptr grid, const std::string& n
     return grid;
 }
 
-/// sum += δ on @a sum's topology (δ is computed on the same; a tile takes δ at its centre).
+/// y = combine(y, x) voxel by voxel and tile by tile on @a y's topology, in parallel over the
+/// leaves (@a x on the same topology: a tile reads x at its origin).
+template <typename Combine>
+void combineInPlace(openvdb::Vec3SGrid& y, const openvdb::Vec3SGrid& x, const Combine& combine)
+{
+    openvdb::tree::LeafManager<openvdb::Vec3STree> leaves(y.tree());
+    leaves.foreach([&](openvdb::Vec3STree::LeafNodeType& leaf, std::size_t) {
+        auto acc = x.getConstAccessor();
+        for (auto it = leaf.beginValueOn(); it; ++it) it.setValue(combine(*it, acc.getValue(it.getCoord())));
+    });
+    auto acc = x.getConstAccessor();
+    for (auto it = y.tree().beginValueOn(); it; ++it) {
+        if (it.isTileValue()) it.setValue(combine(*it, acc.getValue(it.getCoord())));
+    }
+}
+
+/// sum += δ on @a sum's topology (δ is computed on the same).
 /// δ is a difference of two estimates: it may not take a fluence below zero (where the sum is
 /// tiny, at the medium's edge); where the sum is negative already (an artist's negative
 /// source) it adds as it is.
 void addCorrection(openvdb::Vec3SGrid& sum, const openvdb::Vec3SGrid& delta)
 {
-    const auto corrected = [](const openvdb::Vec3f& a, const openvdb::Vec3f& d) {
+    combineInPlace(sum, delta, [](const openvdb::Vec3f& a, const openvdb::Vec3f& d) {
         openvdb::Vec3f v = a + d;
         for (int c = 0; c < 3; ++c) {
             if (a[c] >= 0.0f) v[c] = std::max(v[c], 0.0f);
         }
         return v;
-    };
-    openvdb::tree::LeafManager<openvdb::Vec3STree> leaves(sum.tree());
-    leaves.foreach([&delta, &corrected](openvdb::Vec3STree::LeafNodeType& leaf, std::size_t) {
-        auto d = delta.getConstAccessor();
-        for (auto it = leaf.beginValueOn(); it; ++it) it.setValue(corrected(*it, d.getValue(it.getCoord())));
     });
-    auto d = delta.getConstAccessor();
-    for (auto it = sum.tree().beginValueOn(); it; ++it) {
-        if (!it.isTileValue()) continue;
-        openvdb::CoordBBox box;
-        it.getBoundingBox(box);
-        it.setValue(corrected(*it, d.getValue(box.min() + openvdb::Coord(box.dim().x() / 2))));
-    }
 }
 
 /// Σ a·b per channel over @a a's active values (tiles weighted by their voxel count); @a b
@@ -172,21 +176,12 @@ openvdb::Vec3d innerProduct(const openvdb::Vec3SGrid& a, const openvdb::Vec3SGri
     return sum;
 }
 
-/// y += a·x per channel, on @a y's topology (@a x on the same; a tile takes x at its origin).
+/// y += a·x per channel, on @a y's topology (@a x on the same).
 void axpy(openvdb::Vec3SGrid& y, const openvdb::Vec3d& a, const openvdb::Vec3SGrid& x)
 {
-    const auto added = [&a](const openvdb::Vec3f& yv, const openvdb::Vec3f& xv) {
+    combineInPlace(y, x, [&a](const openvdb::Vec3f& yv, const openvdb::Vec3f& xv) {
         return openvdb::Vec3f(float(yv[0] + a[0] * xv[0]), float(yv[1] + a[1] * xv[1]), float(yv[2] + a[2] * xv[2]));
-    };
-    openvdb::tree::LeafManager<openvdb::Vec3STree> leaves(y.tree());
-    leaves.foreach([&](openvdb::Vec3STree::LeafNodeType& leaf, std::size_t) {
-        auto acc = x.getConstAccessor();
-        for (auto it = leaf.beginValueOn(); it; ++it) it.setValue(added(*it, acc.getValue(it.getCoord())));
     });
-    auto acc = x.getConstAccessor();
-    for (auto it = y.tree().beginValueOn(); it; ++it) {
-        if (it.isTileValue()) it.setValue(added(*it, acc.getValue(it.getCoord())));
-    }
 }
 
 /// a·x per channel, as a new grid.
