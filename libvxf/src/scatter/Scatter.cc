@@ -432,8 +432,7 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
             openvdb::Vec3SGrid::Ptr residual;
             if (options.coarseCorrection) {
                 auto difference = g->deepCopy();
-                openvdb::tools::foreach(coarseTail->beginValueOn(), [](const openvdb::Vec3STree::ValueOnIter& it) { it.setValue(-*it); });
-                openvdb::tools::compSum(*difference, *coarseTail);
+                axpy(*difference, openvdb::Vec3d(-1.0), *coarseTail);
                 residual = scatterPass(medium, *sourceFromFluence(medium, *difference), options.pass, interrupter);
                 ++fineGathers;
             }
@@ -465,6 +464,7 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
             // Σ of the steps, added to the sum at the end: a step may take the sum below zero
             // on the way (near albedo 1 the first overshoots by half), and clamping it there
             // would leave the residual ρ out of step with the sum (it did: 12% too much light).
+            const openvdb::Vec3d uncorrected = gridEnergy(*sum); // the sum's energy before the cycles
             auto correction = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
             correction->setTransform(sum->transformPtr());
             correction->tree().topologyUnion(sum->tree());
@@ -507,7 +507,7 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
                 for (int k = 1; k < 3; ++k) c = std::abs(e[k]) > std::abs(e[c]) ? k : c;
                 const double size = std::abs(e[c]);
                 axpy(*correction, openvdb::Vec3d(1.0), *step);
-                const double total = maxChannel(gridEnergy(*sum) + gridEnergy(*correction));
+                const double total = maxChannel(uncorrected + gridEnergy(*correction));
                 added += fmt::format("{}{:+.2g}%", added.empty() ? "" : ", ", 100.0 * e[c] / std::max(total, 1e-300));
                 const double q = previousSize > 0.0 ? size / previousSize : 1.0;
                 previousSize = size;

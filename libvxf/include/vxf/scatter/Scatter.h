@@ -77,9 +77,9 @@ openvdb::Vec3d gridEnergy(const openvdb::Vec3SGrid& grid);
 /// run on the coarse lattice (their `scatter_pass_K` interpolated back to the fine topology)
 /// and their sum returns to the fine lattice as a source: `scatter` adds one fine gather of
 /// J_N + σs·(Σ coarse φ)/4π, which resolves the light near the surface at full resolution,
-/// and correction cycles (conjugate-gradient steps of two fine gathers each, until what is left is below the tolerance,
-/// at least 0.3%, of the sum) solve for what the coarse lattice's slightly different
-/// operator left out; see Scatter.cc.
+/// and correction cycles (conjugate-gradient steps of two fine gathers each, until what is
+/// left is below the tolerance, at least 0.3%, of the sum) solve for what the coarse
+/// lattice's slightly different operator left out; see Scatter.cc.
 /// Throws vxf::Error naming a missing grid, vxf::UsageError for a bad coarseFactor.
 ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions& options = {},
     Interrupter* interrupter = nullptr);
