@@ -274,6 +274,37 @@ TEST_CASE("adaptive sampling: more camera rays on the silhouette only, the mean 
     CHECK(coverage / (31.0 * 31.0) == Approx(M_PI / 9.0).epsilon(0.01));
 }
 
+TEST_CASE("adaptive sampling: a pixel whose first rays all hit or all miss is refined beside one that differs", "[render]")
+{
+    vxf::Material m;
+    m.sigmaA = openvdb::Vec3d(0.1);
+    m.sigmaS = openvdb::Vec3d(0.4);
+    const vxf::VoxelSet set = litSphere(1.0);
+    const vxf::Medium medium(set, m);
+    vxf::RenderOptions options;
+    options.width = options.height = 31;
+    options.background = openvdb::Vec3d(1.0);
+    options.samples = 1024;
+    const vxf::RenderedImage truth = vxf::render(set, medium, frontView(), options);
+    // One first ray per pixel never disagrees with itself: only the neighbours find the edge.
+    options.samples = 1;
+    options.maxSamples = 64;
+    const vxf::RenderedImage adaptive = vxf::render(set, medium, frontView(), options);
+    double worst = 0.0;
+    std::size_t edges = 0;
+    for (std::size_t p = 0; p < truth.alpha.size(); ++p) {
+        if (truth.alpha[p] <= 0.0f || truth.alpha[p] >= 1.0f) continue;
+        INFO("pixel " << p << " alpha " << truth.alpha[p] << " vs " << adaptive.alpha[p]);
+        CHECK(adaptive.samples[p] == 64.0f);
+        worst = std::max(worst, double(std::abs(adaptive.alpha[p] - truth.alpha[p])));
+        ++edges;
+    }
+    CHECK(edges > 40);
+    CHECK(worst < 0.1); // one ray per pixel errs by up to the pixel's whole coverage
+    CHECK(adaptive.samples[15 * 31 + 15] == 1.0f);
+    CHECK(adaptive.refinedPixels < 31 * 31 / 3);
+}
+
 TEST_CASE("direct from an environment: the samples along a ray are spread over it, the mean unbiased", "[render]")
 {
     // A thick sphere (σt = 10, 0.3 per voxel) in a constant environment: near the surface the

@@ -362,156 +362,186 @@ RenderedImage render(const VoxelSet& set, const Medium& medium, const Scene& sce
 
     std::optional<openvdb::tools::LevelSetRayIntersector<openvdb::FloatGrid>> prototype;
     if (surface) prototype.emplace(*surface);
+    // Adaptive sampling runs as a second pass over the image: a pixel is refined when its first
+    // rays disagree, or when what they met differs from what a neighbour's met. The first rays
+    // of a pixel the silhouette only clips (an ear's tip, a corner) may all miss, or all hit,
+    // and a wrong coverage there is an error of up to the whole pixel; the neighbour that saw
+    // the other side calls for the rays. The refining pass re-traces a pixel's first rays
+    // (same keys, same values) rather than keeping every pixel's sums.
+    constexpr int kMixed = -3;
+    const bool adaptive = maxSpp > spp;
+    std::vector<int> seen(adaptive ? n : 0);  // the object the first rays all met (-1: none), or kMixed
+    std::vector<char> noisy(adaptive ? n : 0); // the first rays' mean is noisier than options.noiseLevel
+    const auto needsMore = [&](int x, int y) {
+        const std::size_t pixel = std::size_t(y) * std::size_t(options.width) + std::size_t(x);
+        if (noisy[pixel] || seen[pixel] == kMixed) return true;
+        for (int ny = std::max(0, y - 1); ny <= std::min(options.height - 1, y + 1); ++ny) {
+            for (int nx = std::max(0, x - 1); nx <= std::min(options.width - 1, x + 1); ++nx) {
+                if (seen[std::size_t(ny) * std::size_t(options.width) + std::size_t(nx)] != seen[pixel]) return true;
+            }
+        }
+        return false;
+    };
+    const int progressRows = options.height * (adaptive ? 2 : 1);
     std::atomic<int> rowsDone{0};
     std::atomic<std::size_t> refined{0};
     std::atomic<bool> cancelled{false};
-    tbb::parallel_for(tbb::blocked_range<int>(0, options.height), [&](const tbb::blocked_range<int>& rows) {
-        auto intersector = prototype;
-        std::size_t refinedHere = 0;
-        Marcher marcher(set, medium, options, options.directFromLights ? &volumeLights : nullptr, meshes.occluders);
-        SurfaceShader shader(medium, lights, meshes.occluders);
-        const auto surfaceTerm = [&](const SceneObject* object, const openvdb::Vec3d& x, const openvdb::Vec3d& normal,
-                                     const openvdb::Vec3d& dir, std::uint64_t key) {
-            if (lights.empty() || !object || !object->surface.reflects()) return openvdb::Vec3d(0.0);
-            return shader.shade(object->surface, x, normal, -dir, key);
-        };
-        // One camera ray through image point (x + u, y + v).
-        const auto trace = [&](int x, int y, double u, double v, std::uint64_t key) {
-            CameraSample c;
-            const double sx = (2.0 * (x + u) / options.width - 1.0), sy = (1.0 - 2.0 * (y + v) / options.height);
-            openvdb::Vec3d origin = camera.position, dir = forward;
-            if (camera.orthographic) {
-                origin += right * (0.5 * camera.width * sx) + up * (0.5 * camera.width / aspect * sy);
-            } else {
-                dir = (forward + right * (sx * tanHalf * aspect) + up * (sy * tanHalf)).unit();
-            }
-
-            // First surface.
-            openvdb::Vec3d hit, normal;
-            double distance = 0.0;
-            const SceneObject* object = nullptr;
-            if (useMeshes) {
-                const auto h = meshes.visible->intersect(origin, dir);
-                if (!h) {
-                    c.combined = options.background;
-                    return c;
+    const auto renderPass = [&](bool refining) {
+        tbb::parallel_for(tbb::blocked_range<int>(0, options.height), [&](const tbb::blocked_range<int>& rows) {
+            auto intersector = prototype;
+            std::size_t refinedHere = 0;
+            Marcher marcher(set, medium, options, options.directFromLights ? &volumeLights : nullptr, meshes.occluders);
+            SurfaceShader shader(medium, lights, meshes.occluders);
+            const auto surfaceTerm = [&](const SceneObject* object, const openvdb::Vec3d& x, const openvdb::Vec3d& normal,
+                                         const openvdb::Vec3d& dir, std::uint64_t key) {
+                if (lights.empty() || !object || !object->surface.reflects()) return openvdb::Vec3d(0.0);
+                return shader.shade(object->surface, x, normal, -dir, key);
+            };
+            // One camera ray through image point (x + u, y + v).
+            const auto trace = [&](int x, int y, double u, double v, std::uint64_t key) {
+                CameraSample c;
+                const double sx = (2.0 * (x + u) / options.width - 1.0), sy = (1.0 - 2.0 * (y + v) / options.height);
+                openvdb::Vec3d origin = camera.position, dir = forward;
+                if (camera.orthographic) {
+                    origin += right * (0.5 * camera.width * sx) + up * (0.5 * camera.width / aspect * sy);
+                } else {
+                    dir = (forward + right * (sx * tanHalf * aspect) + up * (sy * tanHalf)).unit();
                 }
-                distance = h->distance;
-                hit = origin + dir * distance;
-                normal = h->normal;
-                c.object = int(h->id);
-                object = &scene.objects[std::size_t(h->id)];
-            } else {
-                openvdb::math::Ray<double> ray(origin, dir);
-                if (!intersector->intersectsWS(ray, hit, normal, distance)) {
-                    c.combined = options.background;
-                    return c;
-                }
-                normal.normalize();
-                if (normal.dot(dir) > 0.0) normal = -normal;
-                c.object = 0;
-                object = levelSetObject;
-            }
-            c.alpha = 1.0;
-            c.depth = distance;
-            c.normal = normal;
-            c.surface = surfaceTerm(object, hit, normal, dir, key);
-            c.combined = c.surface;
-            if (object && object->role == SceneObject::Role::Occluder) return c; // opaque
 
-            if (!options.gather) {
-                // View mode: march on along the camera ray, up to the first occluder behind.
-                double behindDistance = std::numeric_limits<double>::infinity();
-                openvdb::Vec3d behind = options.background;
+                // First surface.
+                openvdb::Vec3d hit, normal;
+                double distance = 0.0;
+                const SceneObject* object = nullptr;
                 if (useMeshes) {
-                    double t = eps;
-                    while (auto h = meshes.visible->intersect(hit, dir, t)) {
-                        const SceneObject& o = scene.objects[std::size_t(h->id)];
-                        if (o.role == SceneObject::Role::Occluder) {
-                            behindDistance = h->distance;
-                            behind = surfaceTerm(&o, hit + dir * h->distance, h->normal, dir, key);
-                            break;
-                        }
-                        t = h->distance + eps; // the medium's own surfaces: the march covers them
+                    const auto h = meshes.visible->intersect(origin, dir);
+                    if (!h) {
+                        c.combined = options.background;
+                        return c;
                     }
+                    distance = h->distance;
+                    hit = origin + dir * distance;
+                    normal = h->normal;
+                    c.object = int(h->id);
+                    object = &scene.objects[std::size_t(h->id)];
+                } else {
+                    openvdb::math::Ray<double> ray(origin, dir);
+                    if (!intersector->intersectsWS(ray, hit, normal, distance)) {
+                        c.combined = options.background;
+                        return c;
+                    }
+                    normal.normalize();
+                    if (normal.dot(dir) > 0.0) normal = -normal;
+                    c.object = 0;
+                    object = levelSetObject;
                 }
-                // From half a voxel before the hit: without a `surface` level set the
-                // voxels the surface cuts hold medium on its outer side too (their
-                // volume fraction); with one, the march skips what lies outside it.
-                const double back = std::min(0.5 * medium.voxelSize(), distance);
-                const Gathered g = marcher.march(hit - dir * back, dir, behindDistance + back, key);
-                c.direct = g.direct;
-                c.scatter = g.scatter;
-                for (int k = 0; k < 3; ++k) c.combined[k] += g.direct[k] + g.scatter[k] + g.transmittance[k] * behind[k];
+                c.alpha = 1.0;
+                c.depth = distance;
+                c.normal = normal;
+                c.surface = surfaceTerm(object, hit, normal, dir, key);
+                c.combined = c.surface;
+                if (object && object->role == SceneObject::Role::Occluder) return c; // opaque
+
+                if (!options.gather) {
+                    // View mode: march on along the camera ray, up to the first occluder behind.
+                    double behindDistance = std::numeric_limits<double>::infinity();
+                    openvdb::Vec3d behind = options.background;
+                    if (useMeshes) {
+                        double t = eps;
+                        while (auto h = meshes.visible->intersect(hit, dir, t)) {
+                            const SceneObject& o = scene.objects[std::size_t(h->id)];
+                            if (o.role == SceneObject::Role::Occluder) {
+                                behindDistance = h->distance;
+                                behind = surfaceTerm(&o, hit + dir * h->distance, h->normal, dir, key);
+                                break;
+                            }
+                            t = h->distance + eps; // the medium's own surfaces: the march covers them
+                        }
+                    }
+                    // From half a voxel before the hit: without a `surface` level set the
+                    // voxels the surface cuts hold medium on its outer side too (their
+                    // volume fraction); with one, the march skips what lies outside it.
+                    const double back = std::min(0.5 * medium.voxelSize(), distance);
+                    const Gathered g = marcher.march(hit - dir * back, dir, behindDistance + back, key);
+                    c.direct = g.direct;
+                    c.scatter = g.scatter;
+                    for (int k = 0; k < 3; ++k) c.combined[k] += g.direct[k] + g.scatter[k] + g.transmittance[k] * behind[k];
+                    return c;
+                }
+                // Gather mode: cosine-weighted directions about the inward normal.
+                openvdb::Vec3d t1, t2;
+                const openvdb::Vec3d inward = -normal;
+                const openvdb::Vec3d helper = std::abs(inward.x()) < 0.9 ? openvdb::Vec3d(1, 0, 0) : openvdb::Vec3d(0, 1, 0);
+                t1 = inward.cross(helper).unit();
+                t2 = inward.cross(t1);
+                int kept = 0;
+                for (int k = 0; k < gatherDirs; ++k) {
+                    const double a = (k + unitHash(key, std::uint64_t(k), 2)) / gatherDirs;
+                    const double phi = 2.0 * M_PI * unitHash(key, std::uint64_t(k), 3);
+                    const double r = std::sqrt(a);
+                    const openvdb::Vec3d w = (t1 * (r * std::cos(phi)) + t2 * (r * std::sin(phi)) + inward * std::sqrt(std::max(0.0, 1.0 - a))).unit();
+                    const Gathered g = marcher.march(hit, w, std::numeric_limits<double>::infinity(), mixBits(key + std::uint64_t(k) * 7919u));
+                    if (!g.touched) continue; // left the volume: dropped, the rest re-weighted
+                    c.direct += g.direct;
+                    c.scatter += g.scatter;
+                    ++kept;
+                }
+                if (kept > 0) {
+                    c.direct /= kept;
+                    c.scatter /= kept;
+                }
+                c.combined += c.direct + c.scatter;
                 return c;
-            }
-            // Gather mode: cosine-weighted directions about the inward normal.
-            openvdb::Vec3d t1, t2;
-            const openvdb::Vec3d inward = -normal;
-            const openvdb::Vec3d helper = std::abs(inward.x()) < 0.9 ? openvdb::Vec3d(1, 0, 0) : openvdb::Vec3d(0, 1, 0);
-            t1 = inward.cross(helper).unit();
-            t2 = inward.cross(t1);
-            int kept = 0;
-            for (int k = 0; k < gatherDirs; ++k) {
-                const double a = (k + unitHash(key, std::uint64_t(k), 2)) / gatherDirs;
-                const double phi = 2.0 * M_PI * unitHash(key, std::uint64_t(k), 3);
-                const double r = std::sqrt(a);
-                const openvdb::Vec3d w = (t1 * (r * std::cos(phi)) + t2 * (r * std::sin(phi)) + inward * std::sqrt(std::max(0.0, 1.0 - a))).unit();
-                const Gathered g = marcher.march(hit, w, std::numeric_limits<double>::infinity(), mixBits(key + std::uint64_t(k) * 7919u));
-                if (!g.touched) continue; // left the volume: dropped, the rest re-weighted
-                c.direct += g.direct;
-                c.scatter += g.scatter;
-                ++kept;
-            }
-            if (kept > 0) {
-                c.direct /= kept;
-                c.scatter /= kept;
-            }
-            c.combined += c.direct + c.scatter;
-            return c;
-        };
-        for (int y = rows.begin(); y != rows.end() && !cancelled; ++y) {
-            for (int x = 0; x < options.width; ++x) {
-                const std::size_t pixel = std::size_t(y) * std::size_t(options.width) + std::size_t(x);
-                PixelSum sum;
-                // First pass: a jittered side x side grid over the pixel.
-                for (int s = 0; s < spp; ++s) {
-                    const double u = (s % side + unitHash(pixel, std::uint64_t(s), 0)) / side;
-                    const double v = (s / side + unitHash(pixel, std::uint64_t(s), 1)) / side;
-                    sum.add(trace(x, y, u, v, std::uint64_t(pixel) * 65536u + std::uint64_t(s)));
-                }
-                if (maxSpp > spp && sum.disagrees(options.noiseLevel)) {
-                    // More rays where the first ones disagree: the R2 sequence (Roberts 2018,
-                    // low discrepancy for any count), randomly shifted per pixel so that every
-                    // ray is uniform over the pixel and the mean of all of them stays unbiased.
-                    const double u0 = unitHash(pixel, 0, 4), v0 = unitHash(pixel, 0, 5);
-                    for (int s = spp; s < maxSpp; ++s) {
-                        const double u = std::fmod(u0 + (s - spp + 1) * 0.7548776662466927, 1.0);
-                        const double v = std::fmod(v0 + (s - spp + 1) * 0.5698402909980532, 1.0);
+            };
+            for (int y = rows.begin(); y != rows.end() && !cancelled; ++y) {
+                for (int x = 0; x < options.width; ++x) {
+                    const std::size_t pixel = std::size_t(y) * std::size_t(options.width) + std::size_t(x);
+                    if (refining && !needsMore(x, y)) continue;
+                    PixelSum sum;
+                    // First pass: a jittered side x side grid over the pixel.
+                    for (int s = 0; s < spp; ++s) {
+                        const double u = (s % side + unitHash(pixel, std::uint64_t(s), 0)) / side;
+                        const double v = (s / side + unitHash(pixel, std::uint64_t(s), 1)) / side;
                         sum.add(trace(x, y, u, v, std::uint64_t(pixel) * 65536u + std::uint64_t(s)));
                     }
-                    ++refinedHere;
+                    if (adaptive && !refining) {
+                        seen[pixel] = sum.mixed ? kMixed : sum.firstObject;
+                        noisy[pixel] = sum.disagrees(options.noiseLevel);
+                    }
+                    if (refining) {
+                        // More rays where the first ones disagree: the R2 sequence (Roberts 2018,
+                        // low discrepancy for any count), randomly shifted per pixel so that every
+                        // ray is uniform over the pixel and the mean of all of them stays unbiased.
+                        const double u0 = unitHash(pixel, 0, 4), v0 = unitHash(pixel, 0, 5);
+                        for (int s = spp; s < maxSpp; ++s) {
+                            const double u = std::fmod(u0 + (s - spp + 1) * 0.7548776662466927, 1.0);
+                            const double v = std::fmod(v0 + (s - spp + 1) * 0.5698402909980532, 1.0);
+                            sum.add(trace(x, y, u, v, std::uint64_t(pixel) * 65536u + std::uint64_t(s)));
+                        }
+                        ++refinedHere;
+                    }
+                    const double inv = 1.0 / sum.count;
+                    const auto finite = [](openvdb::Vec3d v) {
+                        for (int c = 0; c < 3; ++c) v[c] = std::isfinite(v[c]) ? v[c] : 0.0;
+                        return openvdb::Vec3f(v);
+                    };
+                    const CameraSample& t = sum.total;
+                    image.combined[pixel] = finite(t.combined * inv);
+                    image.surface[pixel] = finite(t.surface * inv);
+                    image.direct[pixel] = finite(t.direct * inv);
+                    image.scatter[pixel] = finite(t.scatter * inv);
+                    image.alpha[pixel] = float(t.alpha * inv);
+                    image.depth[pixel] = t.alpha > 0.0 ? float(t.depth / t.alpha) : 0.0f;
+                    image.normal[pixel] = t.alpha > 0.0 ? finite(t.normal / t.alpha) : openvdb::Vec3f(0.0f);
+                    image.samples[pixel] = float(sum.count);
                 }
-                const double inv = 1.0 / sum.count;
-                const auto finite = [](openvdb::Vec3d v) {
-                    for (int c = 0; c < 3; ++c) v[c] = std::isfinite(v[c]) ? v[c] : 0.0;
-                    return openvdb::Vec3f(v);
-                };
-                const CameraSample& t = sum.total;
-                image.combined[pixel] = finite(t.combined * inv);
-                image.surface[pixel] = finite(t.surface * inv);
-                image.direct[pixel] = finite(t.direct * inv);
-                image.scatter[pixel] = finite(t.scatter * inv);
-                image.alpha[pixel] = float(t.alpha * inv);
-                image.depth[pixel] = t.alpha > 0.0 ? float(t.depth / t.alpha) : 0.0f;
-                image.normal[pixel] = t.alpha > 0.0 ? finite(t.normal / t.alpha) : openvdb::Vec3f(0.0f);
-                image.samples[pixel] = float(sum.count);
+                const int done = ++rowsDone;
+                if (interrupter && interrupter->wasInterrupted(100 * done / progressRows)) cancelled = true;
             }
-            const int done = ++rowsDone;
-            if (interrupter && interrupter->wasInterrupted(100 * done / options.height)) cancelled = true;
-        }
-        refined += refinedHere;
-    });
+            refined += refinedHere;
+        });
+    };
+    renderPass(false);
+    if (adaptive && !cancelled) renderPass(true);
     if (cancelled) throw Interrupted();
     image.refinedPixels = refined;
     return image;

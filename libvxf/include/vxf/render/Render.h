@@ -17,8 +17,10 @@ struct RenderOptions
     int samples = 4;            ///< camera rays per pixel (stratified, deterministic jitter)
     /// Adaptive sampling: a pixel whose first `samples` rays disagree (some hit and some miss,
     /// they hit different objects, or the standard error of their mean luminance is above
-    /// noiseLevel of the mean) gets more, up to maxSamples in all. Silhouettes and a noisy
-    /// light get the rays; smooth interiors keep `samples`. ≤ samples: off.
+    /// noiseLevel of the mean), or met something else than a neighbour's first rays (a
+    /// silhouette clipping the pixel between its first rays), gets more, up to maxSamples in
+    /// all. Silhouettes and a noisy light get the rays; smooth interiors keep `samples`.
+    /// ≤ samples: off.
     int maxSamples = 0;
     double noiseLevel = 0.02;
     bool gather = false;        ///< false: "view" mode (physical); true: the thesis's final gather
