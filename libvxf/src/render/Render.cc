@@ -294,6 +294,248 @@ private:
     std::vector<LightSample> mSamples;
 };
 
+/// What render() sets up once and every thread's CameraTracer reads: the scene, the lights
+/// each term samples, the camera's frame and what camera rays hit.
+struct RenderContext
+{
+    RenderContext(const VoxelSet& set_, const Medium& medium_, const Scene& scene_, const RenderOptions& options_,
+        const RenderMeshes& meshes_)
+        : set(set_)
+        , medium(medium_)
+        , scene(scene_)
+        , options(options_)
+        , meshes(meshes_)
+        , useMeshes(meshes_.visible && !meshes_.visible->empty())
+    {
+        if (!useMeshes) {
+            levelSet = set.get<openvdb::FloatGrid>("surface");
+            if (levelSet->getGridClass() != openvdb::GRID_LEVEL_SET) throw Error("grid 'surface' must be a level set");
+            levelSetIntersector.emplace(*levelSet);
+        }
+        // What the level set stands for: the scene's medium object, if it names one.
+        for (const auto& o : scene.objects) {
+            if (o.role == SceneObject::Role::Medium) {
+                levelSetObject = &o;
+                break;
+            }
+        }
+        const auto shining = [&](std::vector<LightSampler>& out) {
+            for (const Light& l : scene.lights) {
+                if (l.type != Light::Type::Volume && l.power() != openvdb::Vec3d(0.0)) out.emplace_back(l);
+            }
+        };
+        bool anyReflects = false;
+        for (const auto& o : scene.objects) anyReflects = anyReflects || o.surface.reflects();
+        if (options.surface && anyReflects) shining(surfaceLights);
+        if (options.directFromLights) shining(volumeLights);
+
+        const Camera& camera = scene.camera;
+        forward = (camera.lookAt - camera.position).unit();
+        right = forward.cross(camera.up).unit();
+        up = right.cross(forward);
+        aspect = double(options.width) / double(options.height);
+        tanHalf = std::tan(0.5 * camera.fovDegrees * M_PI / 180.0);
+    }
+
+    /// The camera ray through image point (@a px, @a py) (pixels from the top-left corner).
+    void cameraRay(double px, double py, openvdb::Vec3d& origin, openvdb::Vec3d& dir) const
+    {
+        const Camera& camera = scene.camera;
+        const double sx = 2.0 * px / options.width - 1.0, sy = 1.0 - 2.0 * py / options.height;
+        origin = camera.position;
+        dir = forward;
+        if (camera.orthographic) {
+            origin += right * (0.5 * camera.width * sx) + up * (0.5 * camera.width / aspect * sy);
+        } else {
+            dir = (forward + right * (sx * tanHalf * aspect) + up * (sy * tanHalf)).unit();
+        }
+    }
+
+    const VoxelSet& set;
+    const Medium& medium;
+    const Scene& scene;
+    const RenderOptions& options;
+    const RenderMeshes& meshes;
+    const bool useMeshes;
+    /// Without meshes, camera rays meet the `surface` level set, through a copy of the intersector per thread.
+    openvdb::FloatGrid::ConstPtr levelSet;
+    std::optional<openvdb::tools::LevelSetRayIntersector<openvdb::FloatGrid>> levelSetIntersector;
+    const SceneObject* levelSetObject = nullptr;
+    std::vector<LightSampler> surfaceLights; ///< the lights the surface term reflects (none: no surface term)
+    std::vector<LightSampler> volumeLights;  ///< the lights single scattering is marched to (directFromLights)
+    openvdb::Vec3d forward, right, up;       ///< the camera's frame
+    double aspect = 1.0, tanHalf = 1.0;
+};
+
+/// One thread's camera rays: its own intersector, Marcher and shader over a shared RenderContext.
+class CameraTracer
+{
+public:
+    explicit CameraTracer(const RenderContext& context)
+        : mContext(context)
+        , mOptions(context.options)
+        , mIntersector(context.levelSetIntersector)
+        , mMarcher(context.set, context.medium, context.options, context.options.directFromLights ? &context.volumeLights : nullptr,
+              context.meshes.occluders)
+        , mShader(context.medium, context.surfaceLights, context.meshes.occluders)
+        , mEpsilon(1e-4 * context.medium.voxelSize())
+    {
+    }
+
+    /// One camera ray through image point (x + u, y + v).
+    CameraSample trace(int x, int y, double u, double v, std::uint64_t key)
+    {
+        openvdb::Vec3d origin, dir;
+        mContext.cameraRay(x + u, y + v, origin, dir);
+        CameraSample c;
+        const std::optional<Hit> hit = firstSurface(origin, dir);
+        if (!hit) {
+            c.combined = mOptions.background;
+            return c;
+        }
+        c.object = hit->id;
+        c.alpha = 1.0;
+        c.depth = hit->distance;
+        c.normal = hit->normal;
+        c.surface = surfaceTerm(hit->object, hit->point, hit->normal, dir, key);
+        c.combined = c.surface;
+        if (hit->object && hit->object->role == SceneObject::Role::Occluder) return c; // opaque
+        const VolumeTerm g = mOptions.gather ? gatherInward(*hit, key) : marchOn(*hit, dir, key);
+        c.direct = g.direct;
+        c.scatter = g.scatter;
+        for (int ch = 0; ch < 3; ++ch) c.combined[ch] += g.direct[ch] + g.scatter[ch] + g.transmittance[ch] * g.behind[ch];
+        return c;
+    }
+
+private:
+    /// Where a camera ray first meets something (normal facing the ray), and what it is.
+    struct Hit
+    {
+        openvdb::Vec3d point, normal;
+        double distance = 0.0;
+        int id = 0;                          ///< CameraSample::object
+        const SceneObject* object = nullptr; ///< null: the level set of a scene without a medium object
+    };
+
+    /// The volume's radiance per layer, and what lies behind the medium seen through its transmittance.
+    struct VolumeTerm
+    {
+        openvdb::Vec3d direct{0.0}, scatter{0.0}, transmittance{0.0}, behind{0.0};
+    };
+
+    std::optional<Hit> firstSurface(const openvdb::Vec3d& origin, const openvdb::Vec3d& dir)
+    {
+        Hit hit;
+        if (mContext.useMeshes) {
+            const auto h = mContext.meshes.visible->intersect(origin, dir);
+            if (!h) return std::nullopt;
+            hit.distance = h->distance;
+            hit.point = origin + dir * hit.distance;
+            hit.normal = h->normal;
+            hit.id = int(h->id);
+            hit.object = &mContext.scene.objects[std::size_t(h->id)];
+            return hit;
+        }
+        openvdb::math::Ray<double> ray(origin, dir);
+        if (!mIntersector->intersectsWS(ray, hit.point, hit.normal, hit.distance)) return std::nullopt;
+        hit.normal.normalize();
+        if (hit.normal.dot(dir) > 0.0) hit.normal = -hit.normal;
+        hit.id = 0;
+        hit.object = mContext.levelSetObject;
+        return hit;
+    }
+
+    openvdb::Vec3d surfaceTerm(const SceneObject* object, const openvdb::Vec3d& x, const openvdb::Vec3d& normal,
+        const openvdb::Vec3d& dir, std::uint64_t key)
+    {
+        if (mContext.surfaceLights.empty() || !object || !object->surface.reflects()) return openvdb::Vec3d(0.0);
+        return mShader.shade(object->surface, x, normal, -dir, key);
+    }
+
+    /// View mode: the ray marches on through the medium, up to the first occluder behind.
+    VolumeTerm marchOn(const Hit& hit, const openvdb::Vec3d& dir, std::uint64_t key)
+    {
+        VolumeTerm out;
+        double behindDistance = std::numeric_limits<double>::infinity();
+        out.behind = mOptions.background;
+        if (mContext.useMeshes) {
+            double t = mEpsilon;
+            while (auto h = mContext.meshes.visible->intersect(hit.point, dir, t)) {
+                const SceneObject& o = mContext.scene.objects[std::size_t(h->id)];
+                if (o.role == SceneObject::Role::Occluder) {
+                    behindDistance = h->distance;
+                    out.behind = surfaceTerm(&o, hit.point + dir * h->distance, h->normal, dir, key);
+                    break;
+                }
+                t = h->distance + mEpsilon; // the medium's own surfaces: the march covers them
+            }
+        }
+        // From half a voxel before the hit: without a `surface` level set the voxels the
+        // surface cuts hold medium on its outer side too (their volume fraction); with one,
+        // the march skips what lies outside it.
+        const double back = std::min(0.5 * mContext.medium.voxelSize(), hit.distance);
+        const auto g = mMarcher.march(hit.point - dir * back, dir, behindDistance + back, key);
+        out.direct = g.direct;
+        out.scatter = g.scatter;
+        out.transmittance = g.transmittance;
+        return out;
+    }
+
+    /// Gather mode: the mean of marches over cosine-weighted directions about the inward
+    /// normal; those that leave the volume at once are dropped and the rest re-weighted.
+    VolumeTerm gatherInward(const Hit& hit, std::uint64_t key)
+    {
+        VolumeTerm out;
+        const int directions = std::max(1, mOptions.gatherDirections);
+        const openvdb::Vec3d inward = -hit.normal;
+        const openvdb::Vec3d helper = std::abs(inward.x()) < 0.9 ? openvdb::Vec3d(1, 0, 0) : openvdb::Vec3d(0, 1, 0);
+        const openvdb::Vec3d t1 = inward.cross(helper).unit(), t2 = inward.cross(t1);
+        int kept = 0;
+        for (int k = 0; k < directions; ++k) {
+            const double a = (k + unitHash(key, std::uint64_t(k), 2)) / directions;
+            const double phi = 2.0 * M_PI * unitHash(key, std::uint64_t(k), 3);
+            const double r = std::sqrt(a);
+            const openvdb::Vec3d w = (t1 * (r * std::cos(phi)) + t2 * (r * std::sin(phi)) + inward * std::sqrt(std::max(0.0, 1.0 - a))).unit();
+            const auto g = mMarcher.march(hit.point, w, std::numeric_limits<double>::infinity(), mixBits(key + std::uint64_t(k) * 7919u));
+            if (!g.touched) continue;
+            out.direct += g.direct;
+            out.scatter += g.scatter;
+            ++kept;
+        }
+        if (kept > 0) {
+            out.direct /= kept;
+            out.scatter /= kept;
+        }
+        return out;
+    }
+
+    const RenderContext& mContext;
+    const RenderOptions& mOptions;
+    std::optional<openvdb::tools::LevelSetRayIntersector<openvdb::FloatGrid>> mIntersector;
+    Marcher mMarcher;
+    SurfaceShader mShader;
+    double mEpsilon;
+};
+
+/// Pixel @a pixel's layers: the means of its rays, NaN and Inf written as 0.
+void storePixel(RenderedImage& image, std::size_t pixel, const PixelSum& sum)
+{
+    const double inv = 1.0 / sum.count;
+    const auto finite = [](openvdb::Vec3d v) {
+        for (int c = 0; c < 3; ++c) v[c] = std::isfinite(v[c]) ? v[c] : 0.0;
+        return openvdb::Vec3f(v);
+    };
+    const CameraSample& t = sum.total;
+    image.combined[pixel] = finite(t.combined * inv);
+    image.surface[pixel] = finite(t.surface * inv);
+    image.direct[pixel] = finite(t.direct * inv);
+    image.scatter[pixel] = finite(t.scatter * inv);
+    image.alpha[pixel] = float(t.alpha * inv);
+    image.depth[pixel] = t.alpha > 0.0 ? float(t.depth / t.alpha) : 0.0f;
+    image.normal[pixel] = t.alpha > 0.0 ? finite(t.normal / t.alpha) : openvdb::Vec3f(0.0f);
+    image.samples[pixel] = float(sum.count);
+}
+
 } // namespace
 
 RenderedImage render(const VoxelSet& set, const Medium& medium, const Scene& scene, const RenderOptions& options,
@@ -303,37 +545,7 @@ RenderedImage render(const VoxelSet& set, const Medium& medium, const Scene& sce
     if (options.width < 1 || options.height < 1 || options.samples < 1) {
         throw UsageError(fmt::format("image size {}x{} with {} samples per pixel is empty", options.width, options.height, options.samples));
     }
-    const bool useMeshes = meshes.visible && !meshes.visible->empty();
-    openvdb::FloatGrid::Ptr surface;
-    if (!useMeshes) {
-        surface = set.get<openvdb::FloatGrid>("surface");
-        if (surface->getGridClass() != openvdb::GRID_LEVEL_SET) throw Error("grid 'surface' must be a level set");
-    }
-    // What the level set stands for: the scene's medium object, if it names one.
-    const SceneObject* levelSetObject = nullptr;
-    for (const auto& o : scene.objects) {
-        if (o.role == SceneObject::Role::Medium) {
-            levelSetObject = &o;
-            break;
-        }
-    }
-    std::vector<LightSampler> lights;
-    if (options.surface) {
-        bool anyReflects = false;
-        for (const auto& o : scene.objects) anyReflects = anyReflects || o.surface.reflects();
-        if (anyReflects) {
-            for (const Light& l : scene.lights) {
-                if (l.type != Light::Type::Volume && l.power() != openvdb::Vec3d(0.0)) lights.emplace_back(l);
-            }
-        }
-    }
-    std::vector<LightSampler> volumeLights; // the lights single scattering is marched to
-    if (options.directFromLights) {
-        for (const Light& l : scene.lights) {
-            if (l.type != Light::Type::Volume && l.power() != openvdb::Vec3d(0.0)) volumeLights.emplace_back(l);
-        }
-    }
-    const Camera& camera = scene.camera;
+    const RenderContext context(set, medium, scene, options, meshes);
 
     RenderedImage image;
     image.width = options.width;
@@ -348,20 +560,9 @@ RenderedImage render(const VoxelSet& set, const Medium& medium, const Scene& sce
     image.depth.assign(n, 0.0f);
     image.samples.assign(n, 0.0f);
 
-    // Camera frame.
-    const openvdb::Vec3d forward = (camera.lookAt - camera.position).unit();
-    const openvdb::Vec3d right = forward.cross(camera.up).unit();
-    const openvdb::Vec3d up = right.cross(forward);
-    const double aspect = double(options.width) / double(options.height);
-    const double tanHalf = std::tan(0.5 * camera.fovDegrees * M_PI / 180.0);
     const int side = std::max(1, int(std::lround(std::sqrt(double(options.samples)))));
     const int spp = side * side;
     const int maxSpp = std::max(spp, options.maxSamples);
-    const auto gatherDirs = std::max(1, options.gatherDirections);
-    const double eps = 1e-4 * medium.voxelSize();
-
-    std::optional<openvdb::tools::LevelSetRayIntersector<openvdb::FloatGrid>> prototype;
-    if (surface) prototype.emplace(*surface);
     // Adaptive sampling runs as a second pass over the image: a pixel is refined when its first
     // rays disagree, or when what they met differs from what a neighbour's met. The first rays
     // of a pixel the silhouette only clips (an ear's tip, a corner) may all miss, or all hit,
@@ -382,157 +583,48 @@ RenderedImage render(const VoxelSet& set, const Medium& medium, const Scene& sce
         }
         return false;
     };
+    // A pixel's rays: first a jittered side x side grid over the pixel; when refining, up to
+    // maxSpp more from the R2 sequence (Roberts 2018, low discrepancy for any count), randomly
+    // shifted per pixel so that every ray is uniform over the pixel and the mean of all of
+    // them stays unbiased.
+    const auto tracePixel = [&](CameraTracer& tracer, int x, int y, bool refining) {
+        const std::size_t pixel = std::size_t(y) * std::size_t(options.width) + std::size_t(x);
+        const auto key = [&](int s) { return std::uint64_t(pixel) * 65536u + std::uint64_t(s); };
+        PixelSum sum;
+        for (int s = 0; s < spp; ++s) {
+            const double u = (s % side + unitHash(pixel, std::uint64_t(s), 0)) / side;
+            const double v = (s / side + unitHash(pixel, std::uint64_t(s), 1)) / side;
+            sum.add(tracer.trace(x, y, u, v, key(s)));
+        }
+        if (refining) {
+            const double u0 = unitHash(pixel, 0, 4), v0 = unitHash(pixel, 0, 5);
+            for (int s = spp; s < maxSpp; ++s) {
+                const double u = std::fmod(u0 + (s - spp + 1) * 0.7548776662466927, 1.0);
+                const double v = std::fmod(v0 + (s - spp + 1) * 0.5698402909980532, 1.0);
+                sum.add(tracer.trace(x, y, u, v, key(s)));
+            }
+        }
+        return sum;
+    };
     const int progressRows = options.height * (adaptive ? 2 : 1);
     std::atomic<int> rowsDone{0};
     std::atomic<std::size_t> refined{0};
     std::atomic<bool> cancelled{false};
     const auto renderPass = [&](bool refining) {
         tbb::parallel_for(tbb::blocked_range<int>(0, options.height), [&](const tbb::blocked_range<int>& rows) {
-            auto intersector = prototype;
+            CameraTracer tracer(context);
             std::size_t refinedHere = 0;
-            Marcher marcher(set, medium, options, options.directFromLights ? &volumeLights : nullptr, meshes.occluders);
-            SurfaceShader shader(medium, lights, meshes.occluders);
-            const auto surfaceTerm = [&](const SceneObject* object, const openvdb::Vec3d& x, const openvdb::Vec3d& normal,
-                                         const openvdb::Vec3d& dir, std::uint64_t key) {
-                if (lights.empty() || !object || !object->surface.reflects()) return openvdb::Vec3d(0.0);
-                return shader.shade(object->surface, x, normal, -dir, key);
-            };
-            // One camera ray through image point (x + u, y + v).
-            const auto trace = [&](int x, int y, double u, double v, std::uint64_t key) {
-                CameraSample c;
-                const double sx = (2.0 * (x + u) / options.width - 1.0), sy = (1.0 - 2.0 * (y + v) / options.height);
-                openvdb::Vec3d origin = camera.position, dir = forward;
-                if (camera.orthographic) {
-                    origin += right * (0.5 * camera.width * sx) + up * (0.5 * camera.width / aspect * sy);
-                } else {
-                    dir = (forward + right * (sx * tanHalf * aspect) + up * (sy * tanHalf)).unit();
-                }
-
-                // First surface.
-                openvdb::Vec3d hit, normal;
-                double distance = 0.0;
-                const SceneObject* object = nullptr;
-                if (useMeshes) {
-                    const auto h = meshes.visible->intersect(origin, dir);
-                    if (!h) {
-                        c.combined = options.background;
-                        return c;
-                    }
-                    distance = h->distance;
-                    hit = origin + dir * distance;
-                    normal = h->normal;
-                    c.object = int(h->id);
-                    object = &scene.objects[std::size_t(h->id)];
-                } else {
-                    openvdb::math::Ray<double> ray(origin, dir);
-                    if (!intersector->intersectsWS(ray, hit, normal, distance)) {
-                        c.combined = options.background;
-                        return c;
-                    }
-                    normal.normalize();
-                    if (normal.dot(dir) > 0.0) normal = -normal;
-                    c.object = 0;
-                    object = levelSetObject;
-                }
-                c.alpha = 1.0;
-                c.depth = distance;
-                c.normal = normal;
-                c.surface = surfaceTerm(object, hit, normal, dir, key);
-                c.combined = c.surface;
-                if (object && object->role == SceneObject::Role::Occluder) return c; // opaque
-
-                if (!options.gather) {
-                    // View mode: march on along the camera ray, up to the first occluder behind.
-                    double behindDistance = std::numeric_limits<double>::infinity();
-                    openvdb::Vec3d behind = options.background;
-                    if (useMeshes) {
-                        double t = eps;
-                        while (auto h = meshes.visible->intersect(hit, dir, t)) {
-                            const SceneObject& o = scene.objects[std::size_t(h->id)];
-                            if (o.role == SceneObject::Role::Occluder) {
-                                behindDistance = h->distance;
-                                behind = surfaceTerm(&o, hit + dir * h->distance, h->normal, dir, key);
-                                break;
-                            }
-                            t = h->distance + eps; // the medium's own surfaces: the march covers them
-                        }
-                    }
-                    // From half a voxel before the hit: without a `surface` level set the
-                    // voxels the surface cuts hold medium on its outer side too (their
-                    // volume fraction); with one, the march skips what lies outside it.
-                    const double back = std::min(0.5 * medium.voxelSize(), distance);
-                    const Gathered g = marcher.march(hit - dir * back, dir, behindDistance + back, key);
-                    c.direct = g.direct;
-                    c.scatter = g.scatter;
-                    for (int k = 0; k < 3; ++k) c.combined[k] += g.direct[k] + g.scatter[k] + g.transmittance[k] * behind[k];
-                    return c;
-                }
-                // Gather mode: cosine-weighted directions about the inward normal.
-                openvdb::Vec3d t1, t2;
-                const openvdb::Vec3d inward = -normal;
-                const openvdb::Vec3d helper = std::abs(inward.x()) < 0.9 ? openvdb::Vec3d(1, 0, 0) : openvdb::Vec3d(0, 1, 0);
-                t1 = inward.cross(helper).unit();
-                t2 = inward.cross(t1);
-                int kept = 0;
-                for (int k = 0; k < gatherDirs; ++k) {
-                    const double a = (k + unitHash(key, std::uint64_t(k), 2)) / gatherDirs;
-                    const double phi = 2.0 * M_PI * unitHash(key, std::uint64_t(k), 3);
-                    const double r = std::sqrt(a);
-                    const openvdb::Vec3d w = (t1 * (r * std::cos(phi)) + t2 * (r * std::sin(phi)) + inward * std::sqrt(std::max(0.0, 1.0 - a))).unit();
-                    const Gathered g = marcher.march(hit, w, std::numeric_limits<double>::infinity(), mixBits(key + std::uint64_t(k) * 7919u));
-                    if (!g.touched) continue; // left the volume: dropped, the rest re-weighted
-                    c.direct += g.direct;
-                    c.scatter += g.scatter;
-                    ++kept;
-                }
-                if (kept > 0) {
-                    c.direct /= kept;
-                    c.scatter /= kept;
-                }
-                c.combined += c.direct + c.scatter;
-                return c;
-            };
             for (int y = rows.begin(); y != rows.end() && !cancelled; ++y) {
                 for (int x = 0; x < options.width; ++x) {
-                    const std::size_t pixel = std::size_t(y) * std::size_t(options.width) + std::size_t(x);
                     if (refining && !needsMore(x, y)) continue;
-                    PixelSum sum;
-                    // First pass: a jittered side x side grid over the pixel.
-                    for (int s = 0; s < spp; ++s) {
-                        const double u = (s % side + unitHash(pixel, std::uint64_t(s), 0)) / side;
-                        const double v = (s / side + unitHash(pixel, std::uint64_t(s), 1)) / side;
-                        sum.add(trace(x, y, u, v, std::uint64_t(pixel) * 65536u + std::uint64_t(s)));
-                    }
+                    const std::size_t pixel = std::size_t(y) * std::size_t(options.width) + std::size_t(x);
+                    const PixelSum sum = tracePixel(tracer, x, y, refining);
                     if (adaptive && !refining) {
                         seen[pixel] = sum.mixed ? kMixed : sum.firstObject;
                         noisy[pixel] = sum.disagrees(options.noiseLevel);
                     }
-                    if (refining) {
-                        // More rays where the first ones disagree: the R2 sequence (Roberts 2018,
-                        // low discrepancy for any count), randomly shifted per pixel so that every
-                        // ray is uniform over the pixel and the mean of all of them stays unbiased.
-                        const double u0 = unitHash(pixel, 0, 4), v0 = unitHash(pixel, 0, 5);
-                        for (int s = spp; s < maxSpp; ++s) {
-                            const double u = std::fmod(u0 + (s - spp + 1) * 0.7548776662466927, 1.0);
-                            const double v = std::fmod(v0 + (s - spp + 1) * 0.5698402909980532, 1.0);
-                            sum.add(trace(x, y, u, v, std::uint64_t(pixel) * 65536u + std::uint64_t(s)));
-                        }
-                        ++refinedHere;
-                    }
-                    const double inv = 1.0 / sum.count;
-                    const auto finite = [](openvdb::Vec3d v) {
-                        for (int c = 0; c < 3; ++c) v[c] = std::isfinite(v[c]) ? v[c] : 0.0;
-                        return openvdb::Vec3f(v);
-                    };
-                    const CameraSample& t = sum.total;
-                    image.combined[pixel] = finite(t.combined * inv);
-                    image.surface[pixel] = finite(t.surface * inv);
-                    image.direct[pixel] = finite(t.direct * inv);
-                    image.scatter[pixel] = finite(t.scatter * inv);
-                    image.alpha[pixel] = float(t.alpha * inv);
-                    image.depth[pixel] = t.alpha > 0.0 ? float(t.depth / t.alpha) : 0.0f;
-                    image.normal[pixel] = t.alpha > 0.0 ? finite(t.normal / t.alpha) : openvdb::Vec3f(0.0f);
-                    image.samples[pixel] = float(sum.count);
+                    if (refining) ++refinedHere;
+                    storePixel(image, pixel, sum);
                 }
                 const int done = ++rowsDone;
                 if (interrupter && interrupter->wasInterrupted(100 * done / progressRows)) cancelled = true;
