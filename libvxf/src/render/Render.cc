@@ -2,6 +2,7 @@
 
 #include <vxf/core/Hash.h>
 #include <vxf/light/DirectLight.h>
+#include <vxf/light/InteriorField.h>
 #include <vxf/light/LightSampler.h>
 #include <vxf/light/Transmittance.h>
 
@@ -29,9 +30,10 @@ struct Gathered
 class Marcher
 {
 public:
-    /// With @a lights (options.directFromLights), single scattering is marched to them at
-    /// every step instead of read from the `direct` grid.
-    Marcher(const VoxelSet& set, const Medium& medium, const RenderOptions& options,
+    /// Single scattering is read from @a direct (the `direct` grid's J), or with @a lights
+    /// (options.directFromLights) marched to them at every step; multiple scattering from the
+    /// `scatter` grid @a scatter. Either may be null (no such layer).
+    Marcher(const Medium& medium, const RenderOptions& options, const InteriorField* direct, const openvdb::Vec3SGrid* scatter,
         const std::vector<LightSampler>* lights = nullptr, const RayScene* occluders = nullptr)
         : mMedium(medium)
         , mSampler(medium)
@@ -42,8 +44,8 @@ public:
     {
         mShadowMarch.step = options.step;
         mShadowMarch.cutoff = options.cutoff;
-        if (set.find("direct") && !mLights) mDirect.emplace(set.get<openvdb::Vec3SGrid>("direct")->getConstAccessor());
-        if (auto s = set.find("scatter")) mScatter.emplace(set.get<openvdb::Vec3SGrid>("scatter")->getConstAccessor());
+        if (direct && !mLights) mDirect.emplace(*direct);
+        if (scatter) mScatter.emplace(scatter->getConstAccessor());
         mBounds = marchBounds(medium);
         mTauCutoff = -std::log(std::max(options.cutoff, std::numeric_limits<double>::min()));
     }
@@ -66,22 +68,26 @@ public:
         openvdb::Vec3d tau(0.0);
         InsideSteps inside(mSampler, o, d, t0, h);
         InsideStep step;
-        Emission eStart, eMiddle, eEnd; // σs·φ at the step's start, middle and end
+        Emission eStart, eMiddle, eEnd; // J at the step's start, middle and end
         for (int i = 0; i < steps; ++i) {
             // Only the part of the step inside the surface holds medium (sharp boundary).
             if (!inside.next(step)) continue;
             const std::uint64_t point = 3 * std::uint64_t(i); // the ray's emission points, 3 per step
-            eStart = step.joined ? eEnd : emission(step.start, mSampler.interiorScale(step.start, step.distanceBound), key, point);
+            // The interior scale at the step's ends, where σs is read there (lights, scatter grid).
+            const auto scaleAt = [&](const openvdb::Vec3d& p) {
+                return mLights || mScatter ? mSampler.interiorScale(p, step.distanceBound) : 1.0;
+            };
+            eStart = step.joined ? eEnd : emission(step.start, scaleAt(step.start), key, point);
             eMiddle = emission(step.midpoint, step.interior, key, point + 1);
-            eEnd = emission(step.end, mSampler.interiorScale(step.end, step.distanceBound), key, point + 2);
+            eEnd = emission(step.end, scaleAt(step.end), key, point + 2);
             const openvdb::Vec3d sigmaT = mSampler.sigmaT(step.midpoint) * step.interior;
             if (sigmaT[0] <= 0.0 && sigmaT[1] <= 0.0 && sigmaT[2] <= 0.0) continue;
             g.touched = true;
             const double hWorld = step.length * mMedium.voxelSize();
-            // J = σs φ / 4π; ΔL = T·∫ J(s) e^{−σt s} ds (J quadratic along the step); T ·= e^{−σt h}.
+            // ΔL = T·∫ J(s) e^{−σt s} ds (J quadratic along the step); T ·= e^{−σt h}.
             const std::array<EmissionWeights, 3> w = emissionWeights(sigmaT, hWorld);
             for (int c = 0; c < 3; ++c) {
-                const double weight = g.transmittance[c] / (4.0 * M_PI);
+                const double weight = g.transmittance[c];
                 g.direct[c] += weight * emissionIntegral(w[c], eStart.direct[c], eMiddle.direct[c], eEnd.direct[c]);
                 g.scatter[c] += weight * emissionIntegral(w[c], eStart.scatter[c], eMiddle.scatter[c], eEnd.scatter[c]);
                 g.transmittance[c] *= w[c].transmittance;
@@ -96,42 +102,40 @@ public:
     }
 
 private:
-    /// σs·φ of single scattering and of the scattered light at one point.
+    /// J = σs·φ/4π of single scattering and of the scattered light at one point.
     struct Emission
     {
         openvdb::Vec3d direct{0.0}, scatter{0.0};
     };
 
-    /// σs·φ at index point @a p inside the surface, whose interior scale is @a interior: the
-    /// grids' values interpolated, single scattering marched to the lights (one sample per
-    /// light, the @a point-th of the ray of @a key) when options.directFromLights. σs·φ is
-    /// interpolated as one per-voxel quantity (as the scatter passes do); interpolating σs and
-    /// φ apart would square the ramp where both fall to zero at the surface.
+    /// J at index point @a p inside the surface, whose interior scale is @a interior
+    /// (Medium::Sampler::interiorScale). Single scattering: marched to the lights (one sample
+    /// per light, the @a point-th of the ray of @a key) with σs(p)·interior when
+    /// options.directFromLights, else the `direct` grid's InteriorField. Multiple scattering:
+    /// σs·φ of the `scatter` grid interpolated as one per-voxel quantity, as the scatter
+    /// passes read their sources (interpolating σs and φ apart would square the ramp where
+    /// both fall to zero at the surface), times the interior scale.
     Emission emission(const openvdb::Vec3d& p, double interior, std::uint64_t key, std::uint64_t point)
     {
         Emission e;
-        if (mLights) e.direct = mSampler.sigmaS(p) * fluenceFromLights(mMedium.transform().indexToWorld(p), key, point);
-        interpolateEmission(p, e.direct, e.scatter);
-        e.direct *= interior;
-        e.scatter *= interior;
+        if (mLights) e.direct = mSampler.sigmaS(p) * (interior / (4.0 * M_PI)) * fluenceFromLights(mMedium.transform().indexToWorld(p), key, point);
+        if (mDirect) e.direct = mDirect->sample(p);
+        if (mScatter) e.scatter = interpolateScatter(p) * (interior / (4.0 * M_PI));
         return e;
     }
 
-    /// Adds the trilinear interpolation of σs·φ of the eight voxels around index point @a p,
-    /// for the `direct` (when read from the grid) and `scatter` grids.
-    void interpolateEmission(const openvdb::Vec3d& p, openvdb::Vec3d& direct, openvdb::Vec3d& scatter)
+    /// The trilinear interpolation of σs·φ of the `scatter` grid's eight voxels around index point @a p.
+    openvdb::Vec3d interpolateScatter(const openvdb::Vec3d& p)
     {
-        if (!mDirect && !mScatter) return;
+        openvdb::Vec3d sum(0.0);
         const openvdb::Coord base = openvdb::Coord::floor(p);
         const openvdb::Vec3d f = p - base.asVec3d();
         for (int corner = 0; corner < 8; ++corner) {
             const openvdb::Coord c = base.offsetBy(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
             const double w = ((corner & 1) ? f[0] : 1.0 - f[0]) * ((corner & 2) ? f[1] : 1.0 - f[1]) * ((corner & 4) ? f[2] : 1.0 - f[2]);
-            if (w <= 0.0) continue;
-            const openvdb::Vec3d sigmaS = mSampler.sigmaS(c) * w;
-            if (mDirect) direct += sigmaS * openvdb::Vec3d(mDirect->getValue(c));
-            if (mScatter) scatter += sigmaS * openvdb::Vec3d(mScatter->getValue(c));
+            if (w > 0.0) sum += mSampler.sigmaS(c) * openvdb::Vec3d(mScatter->getValue(c)) * w;
         }
+        return sum;
     }
 
     /// φ0 at world point @a x, the @a point-th emission point of the ray of @a key: Σ over the
@@ -168,7 +172,8 @@ private:
     const RayScene* mOccluders;
     MarchOptions mShadowMarch;
     std::vector<LightSample> mLightSamples;
-    std::optional<openvdb::Vec3SGrid::ConstAccessor> mDirect, mScatter;
+    std::optional<InteriorField::Sampler> mDirect;
+    std::optional<openvdb::Vec3SGrid::ConstAccessor> mScatter;
     openvdb::BBoxd mBounds;
     double mTauCutoff;
 };
@@ -328,6 +333,8 @@ struct RenderContext
         for (const auto& o : scene.objects) anyReflects = anyReflects || o.surface.reflects();
         if (options.surface && anyReflects) shining(surfaceLights);
         if (options.directFromLights) shining(volumeLights);
+        if (!options.directFromLights && set.find("direct")) directField.emplace(medium, *set.get<openvdb::Vec3SGrid>("direct"));
+        if (set.find("scatter")) scatterGrid = set.get<openvdb::Vec3SGrid>("scatter");
 
         const Camera& camera = scene.camera;
         forward = (camera.lookAt - camera.position).unit();
@@ -363,6 +370,8 @@ struct RenderContext
     const SceneObject* levelSetObject = nullptr;
     std::vector<LightSampler> surfaceLights; ///< the lights the surface term reflects (none: no surface term)
     std::vector<LightSampler> volumeLights;  ///< the lights single scattering is marched to (directFromLights)
+    std::optional<InteriorField> directField; ///< single scattering read from the `direct` grid (not directFromLights)
+    openvdb::Vec3SGrid::ConstPtr scatterGrid; ///< the `scatter` grid, or null
     openvdb::Vec3d forward, right, up;       ///< the camera's frame
     double aspect = 1.0, tanHalf = 1.0;
 };
@@ -375,7 +384,8 @@ public:
         : mContext(context)
         , mOptions(context.options)
         , mIntersector(context.levelSetIntersector)
-        , mMarcher(context.set, context.medium, context.options, context.options.directFromLights ? &context.volumeLights : nullptr,
+        , mMarcher(context.medium, context.options, context.directField ? &*context.directField : nullptr,
+              context.scatterGrid.get(), context.options.directFromLights ? &context.volumeLights : nullptr,
               context.meshes.occluders)
         , mShader(context.medium, context.surfaceLights, context.meshes.occluders)
         , mEpsilon(1e-4 * context.medium.voxelSize())

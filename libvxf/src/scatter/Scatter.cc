@@ -4,6 +4,7 @@
 #include <vxf/scatter/CoarseLevel.h>
 
 #include <vxf/core/Error.h>
+#include <vxf/light/InteriorField.h>
 
 #include <openvdb/tools/Composite.h>
 #include <openvdb/tools/Morphology.h>
@@ -61,29 +62,6 @@ openvdb::Vec3d gridL1(const openvdb::Vec3SGrid& grid)
 constexpr int kMaxCorrectionCycles = 6;
 
 double maxChannel(const openvdb::Vec3d& v) { return std::max({v[0], v[1], v[2]}); }
-
-/// J = σs·φ/(4π) on φ's topology.
-openvdb::Vec3SGrid::Ptr sourceFromFluence(const Medium& medium, const openvdb::Vec3SGrid& phi)
-{
-    auto j = phi.deepCopy();
-    j->setName("scatter_source");
-    openvdb::tree::LeafManager<openvdb::Vec3STree> leaves(j->tree());
-    leaves.foreach([&](openvdb::Vec3STree::LeafNodeType& leaf, std::size_t) {
-        Medium::Sampler sampler(medium);
-        for (auto it = leaf.beginValueOn(); it; ++it) {
-            it.setValue(openvdb::Vec3f(sampler.sigmaS(it.getCoord()) * openvdb::Vec3d(*it) / (4.0 * M_PI)));
-        }
-    });
-    Medium::Sampler sampler(medium);
-    for (auto it = j->tree().beginValueOn(); it; ++it) {
-        if (!it.isTileValue()) continue;
-        openvdb::CoordBBox box;
-        it.getBoundingBox(box);
-        const openvdb::Coord centre = box.min() + openvdb::Coord(box.dim().x() / 2);
-        it.setValue(openvdb::Vec3f(sampler.sigmaS(centre) * openvdb::Vec3d(*it) / (4.0 * M_PI)));
-    }
-    return j;
-}
 
 /// What is known of the rest of a series of passes, Σ_{k>K} φ_k, from its last two passes.
 struct SeriesTail

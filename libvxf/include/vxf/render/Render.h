@@ -69,12 +69,13 @@ struct RenderMeshes
 ///   attenuated by the medium (sampleTransmittance), from just off the surface.
 /// - Volume term at a medium's surface, view mode: the ray marches on through the medium
 ///   along the same direction (index-matched boundary): L = ∫ T·J dt + T_exit·L_behind, with
-///   J = σs·φ/(4π) per layer (φ = `direct` for the direct layer (or, with
-///   options.directFromLights, the lights' fluence marched per step), `scatter` for the scatter
-///   layer, their sum for combined; σs·φ of the grids interpolated as one per-voxel quantity,
-///   as the scatter passes do; σt constant over each step and σs·φ quadratic through its start,
-///   middle and end, integrated exactly (emissionWeights); with a `surface` level set
-///   the medium ends sharply at it, Medium::Sampler::interiorScale); L_behind is the first
+///   J = σs·φ/(4π) per layer: the direct layer's from the `direct` grid read as an
+///   InteriorField (continued beyond the surface, log-trilinear), or with
+///   options.directFromLights the lights' fluence marched per step; the scatter layer's σs·φ
+///   of `scatter` interpolated as one per-voxel quantity, as the scatter passes do; combined,
+///   their sum. σt constant over each step and J quadratic through its start, middle and end,
+///   integrated exactly (emissionWeights); with a `surface` level set the medium ends sharply
+///   at it (Medium::Sampler::interiorScale). L_behind is the first
 ///   occluder behind (its surface term) or the background, and the march stops there. Gather
 ///   mode: the average of such marches over a cosine-weighted hemisphere of directions into
 ///   the volume, dropping those that leave it at once.
