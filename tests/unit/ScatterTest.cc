@@ -188,3 +188,22 @@ TEST_CASE("a settled pass ratio ends the series early, with its rest added", "[s
     const auto [cut, cutEnergy] = run(int(early.passes.size()), 0.0);
     CHECK(cutEnergy < converged * 0.9);
 }
+
+TEST_CASE("a march cut off at the transmittance cutoff adds the light beyond it", "[scatter]")
+{
+    // Uniform source J deep in a homogeneous medium (σt R = 10): one pass gives φ = 4πJ/σt =
+    // albedo·φ0 at the centre. A march stopped at transmittance c misses a share c of it
+    // unless it adds what lies beyond (J held over an unbounded medium: exact here).
+    const vxf::Material m = vxf::test::albedoMaterial(10.0, 0.5);
+    for (const double cutoff : {0.05, 1e-3}) {
+        vxf::VoxelSet set = uniformSphere(m, 1.0);
+        vxf::ScatterOptions options;
+        options.passes = 1;
+        options.tolerance = 0.0;
+        options.pass.directions = 32;
+        options.pass.cutoff = cutoff;
+        vxf::scatter(set, vxf::Medium(set, m), options);
+        INFO("cutoff " << cutoff);
+        CHECK(set.get<openvdb::Vec3SGrid>("scatter")->tree().getValue(openvdb::Coord(0)).x() == Approx(0.5).epsilon(2e-3));
+    }
+}

@@ -93,7 +93,16 @@ openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGr
                     T[ch] *= w[ch].transmittance;
                     tau[ch] += std::max(0.0, sigmaT[ch]) * hWorld;
                 }
-                if (std::min({tau[0], tau[1], tau[2]}) > tauCutoff) break;
+                if (std::min({tau[0], tau[1], tau[2]}) > tauCutoff) {
+                    // What lies beyond: J held at the step's end over an unbounded medium, T·J/σt,
+                    // unless the step ended at the surface or the march's end (nothing beyond).
+                    if (i + 1 < steps && step.length > hStep * (1.0 - 1e-9)) {
+                        for (int ch = 0; ch < 3; ++ch) {
+                            if (sigmaT[ch] > 0.0) radiance[ch] += T[ch] * jEnd[ch] / sigmaT[ch];
+                        }
+                    }
+                    break;
+                }
             }
             phi += radiance;
         }

@@ -10,7 +10,12 @@ struct ScatterPassOptions
 {
     int directions = 64;        ///< spherical Fibonacci directions per voxel (weights 4π/N)
     double step = 1.0;          ///< march step in voxels
-    double cutoff = 1e-4;       ///< a march stops when the transmittance of every channel is below this
+    /// A march stops when the transmittance of every channel is below this, and adds what lies
+    /// beyond as J held at that point over an unbounded medium, T·J/σt (not where its last step
+    /// ended at the surface). Without that, every pass lost a share `cutoff` of the light deep
+    /// inside, which albedo 0.99 compounds about 40-fold; with it, cutoff 1e-2 costs the thick
+    /// bunny 0.03% (dim 64) for 27% less scatter time, and 1e-1 is too coarse (10% off).
+    double cutoff = 1e-4;
     bool rotatePerVoxel = true; ///< rotate the direction set per voxel (deterministic hash): noise, not banding
 };
 
