@@ -1,4 +1,4 @@
-// `vxf scatter IN.vdb -o OUT.vdb [--passes N] [--directions D] [--step H] [--tolerance E] [--keep-passes] [--band W] [--from-pass K] [--fine-passes N [--coarse-factor F]]`
+// `vxf scatter IN.vdb -o OUT.vdb [--passes N] [--directions D] [--step H] [--cutoff C] [--tolerance E] [--keep-passes] [--band W] [--from-pass K] [--fine-passes N [--coarse-factor F]]`
 #include "CliSupport.h"
 #include "Commands.h"
 
@@ -29,6 +29,10 @@ public:
         mApp->add_option("--passes", mOptions.passes, "At most this many passes (default 16)")->check(CLI::Range(0, 10000));
         mApp->add_option("--directions", mOptions.pass.directions, "Directions per voxel (default 64)")->check(CLI::Range(1, 65536));
         mApp->add_option("--step", mOptions.pass.step, "March step in voxels (default 1)")->check(CLI::Range(0.01, 64.0));
+        mApp->add_option("--cutoff", mOptions.pass.cutoff,
+               "A march stops where the transmittance falls below this and adds the light beyond it as the source "
+               "held over an unbounded medium (default 1e-3; 1e-2 saves a third of the time for about 0.2% error on thick media)")
+            ->check(CLI::Range(1e-12, 0.5));
         mApp->add_option("--tolerance", mOptions.tolerance,
                "Stop when the rest of the series, estimated as phi_K r/(1-r), is known to within this fraction of the sum (the passes have settled into their slowest mode), and add it (default 1e-3; 0: never)")
             ->check(CLI::Range(0.0, 1.0));
@@ -64,7 +68,7 @@ public:
         const Medium medium(set, material);
         const ScatterReport report = scatter(set, medium, mOptions, &progress);
         nlohmann::json params = {{"command", "scatter"}, {"input", mInput}, {"passes", mOptions.passes},
-            {"directions", mOptions.pass.directions}, {"step", mOptions.pass.step}, {"tolerance", mOptions.tolerance},
+            {"directions", mOptions.pass.directions}, {"step", mOptions.pass.step}, {"cutoff", mOptions.pass.cutoff}, {"tolerance", mOptions.tolerance},
             {"keep_passes", mOptions.keepPasses}, {"band", mOptions.band}, {"extrapolate", mOptions.extrapolateTail}, {"from_pass", mOptions.fromPass},
             {"fine_passes", mOptions.finePasses}, {"coarse_factor", mOptions.coarseFactor},
             {"rotate_per_voxel", mOptions.pass.rotatePerVoxel}, {"passes_run", report.passes.size()}};

@@ -1,6 +1,7 @@
 #include <vxf/pipeline/Scene.h>
 
 #include <vxf/core/Error.h>
+#include <vxf/scatter/Scatter.h>
 
 #include "TestSupport.h"
 
@@ -28,7 +29,7 @@ const char* kScene = R"({
   ],
   "camera": {"position": [0, -5, 1], "look_at": [0, 0, 1], "fov": 30},
   "voxelize": {"voxel_size": 0.01, "band": 4},
-  "scatter": {"passes": 8, "directions": 32, "step": 0.5, "tolerance": 0.01, "band": 0.2},
+  "scatter": {"passes": 8, "directions": 32, "step": 0.5, "tolerance": 0.01, "band": 0.2, "cutoff": 0.01},
   "render": {"width": 320, "height": 200, "samples": 2, "mode": "gather", "background": [0.1, 0.2, 0.3]},
   "outputs": ["image", "direct"]
 })";
@@ -102,6 +103,8 @@ TEST_CASE("a scene file resolves materials, lights, camera and settings", "[pipe
     CHECK(scene.settings.band == 4.0);
     CHECK(scene.settings.passes == 8);
     CHECK(scene.settings.scatterBand == 0.2);
+    CHECK(scene.settings.cutoff == 0.01);
+    CHECK(vxf::scatterOptionsFrom(scene.settings).pass.cutoff == 0.01);
     CHECK(scene.settings.gather);
     CHECK(scene.settings.background == openvdb::Vec3d(0.1, 0.2, 0.3));
     CHECK(scene.settings.outputs == std::vector<std::string>{"image", "direct"});
@@ -114,6 +117,8 @@ TEST_CASE("bad scenes are refused with the field at fault", "[pipeline][scene]")
     CHECK_THAT(errorOf(edited(R"("intensity": 4)", R"("intensity": -4)")), Catch::StartsWith("/scenes/test.json: /lights/0/intensity: "));
     CHECK_THAT(errorOf(edited(R"("cone_angle": 40, )", "")), Catch::Contains("/lights/1"));
     CHECK_THAT(errorOf(edited(R"("fov": 30)", R"("fov": 30, "zoom": 2)")), Catch::Contains("/camera"));
+    CHECK_THAT(errorOf(edited(R"("cutoff": 0.01)", R"("cutoff": 0)")), Catch::StartsWith("/scenes/test.json: /scatter/cutoff: "));
+    CHECK_THAT(errorOf(edited(R"("cutoff": 0.01)", R"("cutoff": 0.9)")), Catch::StartsWith("/scenes/test.json: /scatter/cutoff: "));
     CHECK_THAT(errorOf(edited(R"("mean_free_path": 0.5)", R"("mean_free_path": 0.5, "sigma_a": 1)")), Catch::Contains("/objects/0/material"));
     CHECK_THAT(errorOf(edited(R"("voxel_size": 0.01)", R"("voxel_size": 0.01, "dim": 64)")), Catch::Contains("/voxelize"));
     CHECK_THAT(errorOf(edited(R"("type": "directional")", R"("type": "laser")")), Catch::Contains("/lights/2"));

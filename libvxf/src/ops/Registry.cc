@@ -623,7 +623,9 @@ std::vector<Operator> makeRegistry()
 
     ops.push_back({"scatter", "the scatter stage: passes of source iteration into `scatter` and `illumination` (material from the file)",
         {integer("passes", "at most this many", 16, 0, 10000), integer("directions", "per voxel", 64, 1, 65536),
-            number("step", "march step, voxels", 1.0, 0.01, 64.0), number("tolerance", "stop when the rest of the series is known to within this fraction of the sum, and add it", 1e-3, 0.0, 1.0),
+            number("step", "march step, voxels", 1.0, 0.01, 64.0),
+            number("cutoff", "a march stops below this transmittance and adds the light beyond", 1e-3, 1e-12, 0.5),
+            number("tolerance", "stop when the rest of the series is known to within this fraction of the sum, and add it", 1e-3, 0.0, 1.0),
             number("band", "adaptive band, world units (0: full resolution)", 0.0, 0.0), flag("extrapolate", "add the geometric tail"),
             flag("keep_passes", "keep scatter_pass_K"),
             integer("fine_passes", "passes at full resolution before the rest run on a coarser lattice (0: all)", 0, 0, 10000),
@@ -635,6 +637,7 @@ std::vector<Operator> makeRegistry()
             o.passes = ctx.args.integer("passes");
             o.pass.directions = ctx.args.integer("directions");
             o.pass.step = ctx.args.number("step");
+            o.pass.cutoff = ctx.args.number("cutoff");
             o.tolerance = ctx.args.number("tolerance");
             o.band = ctx.args.number("band");
             o.extrapolateTail = ctx.args.flag("extrapolate");

@@ -134,7 +134,7 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
         record("scatter", "skipped", "no requested output needs it", "", 0.0);
     } else {
         const json scatterInputs = {{"lit", lightHash}, {"passes", s.passes}, {"directions", s.directions}, {"step", s.step},
-            {"tolerance", s.tolerance}, {"extrapolate", s.extrapolate}, {"band", s.scatterBand}, {"keep", wants("scatter_passes")},
+            {"cutoff", s.cutoff}, {"tolerance", s.tolerance}, {"extrapolate", s.extrapolate}, {"band", s.scatterBand}, {"keep", wants("scatter_passes")},
             {"fine_passes", s.finePasses}, {"coarse_factor", s.coarseFactor}};
         // (every field scatterOptionsFrom reads)
         volumeHash = hashOf(scatterInputs);

@@ -214,6 +214,7 @@ Scene parseScene(const std::string& text, const std::string& path)
         s.passes = v.value("passes", s.passes);
         s.directions = v.value("directions", s.directions);
         s.step = v.value("step", s.step);
+        s.cutoff = v.value("cutoff", s.cutoff);
         s.tolerance = v.value("tolerance", s.tolerance);
         s.extrapolate = v.value("extrapolate", s.extrapolate);
         s.scatterBand = v.value("band", s.scatterBand);

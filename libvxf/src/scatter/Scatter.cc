@@ -30,6 +30,7 @@ ScatterOptions scatterOptionsFrom(const SceneSettings& s)
     o.keepPasses = std::find(s.outputs.begin(), s.outputs.end(), "scatter_passes") != s.outputs.end();
     o.pass.directions = s.directions;
     o.pass.step = s.step;
+    o.pass.cutoff = s.cutoff;
     o.band = s.scatterBand;
     o.finePasses = s.finePasses;
     o.coarseFactor = s.coarseFactor;

@@ -81,6 +81,7 @@ struct SceneSettings
     double band = 3.0;
     int passes = 16, directions = 64;
     double step = 1.0, tolerance = 1e-3;
+    double cutoff = 1e-3; ///< scatter marches stop below this transmittance (ScatterPassOptions::cutoff)
     bool extrapolate = false;
     double scatterBand = 0.0; ///< 0: full resolution everywhere
     int finePasses = 0, coarseFactor = 4; ///< passes after finePasses on a coarser lattice (0: none)
