@@ -223,6 +223,11 @@ TEST_CASE("command-line usage errors exit with status 2", "[cli]")
     const auto zeroSize = run(fmt::format("{} voxelize builtin:box -o {} --voxel-size 0", vxf, dir.path("x.vdb")));
     CHECK(zeroSize.status == 2);
     CHECK(zeroSize.err.find("--voxel-size: Value 0 is not a number above zero") != std::string::npos);
+    for (const char* cutoff : {"0", "0.7"}) {
+        const auto badCutoff = run(fmt::format("{} scatter {} -o {} --cutoff {}", vxf, dir.path("in.vdb"), dir.path("x.vdb"), cutoff));
+        CHECK(badCutoff.status == 2);
+        CHECK(badCutoff.err.find(fmt::format("--cutoff: Value {} ", cutoff)) != std::string::npos);
+    }
     CHECK(run(vxf + " frobnicate").status == 2);
     CHECK(run(vxf).status == 2);
     CHECK_FALSE(fs::exists(dir.path("x.vdb")));
