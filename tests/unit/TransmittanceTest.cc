@@ -106,19 +106,32 @@ TEST_CASE("transmittance to the boundary through a concave gap counts only the m
     CHECK(t.x() == Approx(expected).margin(1e-4));
 }
 
-TEST_CASE("a march step's part inside the surface ends at the zero crossing", "[light][transmittance]")
+TEST_CASE("grazing chords through a sphere keep their length", "[light][transmittance]")
 {
-    double lo = 0.0, hi = 0.0;
-    CHECK_FALSE(vxf::insidePart(2.0, 0.5, 3.0, 0.25, lo, hi)); // outside
-    REQUIRE(vxf::insidePart(2.0, -0.5, 3.0, -0.25, lo, hi));   // inside: all of it
-    CHECK(lo == 2.0);
-    CHECK(hi == 3.0);
-    REQUIRE(vxf::insidePart(2.0, 0.75, 3.0, -0.25, lo, hi)); // entering at 2.75
-    CHECK(lo == Approx(2.75));
-    CHECK(hi == 3.0);
-    REQUIRE(vxf::insidePart(2.0, -0.25, 3.0, 0.25, lo, hi)); // leaving at 2.5
-    CHECK(lo == 2.0);
-    CHECK(hi == Approx(2.5));
+    // A sphere of 10 voxels' radius, chords from 1 down to 0.1 voxel under its silhouette,
+    // marched at whole-voxel steps (the render's and the scatter's) and at 3 voxels, where the
+    // shortest chords (2.8 voxels) lie between two step ends outside. Along a grazing ray the
+    // signed distance is a parabola: the trilinear level set (convex where the surface is)
+    // lies inside the sphere by up to dx²/8R, and the line between step ends shortens the
+    // chord again: 7.5% and 4% short at 0.1 voxel deep before the level set was read
+    // triquadratically and the crossings found on it.
+    const double radius = 1.0, dx = 0.1, sigmaT = 4.0;
+    vxf::VoxelizeOptions options;
+    options.voxelSize = dx;
+    const vxf::VoxelSet set = vxf::voxelize(vxf::makeSphere(openvdb::Vec3d(0.0), radius, 128, 256), options);
+    const vxf::Medium medium(set, vxf::test::greyMaterial(sigmaT, 0.0));
+    vxf::Medium::Sampler sampler(medium);
+    for (double step : {1.0, 3.0}) {
+        for (double b : {0.9, 0.95, 0.98, 0.99}) {
+            const double exact = sigmaT * 2.0 * std::sqrt(radius * radius - b * b);
+            for (double start : {-1.0, -1.03, -1.07}) { // the steps' phase along the chord
+                const openvdb::Vec3d from(start, b * 0.8, b * 0.6), to(start + 2.0, b * 0.8, b * 0.6);
+                const double tau = -std::log(vxf::transmittance(sampler, medium, from / dx, to / dx, {step, 1e-12}).x());
+                INFO("step " << step << ", offset " << b << ", start " << start << ": tau " << tau << ", exact " << exact);
+                CHECK(tau == Approx(exact).epsilon(0.01));
+            }
+        }
+    }
 }
 
 TEST_CASE("through a voxelized sphere, transmittance follows the exact surface", "[light][transmittance]")

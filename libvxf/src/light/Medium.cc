@@ -100,7 +100,10 @@ Medium::Sampler::Sampler(const Medium& medium)
 double Medium::Sampler::signedDistance(const openvdb::Vec3d& ijk)
 {
     if (!mSurface) return -1.0;
-    return double(openvdb::tools::BoxSampler::sample(*mSurface, ijk)) / mMedium.voxelSize();
+    const double linear = double(openvdb::tools::BoxSampler::sample(*mSurface, ijk)) / mMedium.voxelSize();
+    if (std::abs(linear) > kQuadraticBand) return linear;
+    const double quadratic = double(openvdb::tools::QuadraticSampler::sample(*mSurface, ijk)) / mMedium.voxelSize();
+    return std::abs(quadratic - linear) <= kQuadraticLimit ? quadratic : linear;
 }
 
 double Medium::Sampler::interiorScale(const openvdb::Vec3d& ijk, double distanceBound)

@@ -46,8 +46,17 @@ public:
         openvdb::Vec3d sigmaS(const openvdb::Vec3d& ijk);
         /// σs of voxel @a ijk itself, not interpolated (1/world unit).
         openvdb::Vec3d sigmaS(const openvdb::Coord& ijk);
-        /// Signed distance to the surface at @a ijk (voxels, negative inside, trilinear);
-        /// −1 everywhere when the medium has no surface.
+        /// Signed distance to the surface at @a ijk (voxels, negative inside); −1 everywhere
+        /// when the medium has no surface. Within kQuadraticBand of the surface it is read
+        /// triquadratically (OpenVDB's QuadraticSampler, 27 voxels): the trilinear read of a
+        /// distance that is convex where the surface is lies above it by up to dx²/8R, which
+        /// moves a sphere's surface of radius R inward and shortened chords 0.1 voxel under
+        /// its silhouette by 7.5% at R = 10 voxels (the bunny's convex silhouettes came out
+        /// dark, its concave ones bright). Where the two reads differ by more than
+        /// kQuadraticLimit the distance is not smooth over the 27 voxels (the kink over a
+        /// medial axis: sheets and rims a voxel or two thick, surfaces curved tighter than
+        /// about two voxels), and the parabola across it would move the surface, so the
+        /// trilinear read stands there.
         double signedDistance(const openvdb::Vec3d& ijk);
         /// Sharp boundary: a voxel's coefficients and fluence-weighted emission are averages over
         /// its cube, of which only the volume fraction f = clamp(½ − φ/dx, 0, 1) lies inside the
@@ -64,6 +73,12 @@ public:
         std::optional<openvdb::Vec3SGrid::ConstAccessor> mSigmaA, mSigmaS;
         std::optional<GridLookup<openvdb::FloatGrid>> mSurface;
     };
+
+    /// Voxels: signedDistance reads triquadratically where the trilinear read is within this
+    /// of the surface. Beyond it the two reads cannot disagree on the side (they would differ
+    /// by more than kQuadraticLimit), and the zero crossings are found within it.
+    static constexpr double kQuadraticBand = 0.25;
+    static constexpr double kQuadraticLimit = 0.125; ///< voxels: ½·(2/R)·¼, R = 2 voxels
 
     /// interiorScale's floor on the volume fraction (where an edit put density outside the surface).
     static constexpr double kMinFraction = 0.1;

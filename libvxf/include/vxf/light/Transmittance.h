@@ -77,20 +77,6 @@ inline double emissionIntegral(const EmissionWeights& w, double jStart, double j
     return std::clamp(v, lo, hi);
 }
 
-/// The part [@a lo, @a hi] of the march step [@a ta, @a tb] inside the medium's surface, from
-/// the signed distances @a sa, @a sb at its ends (linear between them, so a step of at most a
-/// voxel meets the zero crossing of the trilinear level set to second order); false when the
-/// step lies outside. Without a surface (distances −1) the whole step is inside.
-inline bool insidePart(double ta, double sa, double tb, double sb, double& lo, double& hi)
-{
-    lo = ta;
-    hi = tb;
-    if (sa >= 0.0 && sb >= 0.0) return false;
-    if (sa > 0.0) lo = ta + (tb - ta) * sa / (sa - sb);
-    else if (sb > 0.0) hi = ta + (tb - ta) * sa / (sa - sb);
-    return hi > lo;
-}
-
 /// One march step's part inside the medium's surface (index space): its ends and midpoint,
 /// its length (voxels), Medium::Sampler::interiorScale at the midpoint, and an upper bound of
 /// the signed distance over it (for interiorScale elsewhere on the step).
@@ -103,15 +89,23 @@ struct InsideStep
     bool joined = false; ///< it starts where the previous inside step ended (values there can be reused)
 };
 
-/// The equal steps of @a h voxels along origin + t·direction from t = @a t0, each clipped to the
-/// surface by insidePart (one signed-distance lookup per step end; interiorScale skipped deep
-/// inside). Without a surface every step is whole, with interior scale 1.
+/// The equal steps of @a h voxels along origin + t·direction (unit, index space) from t = @a t0,
+/// each clipped to the part inside the surface. Both ends of a step are looked up (the end
+/// once, shared with the next step); where the surface may cut the step, the cut is found on
+/// the level set itself (Medium::Sampler::signedDistance), not on the line between the ends:
+/// a grazing ray's signed distance is a parabola whose chord the line shortens (0.1 voxel
+/// under the silhouette of a sphere of 10 voxels, by 4 to 6% at 1-voxel steps, where the
+/// crossings found on it give 0.1%), and a chord shorter than a step, between two ends
+/// outside, was lost altogether. Signed distances are 1-Lipschitz, so a step whose
+/// ends lie outside by sa + sb ≥ its length cannot dip inside and costs nothing more. Each
+/// step keeps one contiguous inside part (a gap narrower than the step, between two parts
+/// inside, counts as medium). Without a surface every step is whole, with interior scale 1.
 class InsideSteps
 {
 public:
     InsideSteps(Medium::Sampler& sampler, const openvdb::Vec3d& origin, const openvdb::Vec3d& direction, double t0, double h)
         : mSampler(sampler), mOrigin(origin), mDirection(direction), mT(t0), mH(h)
-        , mDistance(sampler.signedDistance(origin + direction * t0))
+        , mDistance(distanceAt(t0))
     {
     }
 
@@ -122,7 +116,7 @@ public:
         const bool previousReachedEnd = mReachedEnd;
         mReachedEnd = false;
         mT += mH;
-        mDistance = mSampler.signedDistance(mOrigin + mDirection * mT);
+        mDistance = distanceAt(mT);
         double lo, hi;
         if (!insidePart(ta, sa, mT, mDistance, lo, hi)) return false;
         step.start = mOrigin + mDirection * lo;
@@ -138,6 +132,69 @@ public:
     }
 
 private:
+    double distanceAt(double t) { return mSampler.signedDistance(mOrigin + mDirection * t); }
+
+    /// The part [@a lo, @a hi] of the step [@a ta, @a tb] inside the surface, from the signed
+    /// distances @a sa, @a sb at its ends; false when it lies outside.
+    bool insidePart(double ta, double sa, double tb, double sb, double& lo, double& hi)
+    {
+        lo = ta;
+        hi = tb;
+        if (sa >= 0.0 && sb >= 0.0) {
+            double tm, sm;
+            if (!dipInside(ta, sa, tb, sb, kDipDepth, tm, sm)) return false;
+            lo = crossing(ta, sa, tm, sm);
+            hi = crossing(tm, sm, tb, sb);
+        } else if (sa > 0.0) {
+            lo = crossing(ta, sa, tb, sb);
+        } else if (sb > 0.0) {
+            hi = crossing(ta, sa, tb, sb);
+        }
+        return hi > lo;
+    }
+
+    /// A point @a tm inside (@a sm < 0) of [@a ta, @a tb] whose ends lie outside: looked up
+    /// where the two ends' Lipschitz cones meet (the deepest the surface can reach), then in the
+    /// halves, @a depth levels down; false when none is found or none can exist.
+    bool dipInside(double ta, double sa, double tb, double sb, int depth, double& tm, double& sm)
+    {
+        if (depth == 0 || sa + sb >= tb - ta) return false;
+        tm = std::clamp(0.5 * (ta + tb + sa - sb), ta, tb);
+        sm = distanceAt(tm);
+        if (sm < 0.0) return true;
+        const double tMiddle = tm, sMiddle = sm;
+        return dipInside(ta, sa, tMiddle, sMiddle, depth - 1, tm, sm) || dipInside(tMiddle, sMiddle, tb, sb, depth - 1, tm, sm);
+    }
+
+    /// The zero of the signed distance between @a ta and @a tb, where it changes sign
+    /// (@a sa, @a sb): regula falsi with the Illinois rule, from the secant's estimate.
+    double crossing(double ta, double sa, double tb, double sb)
+    {
+        double t = ta + (tb - ta) * sa / (sa - sb);
+        int kept = 0; // the end kept by the last two iterations: −1 a, +1 b
+        for (int k = 0; k < kCrossingIterations && tb - ta > kCrossingTolerance; ++k) {
+            const double s = distanceAt(t);
+            if (std::abs(s) < kCrossingTolerance) break;
+            if ((s > 0.0) == (sa > 0.0)) {
+                ta = t;
+                sa = s;
+                if (kept == +1) sb *= 0.5;
+                kept = +1;
+            } else {
+                tb = t;
+                sb = s;
+                if (kept == -1) sa *= 0.5;
+                kept = -1;
+            }
+            t = ta + (tb - ta) * sa / (sa - sb);
+        }
+        return t;
+    }
+
+    static constexpr int kDipDepth = 3;            ///< a chord down to an eighth of a step is found
+    static constexpr int kCrossingIterations = 4;
+    static constexpr double kCrossingTolerance = 1e-3; ///< voxels
+
     Medium::Sampler& mSampler;
     openvdb::Vec3d mOrigin, mDirection;
     double mT, mH, mDistance;
