@@ -68,7 +68,8 @@ openvdb::Vec3SGrid::Ptr sourceFromFluence(const Medium& medium, const openvdb::V
     openvdb::tree::LeafManager<openvdb::Vec3STree> leaves(j->tree());
     leaves.foreach([&](openvdb::Vec3STree::LeafNodeType& leaf, std::size_t) {
         Medium::Sampler sampler(medium);
-        for (auto it = leaf.beginValueOn(); it; ++it) {
+        // Inactive values too: trilinear lookups read them.
+        for (auto it = leaf.beginValueAll(); it; ++it) {
             it.setValue(openvdb::Vec3f(sampler.sigmaS(it.getCoord()) * openvdb::Vec3d(*it) / (4.0 * M_PI)));
         }
     });

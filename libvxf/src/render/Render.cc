@@ -1,11 +1,13 @@
 #include <vxf/render/Render.h>
 
+#include <vxf/core/GridLookup.h>
 #include <vxf/core/Hash.h>
 #include <vxf/light/DirectLight.h>
 #include <vxf/light/InteriorField.h>
 #include <vxf/light/LightSampler.h>
 #include <vxf/light/Transmittance.h>
 
+#include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/RayIntersector.h>
 
 #include <fmt/format.h>
@@ -31,9 +33,11 @@ class Marcher
 {
 public:
     /// Single scattering is read from @a direct (the `direct` grid's J), or with @a lights
-    /// (options.directFromLights) marched to them at every step; multiple scattering from the
-    /// `scatter` grid @a scatter. Either may be null (no such layer).
-    Marcher(const Medium& medium, const RenderOptions& options, const InteriorField* direct, const openvdb::Vec3SGrid* scatter,
+    /// (options.directFromLights) marched to them at every step; multiple scattering from
+    /// @a scatterSource, J = σs·φ/4π of the `scatter` grid (sourceFromFluence), through its
+    /// dense copy @a scatterSourceDense where there is one. Either layer may be null (none).
+    Marcher(const Medium& medium, const RenderOptions& options, const InteriorField* direct,
+        const openvdb::Vec3SGrid* scatterSource, const DenseCopy<openvdb::Vec3SGrid>* scatterSourceDense,
         const std::vector<LightSampler>* lights = nullptr, const RayScene* occluders = nullptr)
         : mMedium(medium)
         , mSampler(medium)
@@ -45,7 +49,7 @@ public:
         mShadowMarch.step = options.step;
         mShadowMarch.cutoff = options.cutoff;
         if (direct && !mLights) mDirect.emplace(*direct);
-        if (scatter) mScatter.emplace(scatter->getConstAccessor());
+        if (scatterSource) mScatter.emplace(*scatterSource, scatterSourceDense);
         mBounds = marchBounds(medium);
         mTauCutoff = -std::log(std::max(options.cutoff, std::numeric_limits<double>::min()));
     }
@@ -112,7 +116,7 @@ private:
     /// (Medium::Sampler::interiorScale). Single scattering: marched to the lights (one sample
     /// per light, the @a point-th of the ray of @a key) with σs(p)·interior when
     /// options.directFromLights, else the `direct` grid's InteriorField. Multiple scattering:
-    /// σs·φ of the `scatter` grid interpolated as one per-voxel quantity, as the scatter
+    /// σs·φ/4π of the `scatter` grid interpolated as one per-voxel quantity, as the scatter
     /// passes read their sources (interpolating σs and φ apart would square the ramp where
     /// both fall to zero at the surface), times the interior scale.
     Emission emission(const openvdb::Vec3d& p, double interior, std::uint64_t key, std::uint64_t point)
@@ -120,22 +124,8 @@ private:
         Emission e;
         if (mLights) e.direct = mSampler.sigmaS(p) * (interior / (4.0 * M_PI)) * fluenceFromLights(mMedium.transform().indexToWorld(p), key, point);
         if (mDirect) e.direct = mDirect->sample(p);
-        if (mScatter) e.scatter = interpolateScatter(p) * (interior / (4.0 * M_PI));
+        if (mScatter) e.scatter = openvdb::Vec3d(openvdb::tools::BoxSampler::sample(*mScatter, p)) * interior;
         return e;
-    }
-
-    /// The trilinear interpolation of σs·φ of the `scatter` grid's eight voxels around index point @a p.
-    openvdb::Vec3d interpolateScatter(const openvdb::Vec3d& p)
-    {
-        openvdb::Vec3d sum(0.0);
-        const openvdb::Coord base = openvdb::Coord::floor(p);
-        const openvdb::Vec3d f = p - base.asVec3d();
-        for (int corner = 0; corner < 8; ++corner) {
-            const openvdb::Coord c = base.offsetBy(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
-            const double w = ((corner & 1) ? f[0] : 1.0 - f[0]) * ((corner & 2) ? f[1] : 1.0 - f[1]) * ((corner & 4) ? f[2] : 1.0 - f[2]);
-            if (w > 0.0) sum += mSampler.sigmaS(c) * openvdb::Vec3d(mScatter->getValue(c)) * w;
-        }
-        return sum;
     }
 
     /// φ0 at world point @a x, the @a point-th emission point of the ray of @a key: Σ over the
@@ -173,7 +163,7 @@ private:
     MarchOptions mShadowMarch;
     std::vector<LightSample> mLightSamples;
     std::optional<InteriorField::Sampler> mDirect;
-    std::optional<openvdb::Vec3SGrid::ConstAccessor> mScatter;
+    std::optional<GridLookup<openvdb::Vec3SGrid>> mScatter; ///< J of the scattered light
     openvdb::BBoxd mBounds;
     double mTauCutoff;
 };
@@ -334,7 +324,10 @@ struct RenderContext
         if (options.surface && anyReflects) shining(surfaceLights);
         if (options.directFromLights) shining(volumeLights);
         if (!options.directFromLights && set.find("direct")) directField.emplace(medium, *set.get<openvdb::Vec3SGrid>("direct"));
-        if (set.find("scatter")) scatterGrid = set.get<openvdb::Vec3SGrid>("scatter");
+        if (set.find("scatter")) {
+            scatterSource = sourceFromFluence(medium, *set.get<openvdb::Vec3SGrid>("scatter"));
+            scatterSourceDense = DenseCopy<openvdb::Vec3SGrid>::create(*scatterSource, 2, kDenseCopyBytes);
+        }
 
         const Camera& camera = scene.camera;
         forward = (camera.lookAt - camera.position).unit();
@@ -371,7 +364,8 @@ struct RenderContext
     std::vector<LightSampler> surfaceLights; ///< the lights the surface term reflects (none: no surface term)
     std::vector<LightSampler> volumeLights;  ///< the lights single scattering is marched to (directFromLights)
     std::optional<InteriorField> directField; ///< single scattering read from the `direct` grid (not directFromLights)
-    openvdb::Vec3SGrid::ConstPtr scatterGrid; ///< the `scatter` grid, or null
+    openvdb::Vec3SGrid::ConstPtr scatterSource; ///< J = σs·φ/4π of the `scatter` grid, or null
+    std::shared_ptr<const DenseCopy<openvdb::Vec3SGrid>> scatterSourceDense; ///< its dense copy, or null
     openvdb::Vec3d forward, right, up;       ///< the camera's frame
     double aspect = 1.0, tanHalf = 1.0;
 };
@@ -385,7 +379,7 @@ public:
         , mOptions(context.options)
         , mIntersector(context.levelSetIntersector)
         , mMarcher(context.medium, context.options, context.directField ? &*context.directField : nullptr,
-              context.scatterGrid.get(), context.options.directFromLights ? &context.volumeLights : nullptr,
+              context.scatterSource.get(), context.scatterSourceDense.get(), context.options.directFromLights ? &context.volumeLights : nullptr,
               context.meshes.occluders)
         , mShader(context.medium, context.surfaceLights, context.meshes.occluders)
         , mEpsilon(1e-4 * context.medium.voxelSize())

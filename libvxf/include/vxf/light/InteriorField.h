@@ -91,7 +91,8 @@ private:
 };
 
 /// J = σs·φ/(4π) per voxel on @a phi's topology, σs the voxel's own (active tiles: at their
-/// centre), named "scatter_source": the source a fluence gives the next scatter pass.
+/// centre; inactive values too, which trilinear lookups read), named "scatter_source": the source
+/// a fluence gives the next scatter pass, and the emission the render reads from the `scatter` grid.
 openvdb::Vec3SGrid::Ptr sourceFromFluence(const Medium& medium, const openvdb::Vec3SGrid& phi);
 
 } // namespace vxf
