@@ -32,3 +32,32 @@ TEST_CASE("a dense copy reads what the tree holds, inside and outside its box", 
     CHECK_FALSE(vxf::DenseCopy<openvdb::FloatGrid>::create(*sphere, 2, 1000));
     CHECK_FALSE(vxf::DenseCopy<openvdb::FloatGrid>::create(*openvdb::FloatGrid::create(0.0f), 2, vxf::kDenseCopyBytes));
 }
+
+TEST_CASE("block reads interpolate as OpenVDB's samplers do, across the dense copy's edge", "[gridlookup]")
+{
+    // Points whose 2³ and 3³ blocks lie inside the copied box, straddle its edge (the block
+    // read falls back to single lookups) and lie beyond it: the same values as BoxSampler and
+    // QuadraticSampler on the tree, to the bit.
+    const auto sphere = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(6.0f, openvdb::Vec3f(0.0f), 1.0f, 3.0f);
+    const auto dense = vxf::DenseCopy<openvdb::FloatGrid>::create(*sphere, 1, vxf::kDenseCopyBytes);
+    REQUIRE(dense);
+    const vxf::GridLookup<openvdb::FloatGrid> fast(*sphere, dense.get()), tree(*sphere, nullptr);
+    auto acc = sphere->getConstAccessor();
+    const openvdb::CoordBBox box = sphere->evalActiveVoxelBoundingBox().expandBy(1); // the copied box
+    int checked = 0, straddling = 0, differ = 0;
+    for (double x = box.min().x() - 2.6; x <= box.max().x() + 2.6; x += 0.37) {
+        for (double y = -3.1; y <= 3.1; y += 1.3) {
+            const openvdb::Vec3d p(x, y, 0.45 * x - 0.2);
+            const openvdb::Coord base = openvdb::Coord::floor(p);
+            straddling += box.isInside(base) != box.isInside(base.offsetBy(1));
+            for (const auto* lookup : {&fast, &tree}) {
+                differ += lookup->sampleTrilinear(p) != openvdb::tools::BoxSampler::sample(acc, p);
+                differ += lookup->sampleTriquadratic(p) != openvdb::tools::QuadraticSampler::sample(acc, p);
+            }
+            ++checked;
+        }
+    }
+    CHECK(checked > 100);
+    CHECK(straddling > 0);
+    CHECK(differ == 0);
+}

@@ -191,19 +191,21 @@ InteriorField::Sampler::Sampler(const InteriorField& field)
 
 openvdb::Vec3d InteriorField::Sampler::sample(const openvdb::Vec3d& ijk) const
 {
-    if (!mLogs) return openvdb::Vec3d(openvdb::tools::BoxSampler::sample(mValues, ijk));
+    if (!mLogs) return openvdb::Vec3d(mValues.sampleTrilinear(ijk));
     const Cell cell(ijk);
+    openvdb::Vec3f logs[2][2][2];
+    mLogs->getBlock(cell.base, logs);
     openvdb::Vec3d logSum(0.0);
     bool positive[3] = {true, true, true};
     for (int i = 0; i < 8; ++i) {
-        const openvdb::Vec3f l = mLogs->getValue(cell.corner(i));
+        const openvdb::Vec3f l = logs[i & 1][(i >> 1) & 1][(i >> 2) & 1];
         for (int ch = 0; ch < 3; ++ch) {
             if (l[ch] == kNoLog) positive[ch] = false;
             else logSum[ch] += cell.weight[i] * double(l[ch]);
         }
     }
     if (positive[0] && positive[1] && positive[2]) return openvdb::Vec3d(std::exp(logSum[0]), std::exp(logSum[1]), std::exp(logSum[2]));
-    const openvdb::Vec3d linear(openvdb::tools::BoxSampler::sample(mValues, ijk));
+    const openvdb::Vec3d linear(mValues.sampleTrilinear(ijk));
     openvdb::Vec3d out;
     for (int ch = 0; ch < 3; ++ch) out[ch] = positive[ch] ? std::exp(logSum[ch]) : linear[ch];
     return out;

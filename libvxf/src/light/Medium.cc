@@ -100,9 +100,9 @@ Medium::Sampler::Sampler(const Medium& medium)
 double Medium::Sampler::signedDistance(const openvdb::Vec3d& ijk)
 {
     if (!mSurface) return -1.0;
-    const double linear = double(openvdb::tools::BoxSampler::sample(*mSurface, ijk)) / mMedium.voxelSize();
+    const double linear = double(mSurface->sampleTrilinear(ijk)) / mMedium.voxelSize();
     if (std::abs(linear) > kQuadraticBand) return linear;
-    const double quadratic = double(openvdb::tools::QuadraticSampler::sample(*mSurface, ijk)) / mMedium.voxelSize();
+    const double quadratic = double(mSurface->sampleTriquadratic(ijk)) / mMedium.voxelSize();
     return std::abs(quadratic - linear) <= kQuadraticLimit ? quadratic : linear;
 }
 
@@ -113,11 +113,13 @@ double Medium::Sampler::interiorScale(const openvdb::Vec3d& ijk, double distance
     const openvdb::Coord base = openvdb::Coord::floor(ijk);
     const openvdb::Vec3d f = ijk - base.asVec3d();
     const double dx = mMedium.voxelSize();
+    float phi[2][2][2];
+    mSurface->getBlock(base, phi);
     double fraction = 0.0;
     for (int corner = 0; corner < 8; ++corner) {
-        const openvdb::Coord c = base.offsetBy(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
-        const double w = ((corner & 1) ? f[0] : 1.0 - f[0]) * ((corner & 2) ? f[1] : 1.0 - f[1]) * ((corner & 4) ? f[2] : 1.0 - f[2]);
-        fraction += w * std::clamp(0.5 - double(mSurface->getValue(c)) / dx, 0.0, 1.0);
+        const int i = corner & 1, j = (corner >> 1) & 1, k = (corner >> 2) & 1;
+        const double w = (i ? f[0] : 1.0 - f[0]) * (j ? f[1] : 1.0 - f[1]) * (k ? f[2] : 1.0 - f[2]);
+        fraction += w * std::clamp(0.5 - double(phi[i][j][k]) / dx, 0.0, 1.0);
     }
     return 1.0 / std::max(fraction, kMinFraction);
 }
@@ -125,7 +127,7 @@ double Medium::Sampler::interiorScale(const openvdb::Vec3d& ijk, double distance
 openvdb::Vec3d Medium::Sampler::sigmaS(const openvdb::Vec3d& ijk)
 {
     if (mSigmaS) return openvdb::Vec3d(openvdb::tools::BoxSampler::sample(*mSigmaS, ijk));
-    return mMedium.mMaterial.sigmaS * double(openvdb::tools::BoxSampler::sample(mDensity, ijk));
+    return mMedium.mMaterial.sigmaS * double(mDensity.sampleTrilinear(ijk));
 }
 
 openvdb::Vec3d Medium::Sampler::sigmaS(const openvdb::Coord& ijk)
@@ -137,9 +139,9 @@ openvdb::Vec3d Medium::Sampler::sigmaS(const openvdb::Coord& ijk)
 openvdb::Vec3d Medium::Sampler::sigmaT(const openvdb::Vec3d& ijk)
 {
     if (!mSigmaA && !mSigmaS) {
-        return mMedium.mMaterial.sigmaT() * double(openvdb::tools::BoxSampler::sample(mDensity, ijk));
+        return mMedium.mMaterial.sigmaT() * double(mDensity.sampleTrilinear(ijk));
     }
-    const double d = (mSigmaA && mSigmaS) ? 0.0 : double(openvdb::tools::BoxSampler::sample(mDensity, ijk));
+    const double d = (mSigmaA && mSigmaS) ? 0.0 : double(mDensity.sampleTrilinear(ijk));
     const openvdb::Vec3d a = mSigmaA ? openvdb::Vec3d(openvdb::tools::BoxSampler::sample(*mSigmaA, ijk)) : mMedium.mMaterial.sigmaA * d;
     const openvdb::Vec3d s = mSigmaS ? openvdb::Vec3d(openvdb::tools::BoxSampler::sample(*mSigmaS, ijk)) : mMedium.mMaterial.sigmaS * d;
     return a + s;

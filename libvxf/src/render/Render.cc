@@ -124,7 +124,7 @@ private:
         Emission e;
         if (mLights) e.direct = mSampler.sigmaS(p) * (interior / (4.0 * M_PI)) * fluenceFromLights(mMedium.transform().indexToWorld(p), key, point);
         if (mDirect) e.direct = mDirect->sample(p);
-        if (mScatter) e.scatter = openvdb::Vec3d(openvdb::tools::BoxSampler::sample(*mScatter, p)) * interior;
+        if (mScatter) e.scatter = openvdb::Vec3d(mScatter->sampleTrilinear(p)) * interior;
         return e;
     }
 

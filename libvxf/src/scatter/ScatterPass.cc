@@ -72,7 +72,7 @@ openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGr
             InsideStep step;
             openvdb::Vec3d jStart, jEnd; // J at the step's ends
             const auto sourceAt = [&](const openvdb::Vec3d& p, double interior) {
-                return openvdb::Vec3d(openvdb::tools::BoxSampler::sample(j, p)) * interior;
+                return openvdb::Vec3d(j.sampleTrilinear(p)) * interior;
             };
             for (int i = 0; i < steps; ++i) {
                 // Only the part of each step inside the surface holds medium (sharp boundary).
