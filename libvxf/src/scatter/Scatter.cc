@@ -330,7 +330,32 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
             tailAdded = true;
             break;
         }
-        if (report.stopReason.empty()) report.stopReason = fmt::format("reached {} passes", options.passes);
+        if (report.stopReason.empty()) {
+            report.stopReason = fmt::format("reached {} passes", options.passes);
+            // Say what the limit left out, when the last two passes (on one lattice) tell: near
+            // albedo 1 a few plain passes miss most of the light, and the image alone does not show it.
+            if (!options.extrapolateTail && last && beforeLast && report.passes.size() >= 2) {
+                const std::size_t n = report.passes.size();
+                const SeriesTail tail = seriesTail(*last, *beforeLast, report.passes[n - 1].energy / levelVoxels,
+                    report.passes[n - 2].energy / levelVoxels);
+                const openvdb::Vec3d total = levelSum == sum ? gridEnergy(*sum) : gridEnergy(*sum) + energy(*levelSum);
+                double missing = 0.0, ratio = 0.0;
+                for (int c = 0; c < 3; ++c) {
+                    if (total[c] > 0.0 && tail.rest[c] * levelVoxels / total[c] > missing) {
+                        missing = tail.rest[c] * levelVoxels / total[c];
+                        ratio = tail.ratio[c];
+                    }
+                }
+                const std::string remedy = "raise passes, or set fine_passes (the passes after them run on a coarser lattice, "
+                                           "which converges albedo near 1 in seconds)";
+                if (!tail.known) {
+                    report.stopReason += "; the passes were not yet falling off geometrically, so the series is far from its sum: " + remedy;
+                } else if (missing > std::max(options.tolerance, 1e-3)) {
+                    report.stopReason += fmt::format("; the rest of the series would add about {:.2g}% or more to the scattered light (pass ratio {:.4f}): {}",
+                        100.0 * missing, ratio, remedy);
+                }
+            }
+        }
         if (options.extrapolateTail && !tailAdded && last && beforeLast) {
             // Σ_{k>K} φ_k ≈ φ_K (r + r² + …) = φ_K r/(1−r), with r = φ_K/φ_{K−1} per voxel and
             // channel (regions near the boundary decay faster) capped by the global energy
