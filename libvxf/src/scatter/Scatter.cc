@@ -334,7 +334,10 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
             report.stopReason = fmt::format("reached {} passes", options.passes);
             // Say what the limit left out, when the last two passes (on one lattice) tell: near
             // albedo 1 a few plain passes miss most of the light, and the image alone does not show it.
-            if (!options.extrapolateTail && last && beforeLast && report.passes.size() >= 2) {
+            // (After coarse passes the correction cycles below solve for the whole rest: a limit
+            // of 20 passes on the thick bunny left 49% out, and the first cycle added 35%.)
+            const bool corrected = levelSum != sum && options.coarseCorrection;
+            if (!options.extrapolateTail && !corrected && last && beforeLast && report.passes.size() >= 2) {
                 const std::size_t n = report.passes.size();
                 const SeriesTail tail = seriesTail(*last, *beforeLast, report.passes[n - 1].energy / levelVoxels,
                     report.passes[n - 2].energy / levelVoxels);
@@ -346,8 +349,9 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
                         ratio = tail.ratio[c];
                     }
                 }
-                const std::string remedy = "raise passes, or set fine_passes (the passes after them run on a coarser lattice, "
-                                           "which converges albedo near 1 in seconds)";
+                const std::string remedy = options.finePasses > 0 ? std::string("raise passes")
+                                                                  : "raise passes, or set fine_passes (the passes after them run on a coarser "
+                                                                    "lattice, which converges albedo near 1 in seconds)";
                 if (!tail.known) {
                     report.stopReason += "; the passes were not yet falling off geometrically, so the series is far from its sum: " + remedy;
                 } else if (missing > std::max(options.tolerance, 1e-3)) {
