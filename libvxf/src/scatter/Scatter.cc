@@ -352,9 +352,8 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
                 const std::string remedy = options.finePasses > 0 ? std::string("raise passes")
                                                                   : "raise passes, or set fine_passes (the passes after them run on a coarser "
                                                                     "lattice, which converges albedo near 1 in seconds)";
-                if (!tail.known) {
-                    report.stopReason += "; the passes were not yet falling off geometrically, so the series is far from its sum: " + remedy;
-                } else if (missing > std::max(options.tolerance, 1e-3)) {
+                // (Not when the ratios say nothing, e.g. an artist's source of both signs.)
+                if (tail.known && missing > std::max(options.tolerance, 1e-3)) {
                     report.stopReason += fmt::format("; the rest of the series would add about {:.2g}% or more to the scattered light (pass ratio {:.4f}): {}",
                         100.0 * missing, ratio, remedy);
                 }
