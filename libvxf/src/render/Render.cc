@@ -7,7 +7,6 @@
 #include <vxf/light/LightSampler.h>
 #include <vxf/light/Transmittance.h>
 
-#include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/RayIntersector.h>
 
 #include <fmt/format.h>

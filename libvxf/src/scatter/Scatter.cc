@@ -337,7 +337,7 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
             // (After coarse passes the correction cycles below solve for the whole rest: a limit
             // of 20 passes on the thick bunny left 49% out, and the first cycle added 35%.)
             const bool corrected = levelSum != sum && options.coarseCorrection;
-            if (!options.extrapolateTail && !corrected && last && beforeLast && report.passes.size() >= 2) {
+            if (!options.extrapolateTail && !corrected && last && beforeLast) {
                 const std::size_t n = report.passes.size();
                 const SeriesTail tail = seriesTail(*last, *beforeLast, report.passes[n - 1].energy / levelVoxels,
                     report.passes[n - 2].energy / levelVoxels);
@@ -349,13 +349,13 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
                         ratio = tail.ratio[c];
                     }
                 }
-                const std::string remedy = options.finePasses > 0 ? std::string("raise passes")
-                                                                  : "raise passes, or set fine_passes (the passes after them run on a coarser "
-                                                                    "lattice, which converges albedo near 1 in seconds)";
                 // (Not when the ratios say nothing, e.g. an artist's source of both signs.)
                 if (tail.known && missing > std::max(options.tolerance, 1e-3)) {
                     report.stopReason += fmt::format("; the rest of the series would add about {:.2g}% or more to the scattered light (pass ratio {:.4f}): {}",
-                        100.0 * missing, ratio, remedy);
+                        100.0 * missing, ratio,
+                        options.finePasses > 0 ? "raise passes"
+                                               : "raise passes, or set fine_passes (the passes after them run on a coarser lattice, "
+                                                 "which converges albedo near 1 in seconds)");
                 }
             }
         }
