@@ -32,7 +32,9 @@ openvdb::Vec3d lightFluence(const LightSampler& light, Medium::Sampler& sampler,
     const openvdb::Coord& voxel, const MarchOptions& options, const RayScene* occluders)
 {
     static thread_local std::vector<LightSample> samples;
-    const openvdb::Vec3d xWorld = medium.transform().indexToWorld(voxel.asVec3d());
+    // A rim voxel's light is its medium's, inside the surface: at its centre outside, the light
+    // of a shadowed side comes in unattenuated past the limb (see DirectLight.h).
+    const openvdb::Vec3d xWorld = medium.transform().indexToWorld(sampler.mediumPoint(voxel));
     // Never divide by zero: distances below half a voxel count as half a voxel.
     light.sample(xWorld, coordKey(voxel), 0.5 * medium.voxelSize(), samples);
     openvdb::Vec3d phi(0.0);

@@ -123,17 +123,11 @@ void InteriorField::continueOutward(const Medium& medium, const openvdb::Vec3SGr
         const auto known = values.getConstAccessor();
         const auto fluence = phi.getConstAccessor();
         const auto inside = [&](const openvdb::Coord& c) { return sampler.signedDistance(c.asVec3d()) <= 0.0; };
-        const auto slopeAlong = [&](const openvdb::Vec3d& c, int axis) {
-            openvdb::Vec3d e(0.0);
-            e[axis] = 1.0;
-            return 0.5 * (sampler.signedDistance(c + e) - sampler.signedDistance(c - e));
-        };
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const openvdb::Vec3d c = coords[i].asVec3d();
             const double d = sampler.signedDistance(c);
-            openvdb::Vec3d n(slopeAlong(c, 0), slopeAlong(c, 1), slopeAlong(c, 2));
-            const bool normal = n.length() > 0.1; // 1 where the level set is a distance
-            if (normal) n.normalize();
+            openvdb::Vec3d n;
+            const bool normal = sampler.surfaceNormal(c, n);
             openvdb::Vec3d v1(0.0), v2(0.0);
             if (!normal || !interpolate(known, c - n * (d + 1.0), inside, v1)) {
                 // No normal, or nothing inside along it: the interior voxels around, if any.

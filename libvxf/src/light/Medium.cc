@@ -124,6 +124,30 @@ double Medium::Sampler::interiorScale(const openvdb::Vec3d& ijk, double distance
     return 1.0 / std::max(fraction, kMinFraction);
 }
 
+bool Medium::Sampler::surfaceNormal(const openvdb::Vec3d& ijk, openvdb::Vec3d& normal)
+{
+    if (!mSurface) return false;
+    for (int axis = 0; axis < 3; ++axis) {
+        openvdb::Vec3d e(0.0);
+        e[axis] = 1.0;
+        normal[axis] = 0.5 * (signedDistance(ijk + e) - signedDistance(ijk - e));
+    }
+    const double slope = normal.length();
+    if (!(slope > 0.1)) return false;
+    normal /= slope;
+    return true;
+}
+
+openvdb::Vec3d Medium::Sampler::mediumPoint(const openvdb::Coord& ijk)
+{
+    const openvdb::Vec3d c = ijk.asVec3d();
+    if (!mSurface) return c;
+    const double d = signedDistance(c);
+    openvdb::Vec3d n;
+    if (d <= 0.0 || d >= 0.5 || !surfaceNormal(c, n)) return c;
+    return c - n * d;
+}
+
 openvdb::Vec3d Medium::Sampler::sigmaS(const openvdb::Vec3d& ijk)
 {
     if (mSigmaS) return openvdb::Vec3d(openvdb::tools::BoxSampler::sample(*mSigmaS, ijk));

@@ -66,6 +66,14 @@ public:
         /// @a distanceBound: an upper bound of the signed distance (voxels) at @a ijk, so that
         /// points deep inside (all eight voxels whole) skip the lookups.
         double interiorScale(const openvdb::Vec3d& ijk, double distanceBound = 0.0);
+        /// The surface's outward unit normal at @a ijk (central differences of signedDistance,
+        /// one voxel apart) in @a normal; false without a surface or where the level set's
+        /// slope is below 0.1 (not a distance there: a medial axis, the band's edge).
+        bool surfaceNormal(const openvdb::Vec3d& ijk, openvdb::Vec3d& normal);
+        /// Where voxel @a ijk's medium is: its centre, or where the centre lies outside the
+        /// surface by less than half a voxel (the rim, whose medium is the part of its cube
+        /// inside), the nearest point of the surface, c − φs·n. Its centre without a surface.
+        openvdb::Vec3d mediumPoint(const openvdb::Coord& ijk);
 
     private:
         const Medium& mMedium;
