@@ -282,7 +282,10 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
                 levelVoxels = double(f) * f * f;
                 last = beforeLast = nullptr; // the tail's ratio is taken on one level
             }
-            auto phi = scatterPass(*levelMedium, *j, options.pass, interrupter);
+            // The lights' source J0 is read fraction-weighted, every pass's own continued (SourceField).
+            ScatterPassOptions passOptions = options.pass;
+            if (k == 0) passOptions.source = ScatterPassOptions::SourceRead::FractionWeighted;
+            auto phi = scatterPass(*levelMedium, *j, passOptions, interrupter);
             ++k;
             ScatterReport::Pass info;
             info.index = k;

@@ -3,6 +3,7 @@
 #include <vxf/core/Hash.h>
 #include <vxf/core/SphericalFibonacci.h>
 #include <vxf/light/Transmittance.h>
+#include <vxf/scatter/SourceField.h>
 
 #include <openvdb/math/Mat3.h>
 #include <openvdb/tree/LeafManager.h>
@@ -12,6 +13,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 namespace vxf {
 
@@ -56,9 +58,11 @@ openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGr
     // series no longer matched the fine one's), so J is taken at the midpoint there.
     const bool quadratic = medium.surface() != nullptr;
 
-    // φ(x) at one index-space point.
-    const auto gather = [&](Medium::Sampler& sampler, const GridLookup<openvdb::Vec3SGrid>& j, const openvdb::Coord& c) {
-        const openvdb::Vec3d x = c.asVec3d();
+    const bool continued = options.source == ScatterPassOptions::SourceRead::Continued;
+    // φ(x) at one voxel, J read from the continued field or fraction-weighted from the grid.
+    const auto gather = [&](Medium::Sampler& sampler, const std::optional<SourceField::Sampler>& field, const GridLookup<openvdb::Vec3SGrid>& grid,
+                            const openvdb::Coord& c) {
+        const openvdb::Vec3d x = sampler.mediumPoint(c);
         const openvdb::Mat3d rotation = options.rotatePerVoxel ? voxelRotation(c) : openvdb::Mat3d::identity();
         openvdb::Vec3d phi(0.0);
         for (const openvdb::Vec3d& d0 : directions) {
@@ -70,17 +74,18 @@ openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGr
             const double hStep = tExit / steps;
             InsideSteps inside(sampler, x, d, 0.0, hStep);
             InsideStep step;
-            openvdb::Vec3d jStart, jEnd; // J at the step's ends
+            openvdb::Vec3d jStart(0.0), jEnd(0.0); // J at the step's ends
             const auto sourceAt = [&](const openvdb::Vec3d& p, double interior) {
-                return openvdb::Vec3d(j.sampleTrilinear(p)) * interior;
+                return field ? field->sample(p) : openvdb::Vec3d(grid.sampleTrilinear(p)) * interior;
             };
             for (int i = 0; i < steps; ++i) {
                 // Only the part of each step inside the surface holds medium (sharp boundary).
                 if (!inside.next(step)) continue;
                 const openvdb::Vec3d jMiddle = sourceAt(step.midpoint, step.interior);
                 if (quadratic) {
-                    jStart = step.joined ? jEnd : sourceAt(step.start, sampler.interiorScale(step.start, step.distanceBound));
-                    jEnd = sourceAt(step.end, sampler.interiorScale(step.end, step.distanceBound));
+                    const auto interiorAt = [&](const openvdb::Vec3d& p) { return continued ? 1.0 : sampler.interiorScale(p, step.distanceBound); };
+                    jStart = step.joined ? jEnd : sourceAt(step.start, interiorAt(step.start));
+                    jEnd = sourceAt(step.end, interiorAt(step.end));
                 } else {
                     jStart = jEnd = jMiddle;
                 }
@@ -113,7 +118,10 @@ openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGr
         return openvdb::Vec3f(phi);
     };
 
-    const auto sourceDense = DenseCopy<openvdb::Vec3SGrid>::create(source, 2, kDenseCopyBytes);
+    std::optional<SourceField> sourceField;
+    std::shared_ptr<const DenseCopy<openvdb::Vec3SGrid>> sourceDense;
+    if (continued) sourceField.emplace(medium, source);
+    else sourceDense = DenseCopy<openvdb::Vec3SGrid>::create(source, 2, kDenseCopyBytes);
     openvdb::tree::LeafManager<openvdb::Vec3STree> leaves(fluence->tree());
     std::vector<openvdb::CoordBBox> tiles;
     for (auto it = fluence->tree().cbeginValueOn(); it; ++it) {
@@ -129,13 +137,15 @@ openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGr
     std::atomic<bool> cancelled{false};
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, total, 1), [&](const tbb::blocked_range<std::size_t>& range) {
         Medium::Sampler sampler(medium);
-        const GridLookup<openvdb::Vec3SGrid> j(source, sourceDense.get());
+        std::optional<SourceField::Sampler> field;
+        if (sourceField) field.emplace(*sourceField);
+        const GridLookup<openvdb::Vec3SGrid> grid(source, sourceDense.get());
         for (std::size_t item = range.begin(); item != range.end() && !cancelled; ++item) {
             if (item < leafCount) {
-                for (auto it = leaves.leaf(item).beginValueOn(); it; ++it) it.setValue(gather(sampler, j, it.getCoord()));
+                for (auto it = leaves.leaf(item).beginValueOn(); it; ++it) it.setValue(gather(sampler, field, grid, it.getCoord()));
             } else {
                 const openvdb::CoordBBox& box = tiles[item - leafCount];
-                tileValues[item - leafCount] = gather(sampler, j, box.min() + openvdb::Coord(box.dim().x() / 2));
+                tileValues[item - leafCount] = gather(sampler, field, grid, box.min() + openvdb::Coord(box.dim().x() / 2));
             }
             const std::size_t finished = ++done;
             if (interrupter && interrupter->wasInterrupted(int(100 * finished / std::max<std::size_t>(total, 1)))) cancelled = true;

@@ -19,10 +19,17 @@ struct ScatterPassOptions
     /// 3e-2 gives 5.18% and 1e-1 10% there (J held constant is then too crude).
     double cutoff = 1e-3;
     bool rotatePerVoxel = true; ///< rotate the direction set per voxel (deterministic hash): noise, not banding
+    /// How the gathers read the source near a surface. Continued (SourceField): sources made
+    /// from a pass's fluence. FractionWeighted: σs·φ interpolated and divided by the
+    /// interpolated volume fraction (Medium::Sampler::interiorScale), for the lights' source J0,
+    /// which varies along the surface within a voxel near the terminator. The same without a
+    /// surface (trilinear).
+    enum class SourceRead { Continued, FractionWeighted } source = SourceRead::Continued;
 };
 
 /// The gather kernel: φ(x) = Σ_i (4π/N) ∫_0^{d_i} T(x, x+tω_i) J(x+tω_i) dt, rays stopping at
-/// the medium's bounds (index-matched boundary). Each march step takes σt constant and J
+/// the medium's bounds (index-matched boundary), x a voxel's Medium::Sampler::mediumPoint (a
+/// rim voxel's, outside the surface, is its nearest surface point: SourceField reads it so). Each march step takes σt constant and J
 /// quadratic through its values at the step's start, middle and end, and integrates exactly:
 /// ΔL = T·∫ J(s) e^{−σt s} ds (emissionWeights), T ·= e^{−σt h}; finite for any σt ≥ 0, never
 /// NaN. (J constant at the midpoint, as DESIGN.md has it, is 7% low where the light falls off
