@@ -7,7 +7,6 @@
 #include "TestSupport.h"
 
 #include <catch2/catch.hpp>
-#include <openvdb/tools/Morphology.h>
 
 #include <cmath>
 #include <functional>

@@ -1,5 +1,7 @@
 #include <vxf/light/InteriorField.h>
 
+#include <vxf/core/MaskedTrilinear.h>
+
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tree/LeafManager.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -14,50 +16,6 @@ namespace vxf {
 namespace {
 
 constexpr float kNoLog = -std::numeric_limits<float>::infinity();
-
-/// The eight voxels around index point @a p and their trilinear weights.
-struct Cell
-{
-    explicit Cell(const openvdb::Vec3d& p)
-        : base(openvdb::Coord::floor(p))
-    {
-        const openvdb::Vec3d f = p - base.asVec3d();
-        for (int corner = 0; corner < 8; ++corner) {
-            weight[corner] = ((corner & 1) ? f[0] : 1.0 - f[0]) * ((corner & 2) ? f[1] : 1.0 - f[1]) * ((corner & 4) ? f[2] : 1.0 - f[2]);
-        }
-    }
-    openvdb::Coord corner(int i) const { return base.offsetBy(i & 1, (i >> 1) & 1, (i >> 2) & 1); }
-
-    openvdb::Coord base;
-    double weight[8];
-};
-
-/// Log-trilinear interpolation per channel where all eight values are positive, linear
-/// otherwise, over the corners @a use accepts (weights renormalised over them). Returns false
-/// when they carry less than half the weight.
-template <typename Values, typename Use>
-bool interpolate(const Values& values, const openvdb::Vec3d& p, const Use& use, openvdb::Vec3d& out)
-{
-    const Cell cell(p);
-    double total = 0.0;
-    openvdb::Vec3d linear(0.0), logSum(0.0);
-    bool positive[3] = {true, true, true};
-    for (int i = 0; i < 8; ++i) {
-        if (cell.weight[i] <= 0.0) continue;
-        const openvdb::Coord c = cell.corner(i);
-        if (!use(c)) continue;
-        const openvdb::Vec3d v(values.getValue(c));
-        total += cell.weight[i];
-        linear += v * cell.weight[i];
-        for (int ch = 0; ch < 3; ++ch) {
-            if (v[ch] > 0.0) logSum[ch] += cell.weight[i] * std::log(v[ch]);
-            else positive[ch] = false;
-        }
-    }
-    if (total < 0.5) return false;
-    for (int ch = 0; ch < 3; ++ch) out[ch] = positive[ch] ? std::exp(logSum[ch] / total) : linear[ch] / total;
-    return true;
-}
 
 } // namespace
 
@@ -129,14 +87,14 @@ void InteriorField::continueOutward(const Medium& medium, const openvdb::Vec3SGr
             openvdb::Vec3d n;
             const bool normal = sampler.surfaceNormal(c, n);
             openvdb::Vec3d v1(0.0), v2(0.0);
-            if (!normal || !interpolate(known, c - n * (d + 1.0), inside, v1)) {
+            if (!normal || !maskedTrilinear(known, c - n * (d + 1.0), inside, v1, true)) {
                 // No normal, or nothing inside along it: the interior voxels around, if any.
-                if (!interpolate(known, c, inside, v1)) v1 = openvdb::Vec3d(0.0);
+                if (!maskedTrilinear(known, c, inside, v1, true)) v1 = openvdb::Vec3d(0.0);
                 continued[i] = openvdb::Vec3f(v1);
                 continue;
             }
             const openvdb::Vec3d q2 = c - n * (d + 2.0);
-            const bool deep = sampler.signedDistance(q2) < -1.0 && interpolate(known, q2, inside, v2);
+            const bool deep = sampler.signedDistance(q2) < -1.0 && maskedTrilinear(known, q2, inside, v2, true);
             openvdb::Vec3d out = v1;
             for (int ch = 0; ch < 3; ++ch) {
                 if (!deep || !(v1[ch] > 0.0) || !(v2[ch] > 0.0)) continue;
@@ -186,7 +144,7 @@ InteriorField::Sampler::Sampler(const InteriorField& field)
 openvdb::Vec3d InteriorField::Sampler::sample(const openvdb::Vec3d& ijk) const
 {
     if (!mLogs) return openvdb::Vec3d(mValues.sampleTrilinear(ijk));
-    const Cell cell(ijk);
+    const TrilinearCell cell(ijk);
     openvdb::Vec3f logs[2][2][2];
     mLogs->getBlock(cell.base, logs);
     openvdb::Vec3d logSum(0.0);

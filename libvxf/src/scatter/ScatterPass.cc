@@ -58,7 +58,6 @@ openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGr
     // series no longer matched the fine one's), so J is taken at the midpoint there.
     const bool quadratic = medium.surface() != nullptr;
 
-    const bool continued = options.source == ScatterPassOptions::SourceRead::Continued;
     // φ(x) at one voxel, J read from the continued field or fraction-weighted from the grid.
     const auto gather = [&](Medium::Sampler& sampler, const std::optional<SourceField::Sampler>& field, const GridLookup<openvdb::Vec3SGrid>& grid,
                             const openvdb::Coord& c) {
@@ -83,7 +82,7 @@ openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGr
                 if (!inside.next(step)) continue;
                 const openvdb::Vec3d jMiddle = sourceAt(step.midpoint, step.interior);
                 if (quadratic) {
-                    const auto interiorAt = [&](const openvdb::Vec3d& p) { return continued ? 1.0 : sampler.interiorScale(p, step.distanceBound); };
+                    const auto interiorAt = [&](const openvdb::Vec3d& p) { return field ? 1.0 : sampler.interiorScale(p, step.distanceBound); };
                     jStart = step.joined ? jEnd : sourceAt(step.start, interiorAt(step.start));
                     jEnd = sourceAt(step.end, interiorAt(step.end));
                 } else {
@@ -120,7 +119,7 @@ openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGr
 
     std::optional<SourceField> sourceField;
     std::shared_ptr<const DenseCopy<openvdb::Vec3SGrid>> sourceDense;
-    if (continued) sourceField.emplace(medium, source);
+    if (options.source == ScatterPassOptions::SourceRead::Continued) sourceField.emplace(medium, source);
     else sourceDense = DenseCopy<openvdb::Vec3SGrid>::create(source, 2, kDenseCopyBytes);
     openvdb::tree::LeafManager<openvdb::Vec3STree> leaves(fluence->tree());
     std::vector<openvdb::CoordBBox> tiles;

@@ -1,5 +1,7 @@
 #include <vxf/scatter/SourceField.h>
 
+#include <vxf/core/MaskedTrilinear.h>
+
 #include <openvdb/tools/Morphology.h>
 #include <openvdb/tree/LeafManager.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -12,28 +14,6 @@
 namespace vxf {
 
 namespace {
-
-/// Trilinear interpolation at index point @a p over the corners @a use accepts, the weights
-/// renormalised over them. Returns false when they carry less than half the weight.
-template <typename Accessor, typename Use>
-bool maskedTrilinear(const Accessor& values, const openvdb::Vec3d& p, const Use& use, openvdb::Vec3d& out)
-{
-    const openvdb::Coord base = openvdb::Coord::floor(p);
-    const openvdb::Vec3d f = p - base.asVec3d();
-    double total = 0.0;
-    openvdb::Vec3d sum(0.0);
-    for (int corner = 0; corner < 8; ++corner) {
-        const double w = ((corner & 1) ? f[0] : 1.0 - f[0]) * ((corner & 2) ? f[1] : 1.0 - f[1]) * ((corner & 4) ? f[2] : 1.0 - f[2]);
-        if (w <= 0.0) continue;
-        const openvdb::Coord c = base.offsetBy(corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
-        if (!use(c)) continue;
-        total += w;
-        sum += openvdb::Vec3d(values.getValue(c)) * w;
-    }
-    if (total < 0.5) return false;
-    out = sum / total;
-    return true;
-}
 
 struct Outside
 {

@@ -29,8 +29,9 @@ struct ScatterPassOptions
 
 /// The gather kernel: φ(x) = Σ_i (4π/N) ∫_0^{d_i} T(x, x+tω_i) J(x+tω_i) dt, rays stopping at
 /// the medium's bounds (index-matched boundary), x a voxel's Medium::Sampler::mediumPoint (a
-/// rim voxel's, outside the surface, is its nearest surface point: SourceField reads it so). Each march step takes σt constant and J
-/// quadratic through its values at the step's start, middle and end, and integrates exactly:
+/// rim voxel's, outside the surface, is its nearest surface point: SourceField reads it so).
+/// Each march step takes σt constant and J quadratic through its values at the step's start,
+/// middle and end, and integrates exactly:
 /// ΔL = T·∫ J(s) e^{−σt s} ds (emissionWeights), T ·= e^{−σt h}; finite for any σt ≥ 0, never
 /// NaN. (J constant at the midpoint, as DESIGN.md has it, is 7% low where the light falls off
 /// over a step of 0.77 mean free paths; the quadratic 0.06%.) Output: a Vec3f grid named

@@ -38,17 +38,14 @@ namespace vxf {
 /// Not for the lights' source J0 nor the camera: near a lit surface and at the terminator J0
 /// varies within a voxel along the surface as much as across it, and a continuation along the
 /// normal misreads it (with every source read so, the thick sphere's shadowed third came out
-/// +14% instead of +5% at dim 64); the camera reading the `scatter` grid so took 4% (dim 64) to 8% (dim 32)
-/// off the sphere's lit side. Both keep the fraction-weighted read.
+/// +14% instead of +5% at dim 64); the camera reading the `scatter` grid so took 4% (dim 64)
+/// to 8% (dim 32) off the sphere's lit side. Both keep the fraction-weighted read.
 /// Immutable after construction and shared by threads; each thread reads through a Sampler.
 class SourceField
 {
 public:
     /// From @a source, J per voxel on the medium's lattice (sourceFromFluence).
     SourceField(const Medium& medium, const openvdb::Vec3SGrid& source);
-
-    /// The lattice values the interpolation reads.
-    const openvdb::Vec3SGrid& values() const { return *mValues; }
 
     /// Per-thread lookups.
     class Sampler
