@@ -142,6 +142,7 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
 
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, total, 1), [&](const tbb::blocked_range<std::size_t>& range) {
         Medium::Sampler sampler(medium);
+        sampler.snapCrossingsTo(options.boundary);
         for (std::size_t item = range.begin(); item != range.end(); ++item) {
             if (cancelled) return;
             auto& sums = perLight[item];

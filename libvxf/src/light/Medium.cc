@@ -1,5 +1,7 @@
 #include <vxf/light/Medium.h>
 
+#include <vxf/core/RayScene.h>
+
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <openvdb/tools/Morphology.h>
@@ -7,6 +9,7 @@
 #include <tbb/enumerable_thread_specific.h>
 
 #include <algorithm>
+#include <limits>
 #include <vector>
 
 namespace vxf {
@@ -135,6 +138,46 @@ bool Medium::Sampler::surfaceNormal(const openvdb::Vec3d& ijk, openvdb::Vec3d& n
     const double slope = normal.length();
     if (!(slope > 0.1)) return false;
     normal /= slope;
+    return true;
+}
+
+double Medium::Sampler::snapCrossing(const openvdb::Vec3d& origin, const openvdb::Vec3d& direction, double t, double lo,
+    double hi)
+{
+    if (!mBoundary) return t;
+    const openvdb::Vec3d q = origin + direction * t;
+    // Along a ray that meets the surface at cosine c a depth error e moves the crossing by e/c.
+    openvdb::Vec3d normal;
+    const double cosine = surfaceNormal(q, normal) ? std::abs(normal.dot(direction)) : 1.0;
+    const double reach = std::min(kSnapWindow / std::max(cosine, 1e-3), kSnapReach);
+    const openvdb::math::Transform& xform = mMedium.transform();
+    const openvdb::Vec3d p = xform.indexToWorld(q);
+    openvdb::Vec3d d = xform.indexToWorld(q + direction) - p;
+    const double voxel = d.length(); // world length of one index unit along the ray
+    if (!(voxel > 0.0)) return t;
+    d /= voxel;
+    // Searched beyond [lo, hi] too: a crossing the meshes place in a neighbouring step is
+    // taken to the step's end, so that this step's part outside the meshes counts nothing.
+    const auto ahead = mBoundary->intersect(p, d, 0.0, reach * voxel);
+    const auto behind = mBoundary->intersect(p, -d, 0.0, reach * voxel);
+    const double tAhead = ahead ? t + ahead->distance / voxel : std::numeric_limits<double>::infinity();
+    const double tBehind = behind ? t - behind->distance / voxel : -std::numeric_limits<double>::infinity();
+    if (!ahead && !behind) return t;
+    return std::clamp(tAhead - t < t - tBehind ? tAhead : tBehind, lo, hi);
+}
+
+bool Medium::Sampler::boundaryHit(const openvdb::Vec3d& origin, const openvdb::Vec3d& direction, double lo, double hi,
+    double& t) const
+{
+    if (!mBoundary || !(hi > lo)) return false;
+    const openvdb::math::Transform& xform = mMedium.transform();
+    const openvdb::Vec3d p = xform.indexToWorld(origin + direction * lo);
+    openvdb::Vec3d d = xform.indexToWorld(origin + direction * (lo + 1.0)) - p;
+    const double voxel = d.length();
+    if (!(voxel > 0.0)) return false;
+    const auto hit = mBoundary->intersect(p, d / voxel, 0.0, (hi - lo) * voxel);
+    if (!hit) return false;
+    t = lo + hit->distance / voxel;
     return true;
 }
 

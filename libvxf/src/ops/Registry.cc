@@ -665,7 +665,8 @@ std::vector<Operator> makeRegistry()
             const Medium medium(ctx.set, recordedMaterial(ctx.set));
             const RayScene visible = sceneGeometry(scene, GeometryRoles::All);
             const RayScene occluders = sceneGeometry(scene, GeometryRoles::Occluders);
-            const RenderedImage image = vxf::render(ctx.set, medium, scene, o, {&visible, &occluders}, ctx.interrupter);
+            const RayScene media = sceneGeometry(scene, GeometryRoles::Media);
+            const RenderedImage image = vxf::render(ctx.set, medium, scene, o, {&visible, &occluders, &media}, ctx.interrupter);
             writeExr(ctx.args.text("image"), image);
             if (ctx.args.has("png")) writePng(ctx.args.text("png"), image);
             return fmt::format("rendered {}x{} to {}", o.width, o.height, ctx.args.text("image"));

@@ -19,6 +19,8 @@ DirectLightReport lightScene(VoxelSet& set, const Scene& scene, DirectLightOptio
     const Medium medium(set, material);
     const RayScene occluders = sceneGeometry(scene, GeometryRoles::Occluders);
     options.occluders = occluders.empty() ? nullptr : &occluders;
+    const RayScene boundary = sceneGeometry(scene, GeometryRoles::Media);
+    options.boundary = boundary.empty() ? nullptr : &boundary;
     DirectLightReport report = computeDirectLight(set, medium, scene.lights, options, interrupter);
     recordMaterial(set, material);
     return report;

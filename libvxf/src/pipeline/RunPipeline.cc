@@ -172,7 +172,8 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
         const RenderOptions options = renderOptionsFrom(s);
         const RayScene visible = sceneGeometry(scene, GeometryRoles::All);
         const RayScene occluders = sceneGeometry(scene, GeometryRoles::Occluders);
-        const RenderedImage image = render(volume, medium, scene, options, {&visible, &occluders}, interrupter);
+        const RayScene media = sceneGeometry(scene, GeometryRoles::Media);
+        const RenderedImage image = render(volume, medium, scene, options, {&visible, &occluders, &media}, interrupter);
         writeExr(report.image, image);
         writePng(report.preview, image);
         if (image.refinedPixels > 0) why += "; " + refinedSummary(image, options);

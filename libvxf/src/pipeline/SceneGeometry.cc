@@ -32,6 +32,7 @@ RayScene sceneGeometry(const Scene& scene, GeometryRoles roles)
     for (std::size_t i = 0; i < scene.objects.size(); ++i) {
         const SceneObject& object = scene.objects[i];
         if (roles == GeometryRoles::Occluders && object.role != SceneObject::Role::Occluder) continue;
+        if (roles == GeometryRoles::Media && object.role != SceneObject::Role::Medium) continue;
         geometry.add(objectMesh(object), int(i));
     }
     geometry.commit();

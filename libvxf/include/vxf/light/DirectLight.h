@@ -21,6 +21,9 @@ struct DirectLightOptions
     bool coarseTiles = false;
     /// Meshes that block the light entirely (the scene's occluders); null: none.
     const RayScene* occluders = nullptr;
+    /// The meshes the medium's level set was made from: shadow rays take their crossings of
+    /// the surface there (Medium::Sampler::snapCrossingsTo); null: on the level set.
+    const RayScene* boundary = nullptr;
 };
 
 struct DirectLightReport

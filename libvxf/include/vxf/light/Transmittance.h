@@ -149,6 +149,12 @@ private:
             lo = crossing(ta, sa, tb, sb);
         } else if (sb > 0.0) {
             hi = crossing(ta, sa, tb, sb);
+        } else if (std::max(sa, sb) > -Medium::kSnapWindow) {
+            // Inside at both ends by the level set, one of them near the surface: the meshes
+            // may cross it here (a grazing ray's crossing a step away from the level set's);
+            // the end nearer the surface is then the outside one.
+            double t;
+            if (mSampler.boundaryHit(mOrigin, mDirection, ta, tb, t)) (sa > sb ? lo : hi) = t;
         }
         return hi > lo;
     }
@@ -170,6 +176,10 @@ private:
     /// (@a sa, @a sb): regula falsi with the Illinois rule, from the secant's estimate.
     double crossing(double ta, double sa, double tb, double sb)
     {
+        // Where the crossing may be placed on the meshes: within the step, or the step beyond
+        // it on the outside (a grazing ray crosses the mesh up to ~1/cos further along than
+        // the level set says; the neighbouring step there lies outside and counts nothing).
+        const double lo = sa > 0.0 ? ta - mH : ta, hi = sb > 0.0 ? tb + mH : tb;
         double t = ta + (tb - ta) * sa / (sa - sb);
         int kept = 0; // the end kept by the last two iterations: −1 a, +1 b
         for (int k = 0; k < kCrossingIterations && tb - ta > kCrossingTolerance; ++k) {
@@ -188,7 +198,7 @@ private:
             }
             t = ta + (tb - ta) * sa / (sa - sb);
         }
-        return t;
+        return mSampler.snapCrossing(mOrigin, mDirection, t, lo, hi);
     }
 
     static constexpr int kDipDepth = 3;            ///< a chord down to an eighth of a step is found

@@ -13,9 +13,9 @@ namespace vxf {
 TriangleMesh objectMesh(const SceneObject& object);
 
 /// An Embree scene of the scene's objects, each with its index in scene.objects as id:
-/// every object (camera rays), or only the occluders (shadow rays in the light stage).
-/// Empty when nothing qualifies.
-enum class GeometryRoles { All, Occluders };
+/// every object (camera rays), only the occluders (shadow rays in the light stage), or only
+/// the media (the surfaces their level set was made from). Empty when nothing qualifies.
+enum class GeometryRoles { All, Occluders, Media };
 RayScene sceneGeometry(const Scene& scene, GeometryRoles roles);
 
 } // namespace vxf
