@@ -35,6 +35,8 @@ public:
     /// (options.directFromLights) marched to them at every step; multiple scattering from
     /// @a scatterSource, J = σs·φ/4π of the `scatter` grid (sourceFromFluence), through its
     /// dense copy @a scatterSourceDense where there is one. Either layer may be null (none).
+    /// With @a boundary (the media's meshes) the marches cross the surface where the meshes
+    /// do (Medium::Sampler::snapCrossingsTo): grazing rays, at silhouettes and terminators.
     Marcher(const Medium& medium, const RenderOptions& options, const InteriorField* direct,
         const openvdb::Vec3SGrid* scatterSource, const DenseCopy<openvdb::Vec3SGrid>* scatterSourceDense,
         const std::vector<LightSampler>* lights = nullptr, const RayScene* occluders = nullptr,
@@ -46,7 +48,11 @@ public:
         , mLights(lights)
         , mOccluders(occluders)
     {
-        mShadowSampler.snapCrossingsTo(boundary && !boundary->empty() ? boundary : nullptr);
+        // Camera and shadow rays cross the surface where the meshes do, as the reference's do.
+        if (boundary && !boundary->empty()) {
+            mSampler.snapCrossingsTo(boundary);
+            mShadowSampler.snapCrossingsTo(boundary);
+        }
         mShadowMarch.step = options.step;
         mShadowMarch.cutoff = options.cutoff;
         if (direct && !mLights) mDirect.emplace(*direct);

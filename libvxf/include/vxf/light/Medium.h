@@ -87,7 +87,10 @@ public:
         /// the mesh. The level set still decides what is inside (open and non-manifold meshes
         /// stay well-posed): the meshes only place the crossings it finds (snapCrossing), and
         /// one it missed within a step near the surface (boundaryHit). Costs two or three
-        /// Embree rays per crossing: for shadow rays, not the scatter passes' gathers.
+        /// Embree rays per crossing: for the render's camera and shadow rays and the light
+        /// stage's, not the scatter passes' gathers. On the thick bunny (point light, 1.3
+        /// voxels per mean free path) the image came 3.94 -> 3.79% off the reference at 64
+        /// voxels across, 2.067 -> 2.059% at 96.
         void snapCrossingsTo(const RayScene* boundary) { mBoundary = boundary; }
         /// The crossing of the surface near the level set's @a t on the index-space ray @a origin +
         /// t·@a direction (unit): the nearest hit of the boundary meshes within kSnapWindow voxels

@@ -58,7 +58,7 @@ struct RenderMeshes
 {
     const RayScene* visible = nullptr;   ///< every object; null: camera rays hit the `surface` level set
     const RayScene* occluders = nullptr; ///< the occluders only (shadows of the surface term); may be null
-    const RayScene* media = nullptr;     ///< the media only: where shadow rays cross the surface; may be null
+    const RayScene* media = nullptr;     ///< the media only: where camera and shadow rays cross the surface (may be null)
 };
 
 /// Render the voxel set @a set with @a scene's camera, lights and object shading.
