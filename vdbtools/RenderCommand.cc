@@ -72,13 +72,13 @@ public:
         if (!mMode.empty()) options.gather = mMode == "gather";
         if (mNoSurface) options.surface = false;
         if (mDirectFromLights) options.directFromLights = true;
-        RayScene visible, occluders, media;
-        if (!mLevelSet) {
-            visible = sceneGeometry(scene, GeometryRoles::All);
-            media = sceneGeometry(scene, GeometryRoles::Media);
+        SceneRayScenes meshes;
+        if (mLevelSet) {
+            meshes.occluders = sceneGeometry(scene, GeometryRoles::Occluders);
+        } else {
+            meshes = sceneRayScenes(scene);
         }
-        occluders = sceneGeometry(scene, GeometryRoles::Occluders);
-        const RenderedImage image = render(set, medium, scene, options, {&visible, &occluders, &media}, &progress);
+        const RenderedImage image = render(set, medium, scene, options, {&meshes.visible, &meshes.occluders, &meshes.media}, &progress);
         writeExr(mOutput, image, mHalf);
         if (!mPng.empty()) writePng(mPng, image, mExposure);
         const std::string adaptive = image.refinedPixels == 0 ? std::string() : ", " + refinedSummary(image, options);

@@ -663,10 +663,8 @@ std::vector<Operator> makeRegistry()
             if (ctx.args.has("max_samples")) o.maxSamples = ctx.args.integer("max_samples");
             if (ctx.args.has("noise_level")) o.noiseLevel = ctx.args.number("noise_level");
             const Medium medium(ctx.set, recordedMaterial(ctx.set));
-            const RayScene visible = sceneGeometry(scene, GeometryRoles::All);
-            const RayScene occluders = sceneGeometry(scene, GeometryRoles::Occluders);
-            const RayScene media = sceneGeometry(scene, GeometryRoles::Media);
-            const RenderedImage image = vxf::render(ctx.set, medium, scene, o, {&visible, &occluders, &media}, ctx.interrupter);
+            const SceneRayScenes meshes = sceneRayScenes(scene);
+            const RenderedImage image = vxf::render(ctx.set, medium, scene, o, {&meshes.visible, &meshes.occluders, &meshes.media}, ctx.interrupter);
             writeExr(ctx.args.text("image"), image);
             if (ctx.args.has("png")) writePng(ctx.args.text("png"), image);
             return fmt::format("rendered {}x{} to {}", o.width, o.height, ctx.args.text("image"));

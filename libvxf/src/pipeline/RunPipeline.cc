@@ -170,10 +170,8 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
         const VoxelSet volume = readVoxelSet(volumeFile.string());
         const Medium medium(volume, material);
         const RenderOptions options = renderOptionsFrom(s);
-        const RayScene visible = sceneGeometry(scene, GeometryRoles::All);
-        const RayScene occluders = sceneGeometry(scene, GeometryRoles::Occluders);
-        const RayScene media = sceneGeometry(scene, GeometryRoles::Media);
-        const RenderedImage image = render(volume, medium, scene, options, {&visible, &occluders, &media}, interrupter);
+        const SceneRayScenes meshes = sceneRayScenes(scene);
+        const RenderedImage image = render(volume, medium, scene, options, {&meshes.visible, &meshes.occluders, &meshes.media}, interrupter);
         writeExr(report.image, image);
         writePng(report.preview, image);
         if (image.refinedPixels > 0) why += "; " + refinedSummary(image, options);

@@ -39,4 +39,19 @@ RayScene sceneGeometry(const Scene& scene, GeometryRoles roles)
     return geometry;
 }
 
+SceneRayScenes sceneRayScenes(const Scene& scene)
+{
+    SceneRayScenes g;
+    for (std::size_t i = 0; i < scene.objects.size(); ++i) {
+        const SceneObject& object = scene.objects[i];
+        const TriangleMesh mesh = objectMesh(object);
+        g.visible.add(mesh, int(i));
+        (object.role == SceneObject::Role::Occluder ? g.occluders : g.media).add(mesh, int(i));
+    }
+    g.visible.commit();
+    g.occluders.commit();
+    g.media.commit();
+    return g;
+}
+
 } // namespace vxf

@@ -18,4 +18,12 @@ TriangleMesh objectMesh(const SceneObject& object);
 enum class GeometryRoles { All, Occluders, Media };
 RayScene sceneGeometry(const Scene& scene, GeometryRoles roles);
 
+/// The three Embree scenes a render needs (every object, the occluders, the media), each
+/// object's mesh read once.
+struct SceneRayScenes
+{
+    RayScene visible, occluders, media;
+};
+SceneRayScenes sceneRayScenes(const Scene& scene);
+
 } // namespace vxf
