@@ -9,6 +9,7 @@
 #include <tbb/enumerable_thread_specific.h>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <vector>
 
@@ -141,8 +142,26 @@ bool Medium::Sampler::surfaceNormal(const openvdb::Vec3d& ijk, openvdb::Vec3d& n
     return true;
 }
 
+namespace {
+
+/// The nearest hit of @a meshes on p + s·d, s in (0, @a reach], met from the side @a backFace
+/// says (true: leaving an outward-oriented mesh); its distance, or a negative number.
+double nearestFacing(const RayScene& meshes, const openvdb::Vec3d& p, const openvdb::Vec3d& d, double reach, bool backFace)
+{
+    double from = 0.0;
+    for (int k = 0; k < 8; ++k) {
+        const auto hit = meshes.intersect(p, d, from, reach);
+        if (!hit) return -1.0;
+        if (hit->backFace == backFace) return hit->distance;
+        from = std::nextafter(hit->distance, reach) + 1e-9 * reach; // past this triangle
+    }
+    return -1.0;
+}
+
+} // namespace
+
 double Medium::Sampler::snapCrossing(const openvdb::Vec3d& origin, const openvdb::Vec3d& direction, double t, double lo,
-    double hi)
+    double hi, bool entering)
 {
     if (!mBoundary) return t;
     const openvdb::Vec3d q = origin + direction * t;
@@ -156,18 +175,20 @@ double Medium::Sampler::snapCrossing(const openvdb::Vec3d& origin, const openvdb
     const double voxel = d.length(); // world length of one index unit along the ray
     if (!(voxel > 0.0)) return t;
     d /= voxel;
-    // Searched beyond [lo, hi] too: a crossing the meshes place in a neighbouring step is
-    // taken to the step's end, so that this step's part outside the meshes counts nothing.
-    const auto ahead = mBoundary->intersect(p, d, 0.0, reach * voxel);
-    const auto behind = mBoundary->intersect(p, -d, 0.0, reach * voxel);
-    const double tAhead = ahead ? t + ahead->distance / voxel : std::numeric_limits<double>::infinity();
-    const double tBehind = behind ? t - behind->distance / voxel : -std::numeric_limits<double>::infinity();
-    if (!ahead && !behind) return t;
+    // Only a crossing of the same kind (into the meshes or out of them): a short chord's entry
+    // and exit lie within each other's reach. Backwards the ray meets the same triangles from
+    // the other side. Searched beyond [lo, hi] too: a crossing the meshes place in a
+    // neighbouring step is taken to the step's end, so this step's part outside them counts nothing.
+    const double ahead = nearestFacing(*mBoundary, p, d, reach * voxel, !entering);
+    const double behind = nearestFacing(*mBoundary, p, -d, reach * voxel, entering);
+    if (ahead < 0.0 && behind < 0.0) return t;
+    const double tAhead = ahead >= 0.0 ? t + ahead / voxel : std::numeric_limits<double>::infinity();
+    const double tBehind = behind >= 0.0 ? t - behind / voxel : -std::numeric_limits<double>::infinity();
     return std::clamp(tAhead - t < t - tBehind ? tAhead : tBehind, lo, hi);
 }
 
 bool Medium::Sampler::boundaryHit(const openvdb::Vec3d& origin, const openvdb::Vec3d& direction, double lo, double hi,
-    double& t) const
+    double& t, bool& entering) const
 {
     if (!mBoundary || !(hi > lo)) return false;
     const openvdb::math::Transform& xform = mMedium.transform();
@@ -175,9 +196,10 @@ bool Medium::Sampler::boundaryHit(const openvdb::Vec3d& origin, const openvdb::V
     openvdb::Vec3d d = xform.indexToWorld(origin + direction * (lo + 1.0)) - p;
     const double voxel = d.length();
     if (!(voxel > 0.0)) return false;
-    const auto hit = mBoundary->intersect(p, d / voxel, 0.0, (hi - lo) * voxel);
+    const auto hit = mBoundary->intersect(p, d / voxel, 1e-6 * voxel, (hi - lo) * voxel); // not a crossing at lo itself
     if (!hit) return false;
     t = lo + hit->distance / voxel;
+    entering = !hit->backFace;
     return true;
 }
 

@@ -93,13 +93,17 @@ public:
         /// voxels across, 2.067 -> 2.059% at 96.
         void snapCrossingsTo(const RayScene* boundary) { mBoundary = boundary; }
         /// The crossing of the surface near the level set's @a t on the index-space ray @a origin +
-        /// t·@a direction (unit): the nearest hit of the boundary meshes within kSnapWindow voxels
-        /// of depth (kSnapWindow / cos along a ray meeting the surface at cosine cos, at most
-        /// kSnapReach), clamped to [@a lo, @a hi]; @a t itself without boundary meshes or a hit.
-        double snapCrossing(const openvdb::Vec3d& origin, const openvdb::Vec3d& direction, double t, double lo, double hi);
-        /// The first hit @a t of the boundary meshes on the index-space ray in (@a lo, @a hi);
-        /// false without boundary meshes or a hit.
-        bool boundaryHit(const openvdb::Vec3d& origin, const openvdb::Vec3d& direction, double lo, double hi, double& t) const;
+        /// t·@a direction (unit), into the medium when @a entering: the nearest hit of the
+        /// boundary meshes of that kind (an outward-oriented mesh met from its front, or from
+        /// behind when leaving) within kSnapWindow voxels of depth (kSnapWindow / cos along a
+        /// ray meeting the surface at cosine cos, at most kSnapReach), clamped to [@a lo, @a hi];
+        /// @a t itself without boundary meshes or such a hit.
+        double snapCrossing(const openvdb::Vec3d& origin, const openvdb::Vec3d& direction, double t, double lo, double hi,
+            bool entering);
+        /// The first hit @a t of the boundary meshes on the index-space ray in (@a lo, @a hi),
+        /// and whether the ray @a entering the meshes there; false without boundary meshes or a hit.
+        bool boundaryHit(const openvdb::Vec3d& origin, const openvdb::Vec3d& direction, double lo, double hi, double& t,
+            bool& entering) const;
 
     private:
         const Medium& mMedium;

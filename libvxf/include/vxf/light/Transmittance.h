@@ -149,12 +149,17 @@ private:
             lo = crossing(ta, sa, tb, sb);
         } else if (sb > 0.0) {
             hi = crossing(ta, sa, tb, sb);
-        } else if (std::max(sa, sb) > -Medium::kSnapWindow) {
-            // Inside at both ends by the level set, one of them near the surface: the meshes
-            // may cross it here (a grazing ray's crossing a step away from the level set's);
-            // the end nearer the surface is then the outside one.
-            double t;
-            if (mSampler.boundaryHit(mOrigin, mDirection, ta, tb, t)) (sa > sb ? lo : hi) = t;
+        }
+        // With boundary meshes: an end the level set holds inside but near the surface may lie
+        // outside the meshes (a short chord under a silhouette, a grazing ray's crossing a step
+        // away from the level set's): the part before their entry, or after their exit, is outside.
+        double t;
+        bool entering;
+        if (lo == ta && sa > -Medium::kSnapWindow && mSampler.boundaryHit(mOrigin, mDirection, lo, hi, t, entering) && entering) {
+            lo = t;
+        }
+        if (hi == tb && sb > -Medium::kSnapWindow && mSampler.boundaryHit(mOrigin, mDirection, lo, hi, t, entering) && !entering) {
+            hi = t;
         }
         return hi > lo;
     }
@@ -198,7 +203,7 @@ private:
             }
             t = ta + (tb - ta) * sa / (sa - sb);
         }
-        return mSampler.snapCrossing(mOrigin, mDirection, t, lo, hi);
+        return mSampler.snapCrossing(mOrigin, mDirection, t, lo, hi, sa > 0.0);
     }
 
     static constexpr int kDipDepth = 3;            ///< a chord down to an eighth of a step is found
