@@ -169,6 +169,13 @@ TEST_CASE("view mode with the media's meshes: rays enter and leave where the mes
     INFO("worst error: on the mesh " << worstMesh << ", on the level set " << worstLevelSet << " (brightest pixel ~0.08)");
     CHECK(rays > 1000);
     CHECK(worstMesh < 0.2 * worstLevelSet);
+
+    // Hits name scene objects by the meshes' ids: an id the scene lacks is an error, not a read past its objects.
+    vxf::RayScene stray;
+    stray.add(mesh, 1);
+    stray.commit();
+    CHECK_THROWS_WITH(vxf::render(set, medium, scene, options, {&visible, &occluders, &stray}),
+        Catch::Contains("object 1") && Catch::Contains("1 object(s)"));
 }
 
 TEST_CASE("gather mode and image files", "[render][io]")

@@ -5,6 +5,7 @@
 #include <embree3/rtcore.h>
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -65,6 +66,14 @@ void RayScene::add(const TriangleMesh& mesh, int id)
 }
 
 bool RayScene::empty() const { return mImpl->ids.empty() && mImpl->pending.empty(); }
+
+int RayScene::largestId() const
+{
+    int largest = -1;
+    for (int id : mImpl->ids) largest = std::max(largest, id);
+    for (const auto& [mesh, id] : mImpl->pending) largest = std::max(largest, id);
+    return largest;
+}
 
 void RayScene::commit()
 {

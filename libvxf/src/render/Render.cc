@@ -376,6 +376,13 @@ struct RenderContext
         , meshes(meshes_)
         , useMeshes(meshes_.visible && !meshes_.visible->empty())
     {
+        // Hits report RayScene ids, which index scene.objects.
+        for (const RayScene* rays : {meshes.visible, meshes.occluders, meshes.media}) {
+            if (rays && rays->largestId() >= int(scene.objects.size())) {
+                throw Error(fmt::format("render: a mesh is given as object {}, but the scene has {} object(s)",
+                    rays->largestId(), scene.objects.size()));
+            }
+        }
         if (!useMeshes) {
             levelSet = set.get<openvdb::FloatGrid>("surface");
             if (levelSet->getGridClass() != openvdb::GRID_LEVEL_SET) throw Error("grid 'surface' must be a level set");

@@ -25,6 +25,8 @@ public:
     /// Build the BVH; no add() after this.
     void commit();
     bool empty() const;
+    /// The largest object id given to add() (-1: none), so a caller can check the ids against its objects.
+    int largestId() const;
 
     struct Hit
     {
