@@ -1,6 +1,7 @@
 #include "TestSupport.h"
 
 #include <fmt/format.h>
+#include <openvdb/tools/Morphology.h>
 
 #include <cstdlib>
 #include <fstream>
@@ -137,6 +138,19 @@ bool identicalGrids(const openvdb::GridBase& a, const openvdb::GridBase& b, std:
         return identicalTyped(*ia, static_cast<const openvdb::Int32Grid&>(b), why);
     }
     return say("unsupported grid type " + a.type());
+}
+
+void putConstantFluence(vxf::VoxelSet& set, const std::string& name, double phi)
+{
+    auto density = set.get<openvdb::FloatGrid>("density");
+    auto grid = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
+    grid->setName(name);
+    grid->setTransform(set.transformPtr());
+    grid->tree().topologyUnion(density->tree());
+    grid->tree().voxelizeActiveTiles();
+    openvdb::tools::dilateActiveValues(grid->tree(), 1, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
+    for (auto it = grid->beginValueOn(); it; ++it) it.setValue(openvdb::Vec3f(float(phi)));
+    set.put(grid);
 }
 
 } // namespace vxf::test

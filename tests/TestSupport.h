@@ -2,6 +2,7 @@
 // comparison.
 #pragma once
 
+#include <vxf/core/VoxelSet.h>
 #include <vxf/pipeline/Scene.h>
 
 #include <openvdb/openvdb.h>
@@ -51,6 +52,10 @@ vxf::Material greyMaterial(double sigmaA, double sigmaS);
 
 /// A grey material of extinction @a sigmaT and single-scattering @a albedo.
 vxf::Material albedoMaterial(double sigmaT, double albedo);
+
+/// A constant fluence @a phi named @a name over @a set's medium (its `density`) and, as the
+/// light stage does, one voxel beyond it.
+void putConstantFluence(vxf::VoxelSet& set, const std::string& name, double phi);
 
 /// Whether two grids are identical: type, class, background, transform, and every stored
 /// value and active state (tiles compared voxel by voxel, so pruning does not matter).

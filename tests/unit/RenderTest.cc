@@ -11,24 +11,8 @@
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfInputFile.h>
 #include <catch2/catch.hpp>
-#include <openvdb/tools/Morphology.h>
 
 namespace {
-
-/// A constant fluence @a phi named @a name over @a set's medium and, as the light stage does,
-/// one voxel beyond it.
-void putConstantFluence(vxf::VoxelSet& set, const std::string& name, double phi)
-{
-    auto density = set.get<openvdb::FloatGrid>("density");
-    auto grid = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
-    grid->setName(name);
-    grid->setTransform(set.transformPtr());
-    grid->tree().topologyUnion(density->tree());
-    grid->tree().voxelizeActiveTiles();
-    openvdb::tools::dilateActiveValues(grid->tree(), 1, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
-    for (auto it = grid->beginValueOn(); it; ++it) it.setValue(openvdb::Vec3f(float(phi)));
-    set.put(grid);
-}
 
 /// The unit sphere voxelized, with a constant `direct` φ over its medium (no scatter).
 vxf::VoxelSet litSphere(double phi)
@@ -36,7 +20,7 @@ vxf::VoxelSet litSphere(double phi)
     vxf::VoxelizeOptions options;
     options.dim = 64;
     vxf::VoxelSet set = vxf::voxelize(vxf::makeSphere(openvdb::Vec3d(0.0), 1.0), options);
-    putConstantFluence(set, "direct", phi);
+    vxf::test::putConstantFluence(set, "direct", phi);
     return set;
 }
 
@@ -118,7 +102,7 @@ TEST_CASE("view mode with the media's meshes: rays enter and leave where the mes
     vxf::VoxelizeOptions voxelize;
     voxelize.voxelSize = dx;
     vxf::VoxelSet set = vxf::voxelize(mesh, voxelize);
-    putConstantFluence(set, "scatter", phi);
+    vxf::test::putConstantFluence(set, "scatter", phi);
     vxf::Material material;
     material.sigmaA = openvdb::Vec3d(sigmaA);
     material.sigmaS = openvdb::Vec3d(sigmaS);

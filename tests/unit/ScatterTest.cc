@@ -1,7 +1,12 @@
 #include <vxf/scatter/Scatter.h>
 
+#include <vxf/core/ProceduralMesh.h>
+#include <vxf/light/InteriorField.h>
+#include <vxf/voxelize/Voxelize.h>
+
 #include "TestSupport.h"
 
+#include <boost/math/special_functions/expint.hpp>
 #include <catch2/catch.hpp>
 #include <tbb/global_control.h>
 
@@ -207,5 +212,46 @@ TEST_CASE("a march cut off at the transmittance cutoff adds the light beyond it"
         vxf::scatter(set, vxf::Medium(set, m), options);
         INFO("cutoff " << cutoff);
         CHECK(set.get<openvdb::Vec3SGrid>("scatter")->tree().getValue(openvdb::Coord(0)).x() == Approx(0.5).epsilon(2e-3));
+    }
+}
+
+TEST_CASE("one pass from a uniform source near a flat face: A phi0 (1 - E2(sigma_t z)/2) at every depth, the face anywhere in its voxel", "[scatter]")
+{
+    // A half-space of uniform source J0 = σs·φ0/4π: at depth z the directions leaving through
+    // the face see the medium for z/μ, so one pass gives φ1(z) = A·φ0·(1 − E2(σt z)/2), half
+    // of A·φ0 on the face itself (a rim voxel, whose centre lies outside, holds it there:
+    // Medium::Sampler::mediumPoint). Near the face φ1 rises with infinite slope (E2' = −E1), a
+    // voxel or two per mean free path sees it all; the gather from a surface point and the
+    // marches cut at the surface (InsideSteps) are what this checks, with the face at four
+    // offsets in its voxel. A box at least 8 mean free paths deep around the probed line.
+    const double dx = 1.0 / 32.0, sigmaT = 16.0, albedo = 0.8; // 2 voxels per mean free path
+    const vxf::Material m = vxf::test::albedoMaterial(sigmaT, albedo);
+    for (const double offset : {0.1, 0.35, 0.6, 0.85}) {
+        const double face = 0.5 + offset * dx; // voxel centres lie on dx·ℤ
+        vxf::VoxelizeOptions voxelize;
+        voxelize.voxelSize = dx;
+        vxf::VoxelSet set = vxf::voxelize(vxf::makeBox(openvdb::Vec3d(-0.25, -0.5, -0.5), openvdb::Vec3d(face, 0.5, 0.5)), voxelize);
+        vxf::test::putConstantFluence(set, "direct", 1.0);
+        set.put(vxf::sourceFromFluence(vxf::Medium(set, m), *set.get<openvdb::Vec3SGrid>("direct")));
+        vxf::ScatterOptions options;
+        options.passes = 1;
+        options.tolerance = 0.0;
+        options.pass.directions = 64;
+        vxf::scatter(set, vxf::Medium(set, m), options);
+        const auto phi1 = set.get<openvdb::Vec3SGrid>("scatter")->getConstAccessor();
+        int rims = 0;
+        for (int i = 10; double(i) * dx < face + 0.5 * dx; ++i) {
+            const double depth = std::max(0.0, face - double(i) * dx); // the rim's value is at its surface point
+            rims += depth == 0.0;
+            const double expected = albedo * (1.0 - 0.5 * boost::math::expint(2, sigmaT * depth));
+            INFO("face offset " << offset << " voxel, centre " << i << ": depth " << depth / dx << " voxels");
+            // On the face the directions split at μ = 0 into those that see the half-space's
+            // J/σt and those that see nothing: the rim holds its share of the direction set,
+            // right to one direction's weight, A·φ0/N (1.25% here; per-voxel rotations make
+            // it noise over a surface).
+            const double margin = depth == 0.0 ? albedo / options.pass.directions : 0.0;
+            CHECK(phi1.getValue(openvdb::Coord(i, 0, 0)).x() == Approx(expected).epsilon(0.003).margin(margin));
+        }
+        CHECK(rims == (offset > 0.5 ? 1 : 0)); // a centre outside by less than half a voxel
     }
 }

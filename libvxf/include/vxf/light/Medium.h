@@ -90,7 +90,7 @@ public:
         /// Embree rays per crossing: for the render's camera and shadow rays and the light
         /// stage's, not the scatter passes' gathers. On the thick bunny (point light, 1.3
         /// voxels per mean free path) the image came 3.94 -> 3.79% off the reference at 64
-        /// voxels across, 2.067 -> 2.059% at 96.
+        /// voxels across, 2.067 -> 2.057% at 96.
         void snapCrossingsTo(const RayScene* boundary) { mBoundary = boundary; }
         /// The crossing of the surface near the level set's @a t on the index-space ray @a origin +
         /// t·@a direction (unit), into the medium when @a entering: the nearest hit of the

@@ -40,6 +40,22 @@ namespace vxf {
 /// normal misreads it (with every source read so, the thick sphere's shadowed third came out
 /// +14% instead of +5% at dim 64); the camera reading the `scatter` grid so took 4% (dim 64)
 /// to 8% (dim 32) off the sphere's lit side. Both keep the fraction-weighted read.
+///
+/// What the lines leave (2026-12-02): near a surface the scattered light does not rise
+/// linearly. The first pass from a uniform source is A·φ0·(1 − E2(σt z)/2) at depth z, with an
+/// infinite slope at the surface (E2' = −E1), and the converged scattered light has nearly the
+/// shape G(z) = 1 − E2(σt z) there: in bench/accuracy/slab_model's fine solution (albedo 0.99,
+/// half a mean free path per voxel), (J(z) − J(0)) / (J(h) − J(0)) at a quarter, half and three
+/// quarters of the first voxel is 0.42, 0.68, 0.86; G(z)/G(h) gives 0.48, 0.72, 0.88, a line
+/// 0.25, 0.5, 0.75. On a flat face (2 voxels per mean free path, albedo 0.99) the first pass is
+/// exact to 0.1% at every depth (ScatterTest), but the second, reading the first through this
+/// field, came out −6.6%, −3.9%, +1.1%, −1.5% at the surface with the face at 0, ¼, ½, ¾ of its
+/// voxel (against a 1-D quadrature of the second pass): each cut of the lattice its own error,
+/// the spatial pattern the thick bunny's scattered light still shows. The camera reading
+/// `scatter` through this field: rim −6.6%, body −2.1% (dim 96 rung, multiple scattering
+/// against Mitsuba) where the fraction-weighted read gives +5.4% and −0.1%. The lead: continue
+/// between J on the surface and J a voxel beneath it along G instead of a line, with J on the
+/// surface gathered for every cut voxel (not only the rim's), in the passes and the camera alike.
 /// Immutable after construction and shared by threads; each thread reads through a Sampler.
 class SourceField
 {
