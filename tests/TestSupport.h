@@ -1,5 +1,5 @@
-// Helpers shared by the tests: temporary folders, running the real binaries, exact grid
-// comparison.
+// Helpers shared by the tests: temporary folders, running the real binaries, materials and
+// constant fluence grids, exact grid comparison.
 #pragma once
 
 #include <vxf/core/VoxelSet.h>
