@@ -1,6 +1,7 @@
 #include <vxf/pipeline/Graph.h>
 
 #include <vxf/core/Error.h>
+#include <vxf/io/ContentHash.h>
 #include <vxf/io/VoxelSetFile.h>
 
 #include "TestSupport.h"
@@ -136,4 +137,14 @@ TEST_CASE("a graph runs the pipeline stages and combines nodes (with)", "[graph]
     CHECK(worst < 1e-5);
     vxf::test::spit(dir.path("q.json"), R"({"nodes": {"s": {"file": "sc.vdb"}, "v": {"op": "voxelize", "input": "s", "params": {"mesh": "builtin:box"}}}, "outputs": {"v": "v.vdb"}})");
     CHECK_THROWS_WITH(vxf::runGraph(dir.path("q.json"), dir.path("cache")), Catch::Contains("takes no input"));
+}
+
+TEST_CASE("cache keys name the program: the fingerprint of the running executable", "[graph]")
+{
+    // vxf run's stages and the graph's nodes key on it, so a rebuilt vxf does not take what
+    // an older one computed. It is the executable's bytes, computed once.
+    const std::string& fingerprint = vxf::programFingerprint();
+    CHECK(fingerprint == vxf::fileFingerprint("/proc/self/exe"));
+    CHECK(fingerprint.size() == 16);
+    CHECK(&vxf::programFingerprint() == &fingerprint);
 }

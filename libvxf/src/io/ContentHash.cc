@@ -33,4 +33,16 @@ std::string fileFingerprint(const std::string& path)
     return hashHex(readFileBytes(path));
 }
 
+const std::string& programFingerprint()
+{
+    static const std::string fingerprint = [] {
+        try {
+            return fileFingerprint("/proc/self/exe");
+        } catch (const Error&) {
+            return std::string("version " VXF_VERSION_STRING);
+        }
+    }();
+    return fingerprint;
+}
+
 } // namespace vxf

@@ -114,7 +114,7 @@ private:
         return path.is_absolute() ? path.string() : (mFolder / path).lexically_normal().string();
     }
 
-    /// The node's cache hash: its own definition and its input's hash (recursively).
+    /// The node's cache hash: its own definition, its input's hash (recursively) and the program.
     std::string hashOf(const std::string& name)
     {
         if (auto found = mHashes.find(name); found != mHashes.end()) return found->second;
@@ -132,6 +132,7 @@ private:
                 if (node["params"].contains(param)) key[param] = fileFingerprint(node["params"][param].get<std::string>());
             }
         }
+        key["program"] = programFingerprint();
         mVisiting.erase(name);
         return mHashes[name] = hashHex(key.dump());
     }

@@ -76,7 +76,9 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
             {"sigma", mediaCount(scene) > 1 ? json{vec(m.sigmaA), vec(m.sigmaS)} : json()},
             {"grids", m.gridsFile.empty() ? json() : json{fileFingerprint(m.gridsFile), m.sigmaAGrid, m.sigmaSGrid}}});
     }
-    const json voxelInputs = {{"media", media}, {"dim", s.dim}, {"voxel_size", s.voxelSize}, {"band", s.band}};
+    // The program too: the light and scatter stages' keys chain from this one.
+    const json voxelInputs = {{"media", media}, {"dim", s.dim}, {"voxel_size", s.voxelSize}, {"band", s.band},
+        {"program", programFingerprint()}};
     const std::string voxelHash = hashOf(voxelInputs);
     const fs::path voxelFile = cache / ("voxelize-" + voxelHash + ".vdb");
     VoxelSet set;

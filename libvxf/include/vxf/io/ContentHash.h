@@ -20,4 +20,10 @@ std::string hashHex(const std::string& text);
 /// themselves. Throws vxf::Error naming the file when it cannot be read.
 std::string fileFingerprint(const std::string& path);
 
+/// The hash of the running program's executable (/proc/self/exe) as 16 hex digits, computed
+/// once; the version string where it cannot be read. Part of every cache key (`vxf run`'s
+/// stages, `vxf graph`'s nodes), so a rebuilt or upgraded vxf does not take results an older
+/// one computed with other algorithms.
+const std::string& programFingerprint();
+
 } // namespace vxf
