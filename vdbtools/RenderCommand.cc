@@ -74,7 +74,7 @@ public:
         if (mDirectFromLights) options.directFromLights = true;
         SceneRayScenes meshes;
         if (mLevelSet) {
-            meshes.occluders = sceneGeometry(scene, GeometryRoles::Occluders);
+            meshes.occluders = sceneGeometry(scene, SceneObject::Role::Occluder);
         } else {
             meshes = sceneRayScenes(scene);
         }

@@ -17,9 +17,9 @@ DirectLightReport lightScene(VoxelSet& set, const Scene& scene, DirectLightOptio
             scene.path, mediaCount(scene)));
     }
     const Medium medium(set, material);
-    const RayScene occluders = sceneGeometry(scene, GeometryRoles::Occluders);
+    const RayScene occluders = sceneGeometry(scene, SceneObject::Role::Occluder);
     options.occluders = occluders.empty() ? nullptr : &occluders;
-    const RayScene boundary = sceneGeometry(scene, GeometryRoles::Media);
+    const RayScene boundary = sceneGeometry(scene, SceneObject::Role::Medium);
     options.boundary = boundary.empty() ? nullptr : &boundary;
     DirectLightReport report = computeDirectLight(set, medium, scene.lights, options, interrupter);
     recordMaterial(set, material);

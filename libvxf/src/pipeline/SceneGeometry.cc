@@ -26,14 +26,11 @@ TriangleMesh objectMesh(const SceneObject& object)
     return mesh;
 }
 
-RayScene sceneGeometry(const Scene& scene, GeometryRoles roles)
+RayScene sceneGeometry(const Scene& scene, SceneObject::Role role)
 {
     RayScene geometry;
     for (std::size_t i = 0; i < scene.objects.size(); ++i) {
-        const SceneObject& object = scene.objects[i];
-        if (roles == GeometryRoles::Occluders && object.role != SceneObject::Role::Occluder) continue;
-        if (roles == GeometryRoles::Media && object.role != SceneObject::Role::Medium) continue;
-        geometry.add(objectMesh(object), int(i));
+        if (scene.objects[i].role == role) geometry.add(objectMesh(scene.objects[i]), int(i));
     }
     geometry.commit();
     return geometry;

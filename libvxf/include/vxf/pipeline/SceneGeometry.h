@@ -12,11 +12,10 @@ namespace vxf {
 /// bad mesh file.
 TriangleMesh objectMesh(const SceneObject& object);
 
-/// An Embree scene of the scene's objects, each with its index in scene.objects as id:
-/// every object (camera rays), only the occluders (shadow rays in the light stage), or only
-/// the media (the surfaces their level set was made from). Empty when nothing qualifies.
-enum class GeometryRoles { All, Occluders, Media };
-RayScene sceneGeometry(const Scene& scene, GeometryRoles roles);
+/// An Embree scene of the scene's objects of @a role, each with its index in scene.objects as
+/// id: the occluders (shadow rays in the light stage) or the media (the surfaces their level
+/// set was made from). Empty when none has it.
+RayScene sceneGeometry(const Scene& scene, SceneObject::Role role);
 
 /// The three Embree scenes a render needs (every object, the occluders, the media), each
 /// object's mesh read once.
