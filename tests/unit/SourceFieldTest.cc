@@ -16,8 +16,8 @@ namespace {
 constexpr double kSigmaS = 2.0;
 
 /// A sphere of radius 1 at voxel size 0.1 (σs = 2) and the source of a fluence @a phi taken
-/// where the passes gather it (mediumPoint: the centre, or the surface point of a rim voxel),
-/// on the medium's topology.
+/// where the passes gather it (the centre, or a skin voxel's surface point: skinPoint), on the
+/// medium's topology.
 struct ScatteringSphere
 {
     explicit ScatteringSphere(const std::function<double(const openvdb::Vec3d&)>& phi)
@@ -30,7 +30,8 @@ struct ScatteringSphere
         fluence->tree().voxelizeActiveTiles();
         vxf::Medium::Sampler sampler(*medium);
         for (auto it = fluence->beginValueOn(); it; ++it) {
-            const openvdb::Vec3d p = sampler.mediumPoint(it.getCoord());
+            openvdb::Vec3d p = it.getCoord().asVec3d(), normal;
+            sampler.skinPoint(it.getCoord(), p, normal);
             it.setValue(openvdb::Vec3f(float(phi(set.transform().indexToWorld(p)))));
         }
         source = vxf::sourceFromFluence(*medium, *fluence);

@@ -213,6 +213,16 @@ openvdb::Vec3d Medium::Sampler::mediumPoint(const openvdb::Coord& ijk)
     return c - n * d;
 }
 
+bool Medium::Sampler::skinPoint(const openvdb::Coord& ijk, openvdb::Vec3d& point, openvdb::Vec3d& normal)
+{
+    if (!mSurface) return false;
+    const openvdb::Vec3d c = ijk.asVec3d();
+    const double d = signedDistance(c);
+    if (!(std::abs(d) < 0.5) || !surfaceNormal(c, normal)) return false;
+    point = c - normal * d;
+    return true;
+}
+
 openvdb::Vec3d Medium::Sampler::sigmaS(const openvdb::Vec3d& ijk)
 {
     if (mSigmaS) return openvdb::Vec3d(openvdb::tools::BoxSampler::sample(*mSigmaS, ijk));

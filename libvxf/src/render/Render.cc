@@ -6,6 +6,7 @@
 #include <vxf/light/InteriorField.h>
 #include <vxf/light/LightSampler.h>
 #include <vxf/light/Transmittance.h>
+#include <vxf/scatter/SourceField.h>
 
 #include <openvdb/tools/RayIntersector.h>
 
@@ -33,12 +34,12 @@ class Marcher
 public:
     /// Single scattering is read from @a direct (the `direct` grid's J), or with @a lights
     /// (options.directFromLights) marched to them at every step; multiple scattering from
-    /// @a scatterSource, J = σs·φ/4π of the `scatter` grid (sourceFromFluence), through its
-    /// dense copy @a scatterSourceDense where there is one. Either layer may be null (none).
+    /// @a scatter, J = σs·φ/4π of the `scatter` grid read as the scatter passes read their
+    /// sources (SourceField: near a surface, its layers). Either layer may be null (none).
     /// With @a boundary (the media's meshes) the marches cross the surface where the meshes
     /// do (Medium::Sampler::snapCrossingsTo): grazing rays, at silhouettes and terminators.
     Marcher(const Medium& medium, const RenderOptions& options, const InteriorField* direct,
-        const openvdb::Vec3SGrid* scatterSource, const DenseCopy<openvdb::Vec3SGrid>* scatterSourceDense,
+        const SourceField* scatter,
         const std::vector<LightSampler>* lights = nullptr, const RayScene* occluders = nullptr,
         const RayScene* boundary = nullptr)
         : mMedium(medium)
@@ -56,7 +57,7 @@ public:
         mShadowMarch.step = options.step;
         mShadowMarch.cutoff = options.cutoff;
         if (direct && !mLights) mDirect.emplace(*direct);
-        if (scatterSource) mScatter.emplace(*scatterSource, scatterSourceDense);
+        if (scatter) mScatter.emplace(*scatter);
         mBounds = marchBounds(medium);
         mTauCutoff = -std::log(std::max(options.cutoff, std::numeric_limits<double>::min()));
     }
@@ -85,9 +86,9 @@ public:
             // Only the part of the step inside the surface holds medium (sharp boundary).
             if (!inside.next(step)) continue;
             const std::uint64_t point = 3 * std::uint64_t(i); // the ray's emission points, 3 per step
-            // The interior scale at the step's ends, where σs is read there (lights, scatter grid).
+            // The interior scale at the step's ends, where σs is read there (lights).
             const auto scaleAt = [&](const openvdb::Vec3d& p) {
-                return mLights || mScatter ? mSampler.interiorScale(p, step.distanceBound) : 1.0;
+                return mLights ? mSampler.interiorScale(p, step.distanceBound) : 1.0;
             };
             eStart = step.joined ? eEnd : emission(step.start, scaleAt(step.start), key, point);
             eMiddle = emission(step.midpoint, step.interior, key, point + 1);
@@ -181,9 +182,9 @@ private:
     /// (Medium::Sampler::interiorScale). Single scattering: marched to the lights (one sample
     /// per light, the @a point-th of the ray of @a key) with σs(p)·interior when
     /// options.directFromLights, else the `direct` grid's InteriorField. Multiple scattering:
-    /// σs·φ/4π of the `scatter` grid interpolated as one per-voxel quantity, as the scatter
-    /// passes read their sources (interpolating σs and φ apart would square the ramp where
-    /// both fall to zero at the surface), times the interior scale.
+    /// σs·φ/4π of the `scatter` grid as the scatter passes read their sources (SourceField;
+    /// σs·φ is one per-voxel quantity: interpolating σs and φ apart would square the ramp
+    /// where both fall to zero at the surface).
     Emission emission(const openvdb::Vec3d& p, double interior, std::uint64_t key, std::uint64_t point)
     {
         Emission e;
@@ -194,7 +195,7 @@ private:
             e.directExact = scale * exact;
         }
         if (mDirect) e.direct = e.directExact = mDirect->sample(p);
-        if (mScatter) e.scatter = openvdb::Vec3d(mScatter->sampleTrilinear(p)) * interior;
+        if (mScatter) e.scatter = mScatter->sample(p);
         return e;
     }
 
@@ -236,7 +237,7 @@ private:
     MarchOptions mShadowMarch;
     std::vector<LightSample> mLightSamples;
     std::optional<InteriorField::Sampler> mDirect;
-    std::optional<GridLookup<openvdb::Vec3SGrid>> mScatter; ///< J of the scattered light
+    std::optional<SourceField::Sampler> mScatter; ///< J of the scattered light
     openvdb::BBoxd mBounds;
     double mTauCutoff;
     std::uint64_t mExtraPoint = 0; ///< the next refined point's index along the ray (after the steps' 3 per step)
@@ -406,8 +407,7 @@ struct RenderContext
         if (options.directFromLights) shining(volumeLights);
         if (!options.directFromLights && set.find("direct")) directField.emplace(medium, *set.get<openvdb::Vec3SGrid>("direct"));
         if (set.find("scatter")) {
-            scatterSource = sourceFromFluence(medium, *set.get<openvdb::Vec3SGrid>("scatter"));
-            scatterSourceDense = DenseCopy<openvdb::Vec3SGrid>::create(*scatterSource, 2, kDenseCopyBytes);
+            scatterField.emplace(medium, *sourceFromFluence(medium, *set.get<openvdb::Vec3SGrid>("scatter")));
         }
 
         const Camera& camera = scene.camera;
@@ -445,8 +445,7 @@ struct RenderContext
     std::vector<LightSampler> surfaceLights; ///< the lights the surface term reflects (none: no surface term)
     std::vector<LightSampler> volumeLights;  ///< the lights single scattering is marched to (directFromLights)
     std::optional<InteriorField> directField; ///< single scattering read from the `direct` grid (not directFromLights)
-    openvdb::Vec3SGrid::ConstPtr scatterSource; ///< J = σs·φ/4π of the `scatter` grid, or null
-    std::shared_ptr<const DenseCopy<openvdb::Vec3SGrid>> scatterSourceDense; ///< its dense copy, or null
+    std::optional<SourceField> scatterField; ///< J = σs·φ/4π of the `scatter` grid, or none
     openvdb::Vec3d forward, right, up;       ///< the camera's frame
     double aspect = 1.0, tanHalf = 1.0;
 };
@@ -460,7 +459,7 @@ public:
         , mOptions(context.options)
         , mIntersector(context.levelSetIntersector)
         , mMarcher(context.medium, context.options, context.directField ? &*context.directField : nullptr,
-              context.scatterSource.get(), context.scatterSourceDense.get(), context.options.directFromLights ? &context.volumeLights : nullptr,
+              context.scatterField ? &*context.scatterField : nullptr, context.options.directFromLights ? &context.volumeLights : nullptr,
               context.meshes.occluders, context.meshes.media)
         , mShader(context.medium, context.surfaceLights, context.meshes.occluders)
         , mEpsilon(1e-4 * context.medium.voxelSize())

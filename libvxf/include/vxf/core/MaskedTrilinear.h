@@ -29,9 +29,10 @@ struct TrilinearCell
 /// corners @a use accepts, the weights renormalised over them; with @a geometric, per channel
 /// the weighted geometric mean where all its values used are positive (exact for a field
 /// falling off exponentially), linear otherwise. Returns false, leaving @a out, when the
-/// corners used carry less than half the weight.
+/// corners used carry less than @a minWeight of the weight.
 template <typename Values, typename Use>
-bool maskedTrilinear(const Values& values, const openvdb::Vec3d& p, const Use& use, openvdb::Vec3d& out, bool geometric = false)
+bool maskedTrilinear(const Values& values, const openvdb::Vec3d& p, const Use& use, openvdb::Vec3d& out, bool geometric = false,
+    double minWeight = 0.5)
 {
     const TrilinearCell cell(p);
     double total = 0.0;
@@ -50,7 +51,7 @@ bool maskedTrilinear(const Values& values, const openvdb::Vec3d& p, const Use& u
             else positive[ch] = false;
         }
     }
-    if (total < 0.5) return false;
+    if (total < minWeight || total <= 0.0) return false;
     for (int ch = 0; ch < 3; ++ch) out[ch] = positive[ch] ? std::exp(logSum[ch] / total) : linear[ch] / total;
     return true;
 }

@@ -76,6 +76,11 @@ public:
         /// surface by less than half a voxel (the rim, whose medium is the part of its cube
         /// inside), the nearest point of the surface, c − φs·n. Its centre without a surface.
         openvdb::Vec3d mediumPoint(const openvdb::Coord& ijk);
+        /// Whether voxel @a ijk is in the surface's skin, its centre within half a voxel of the
+        /// surface on either side; then its nearest surface point c − φs·n in @a point and the
+        /// outward normal in @a normal. The scatter passes gather a skin voxel's fluence there,
+        /// so the field's values on the surface are known wherever the surface is (SourceField).
+        bool skinPoint(const openvdb::Coord& ijk, openvdb::Vec3d& point, openvdb::Vec3d& normal);
 
         /// Take the surface's crossings (InsideSteps) on @a boundary, the meshes the level set
         /// was made from (world units; null: the level set alone). A ray that grazes the

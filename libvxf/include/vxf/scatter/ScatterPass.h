@@ -28,8 +28,10 @@ struct ScatterPassOptions
 };
 
 /// The gather kernel: φ(x) = Σ_i (4π/N) ∫_0^{d_i} T(x, x+tω_i) J(x+tω_i) dt, rays stopping at
-/// the medium's bounds (index-matched boundary), x a voxel's Medium::Sampler::mediumPoint (a
-/// rim voxel's, outside the surface, is its nearest surface point: SourceField reads it so).
+/// the medium's bounds (index-matched boundary), x a voxel's centre or, in the surface's skin
+/// (centre within half a voxel of it, either side), its nearest surface point
+/// (Medium::Sampler::skinPoint: SourceField reads the skin as J on the surface), where the
+/// direction set's pole is turned to the normal so that it splits exactly in half there.
 /// Each march step takes σt constant and J quadratic through its values at the step's start,
 /// middle and end, and integrates exactly:
 /// ΔL = T·∫ J(s) e^{−σt s} ds (emissionWeights), T ·= e^{−σt h}; finite for any σt ≥ 0, never
