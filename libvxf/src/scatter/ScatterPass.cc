@@ -81,9 +81,8 @@ openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGr
         openvdb::Mat3d rotation = openvdb::Mat3d::identity();
         if (sampler.skinPoint(c, x, normal)) {
             rotation = surfaceRotation(c, normal, options.rotatePerVoxel);
-        } else {
-            x = c.asVec3d();
-            if (options.rotatePerVoxel) rotation = voxelRotation(c);
+        } else if (options.rotatePerVoxel) {
+            rotation = voxelRotation(c);
         }
         openvdb::Vec3d phi(0.0);
         for (const openvdb::Vec3d& d0 : directions) {

@@ -176,11 +176,13 @@ SourceField::SourceField(const Medium& medium, const openvdb::Vec3SGrid& source)
             for (auto it = leaf.beginValueOn(); it; ++it) {
                 const openvdb::Coord c = it.getCoord();
                 const double d = sampler.signedDistance(c.asVec3d());
-                if (d > -kLayerInside && d < kLayerOutside) bandLocal.local().push_back({c, d});
+                const bool inBand = d > -kLayerInside && d < kReach;
+                if (inBand) bandLocal.local().push_back({c, d});
+                // Beyond the band, what the dilation added holds nothing (in it, the layers decide).
+                if (d >= kReach || (!inBand && !known.isValueOn(c))) it.setValue(openvdb::Vec3f(0.0f));
                 if (d <= -0.5 && known.isValueOn(c)) continue;
                 shallowLocal.local().push_back(c);
                 if (std::abs(d) < 0.5 && known.isValueOn(c)) skinLocal.local().emplace_back(c, *it / float(0.5 - d));
-                if (d >= kReach) it.setValue(openvdb::Vec3f(0.0f));
             }
         });
         {
@@ -243,11 +245,6 @@ SourceField::SourceField(const Medium& medium, const openvdb::Vec3SGrid& source)
             const openvdb::Vec3d js(layer.surface);
             const openvdb::Vec3d j = v.distance <= 0.0 ? evaluate(layer, -v.distance) : js - (evaluate(layer, 1.0) - js) * v.distance;
             acc.setValueOnly(v.ijk, openvdb::Vec3f(j));
-        }
-        // Continued voxels outside the band of layers: nothing.
-        for (auto it = values.beginValueOn(); it; ++it) {
-            if (skinValues.isValueOn(it.getCoord()) || index.getValue(it.getCoord()) >= 0) continue;
-            if (!source.tree().isValueOn(it.getCoord())) it.setValue(openvdb::Vec3f(0.0f));
         }
         mLayerIndexDense = DenseCopy<openvdb::Int32Grid>::create(*mLayerIndex, 2, kDenseCopyBytes);
     }

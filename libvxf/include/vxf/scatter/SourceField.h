@@ -22,7 +22,7 @@ namespace vxf {
 /// - The skin's voxels (centre within half a voxel of the surface, either side) hold J on the
 ///   surface, at their nearest surface point, where the passes gather them
 ///   (Medium::Sampler::skinPoint); divided by their volume fraction f = ½ − φs.
-/// - Every voxel within kLayerInside / kLayerOutside of the surface has a Layer: along the
+/// - Every voxel within kLayerInside inside / kReach outside of the surface has a Layer: along the
 ///   normal at its surface point J(z) = Js + slope·z + rise·(1 − E2(σt·dx·z)), through J on the
 ///   surface (the skin around the point) and J at kAnchorA and kAnchorB beneath it over the
 ///   voxels half a voxel deep or more, each anchor matched as the lattice holds it (the shapes
@@ -80,17 +80,18 @@ public:
         mutable Medium::Sampler mMedium; ///< the depth of a point near the surface (its lookups' caches change)
     };
 
-    /// Voxels whose centre lies this far outside the surface or less are continued: a
-    /// triquadratic lookup at a point inside reads voxels up to 1.5 voxels away along each axis.
-    static constexpr double kReach = 2.6;
+    /// Voxels whose centre lies this far outside the surface or less are continued and carry a
+    /// Layer: a point within kModelDepth + kBlendWidth of the surface reads layers up to 0.87
+    /// voxels away, and the lattice from 1.5 voxels deep reaches no farther out than 0.73.
+    static constexpr double kReach = 1.8;
     /// Voxels: the layer model's anchors beneath the surface point (masked to voxels whose
     /// centre lies half a voxel inside or deeper, so that their trilinear reads hold no skin).
     static constexpr double kAnchorA = 1.0, kAnchorB = 2.0;
     /// Voxels of depth: points shallower than kModelDepth read the layer model alone, deeper
     /// than kModelDepth + kBlendWidth the lattice alone, linearly blended between.
     static constexpr double kModelDepth = 1.5, kBlendWidth = 1.0;
-    /// Voxels whose centre lies within these depths (voxels, outside negative) carry a Layer.
-    static constexpr double kLayerInside = 3.0, kLayerOutside = 1.8;
+    /// Voxels whose centre lies this deep or less carry a Layer (and up to kReach outside).
+    static constexpr double kLayerInside = 3.0;
 
 private:
     const Medium& mMedium;
