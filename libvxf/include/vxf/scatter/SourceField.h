@@ -39,11 +39,13 @@ namespace vxf {
 /// at every depth (ScatterTest), where the line through J on the surface and J a voxel beneath
 /// left it 6.6% low on the face when it passed through the centres, and the fraction-weighted
 /// read (σs·φ interpolated, divided by the interpolated f) holds the field flat from the last
-/// centre out, too bright by as much. Near a lit face the scattered light rises more slowly
-/// than the rise (bench/accuracy/slab_model, albedo 0.99: from 0.52 on the surface to 2.8 at
-/// two mean free paths), and the two shapes through anchors 1 and 2 voxels deep read it to
-/// +6% half a voxel deep at 1.3 voxels per mean free path, +4.5% at 2 (anchors 1.5 and 2.5
-/// voxels deep: +12% and +9%; a parabola through the same values: −9% and −6%).
+/// centre out, too bright by as much. Near a lit face (bench/accuracy/slab_model, albedo 0.99,
+/// the scattered fluence 1.54 on the surface, 2.94 a mean free path deep, peaking at 2.99 and
+/// then falling), the layers through the exact values read, weighted as a camera leaving at
+/// cosines 1, 0.5 and 0.25 sees them, +1.5%, +2.9%, +4.6% at 0.78 mean free paths per voxel
+/// and +4.5%, +6.8%, +8.8% at 1.56 (the lattice alone: −4.8%, −7.1%, −8.7% and −14%, −17%,
+/// −17%). On the thick bunny the layers pay through the camera; in the passes they gained
+/// nothing at dim 96 and lost at 48 and 64 against the lattice alone (docs/accuracy.md (h)).
 ///
 /// Not for the lights' source J0: near a lit surface and at the terminator J0 varies within a
 /// voxel along the surface as much as across it, and a continuation along the normal misreads
