@@ -248,12 +248,15 @@ TEST_CASE("two passes from a uniform source near a flat face: the closed form an
     // A half-space of uniform source J0 = σs·φ0/4π: at depth z the directions leaving through
     // the face see the medium for z/μ, so one pass gives φ1(z) = A·φ0·(1 − E2(σt z)/2), half
     // of A·φ0 on the face itself. Near the face φ1 rises with infinite slope (E2' = −E1), a
-    // voxel or two per mean free path sees it all; the second pass reads it through
-    // SourceField's layers (J on the surface, a depth and a rise 1 − E2 beneath). The skin
-    // voxel (centre within half a voxel of the face, either side) holds the value on the face
-    // (Medium::Sampler::skinPoint), its directions split exactly in half there. With the face at
-    // four offsets in its voxel; a box at least 8 mean free paths deep around the probed line.
-    // (The linear continuation before the layers left the second pass 6.6% low on the face
+    // voxel or two per mean free path sees it all; the second pass reads it from SourceField's
+    // lattice, whose skin and outside voxels its layers fill (J on the surface, a depth and a
+    // rise 1 − E2 beneath). The skin voxel (centre within half a voxel of the face, either
+    // side) holds the value on the face (Medium::Sampler::skinPoint), its directions split
+    // exactly in half there. With the face at four offsets in its voxel; a box at least 8 mean
+    // free paths deep around the probed line. The skin's second pass comes out −0.9%, +1.4%,
+    // −0.1%, −2.8% off at the four offsets (within 0.25% when the passes read the layers
+    // themselves, which cost the thick bunny accuracy: SourceField::Near), the voxel 0.85
+    // deep −0.7%, every voxel deeper within 0.5%. (The linear continuation before the layers left it 6.6% low on the face
     // where it passes through the centres.)
     const double dx = 1.0 / 32.0, sigmaT = 16.0, albedo = 0.8; // 2 voxels per mean free path
     const vxf::Material m = vxf::test::albedoMaterial(sigmaT, albedo);
@@ -280,7 +283,7 @@ TEST_CASE("two passes from a uniform source near a flat face: the closed form an
             INFO("face offset " << offset << " voxel, centre " << i << ": depth " << depth / dx << " voxels");
             const double first = albedo * (1.0 - 0.5 * boost::math::expint(2, std::max(sigmaT * depth, 1e-300)));
             CHECK(phi1.getValue(openvdb::Coord(i, 0, 0)).x() == Approx(first).epsilon(0.003));
-            CHECK(phi2.getValue(openvdb::Coord(i, 0, 0)).x() == Approx(secondPassOnHalfSpace(albedo, sigmaT * depth)).epsilon(0.005));
+            CHECK(phi2.getValue(openvdb::Coord(i, 0, 0)).x() == Approx(secondPassOnHalfSpace(albedo, sigmaT * depth)).epsilon(depth == 0.0 ? 0.03 : depth < dx ? 0.01 : 0.005));
         }
         CHECK(skins == 1);
     }

@@ -34,8 +34,8 @@ class Marcher
 public:
     /// Single scattering is read from @a direct (the `direct` grid's J), or with @a lights
     /// (options.directFromLights) marched to them at every step; multiple scattering from
-    /// @a scatter, J = σs·φ/4π of the `scatter` grid read as the scatter passes read their
-    /// sources (SourceField: near a surface, its layers). Either layer may be null (none).
+    /// @a scatter, J = σs·φ/4π of the `scatter` grid (SourceField: near a surface, its layers;
+    /// the passes read the lattice alone there). Either layer may be null (none).
     /// With @a boundary (the media's meshes) the marches cross the surface where the meshes
     /// do (Medium::Sampler::snapCrossingsTo): grazing rays, at silhouettes and terminators.
     Marcher(const Medium& medium, const RenderOptions& options, const InteriorField* direct,
@@ -182,8 +182,8 @@ private:
     /// (Medium::Sampler::interiorScale). Single scattering: marched to the lights (one sample
     /// per light, the @a point-th of the ray of @a key) with σs(p)·interior when
     /// options.directFromLights, else the `direct` grid's InteriorField. Multiple scattering:
-    /// σs·φ/4π of the `scatter` grid as the scatter passes read their sources (SourceField;
-    /// σs·φ is one per-voxel quantity: interpolating σs and φ apart would square the ramp
+    /// σs·φ/4π of the `scatter` grid, continued to the surface by SourceField's layers (the
+    /// passes read its lattice alone; σs·φ is one per-voxel quantity: interpolating σs and φ apart would square the ramp
     /// where both fall to zero at the surface).
     Emission emission(const openvdb::Vec3d& p, double interior, std::uint64_t key, std::uint64_t point)
     {
@@ -407,7 +407,7 @@ struct RenderContext
         if (options.directFromLights) shining(volumeLights);
         if (!options.directFromLights && set.find("direct")) directField.emplace(medium, *set.get<openvdb::Vec3SGrid>("direct"));
         if (set.find("scatter")) {
-            scatterField.emplace(medium, *sourceFromFluence(medium, *set.get<openvdb::Vec3SGrid>("scatter")));
+            scatterField.emplace(medium, *sourceFromFluence(medium, *set.get<openvdb::Vec3SGrid>("scatter")), SourceField::Near::Layers);
         }
 
         const Camera& camera = scene.camera;

@@ -140,7 +140,7 @@ openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGr
 
     std::optional<SourceField> sourceField;
     std::shared_ptr<const DenseCopy<openvdb::Vec3SGrid>> sourceDense;
-    if (options.source == ScatterPassOptions::SourceRead::Continued) sourceField.emplace(medium, source);
+    if (options.source == ScatterPassOptions::SourceRead::Continued) sourceField.emplace(medium, source, SourceField::Near::Lattice);
     else sourceDense = DenseCopy<openvdb::Vec3SGrid>::create(source, 2, kDenseCopyBytes);
     openvdb::tree::LeafManager<openvdb::Vec3STree> leaves(fluence->tree());
     std::vector<openvdb::CoordBBox> tiles;

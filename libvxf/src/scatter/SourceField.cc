@@ -149,7 +149,7 @@ struct BandVoxel
 
 } // namespace
 
-SourceField::SourceField(const Medium& medium, const openvdb::Vec3SGrid& source)
+SourceField::SourceField(const Medium& medium, const openvdb::Vec3SGrid& source, Near near)
     : mMedium(medium)
     , mValues(source.deepCopy())
     , mQuadratic(medium.surface() != nullptr)
@@ -176,7 +176,8 @@ SourceField::SourceField(const Medium& medium, const openvdb::Vec3SGrid& source)
             for (auto it = leaf.beginValueOn(); it; ++it) {
                 const openvdb::Coord c = it.getCoord();
                 const double d = sampler.signedDistance(c.asVec3d());
-                const bool inBand = d > -kLayerInside && d < kReach;
+                // The lattice alone needs the layers of the skin and the voxels outside only.
+                const bool inBand = d > (near == Near::Layers ? -kLayerInside : -0.5) && d < kReach;
                 if (inBand) bandLocal.local().push_back({c, d});
                 // Beyond the band, what the dilation added holds nothing (in it, the layers decide).
                 if (d >= kReach || (!inBand && !known.isValueOn(c))) it.setValue(openvdb::Vec3f(0.0f));
@@ -225,9 +226,12 @@ SourceField::SourceField(const Medium& medium, const openvdb::Vec3SGrid& source)
         // The lattice for the reads deeper than the layers': skin voxels inside hold the layer
         // at their centre, those outside and the rest within kReach the line through J on the
         // surface and J a voxel beneath it, continued out to their centre.
-        mLayerIndex = openvdb::Int32Grid::create(-1);
-        mLayerIndex->setTransform(source.transformPtr()->copy());
-        auto index = mLayerIndex->getAccessor();
+        std::optional<openvdb::Int32Grid::Accessor> index;
+        if (near == Near::Layers) {
+            mLayerIndex = openvdb::Int32Grid::create(-1);
+            mLayerIndex->setTransform(source.transformPtr()->copy());
+            index.emplace(mLayerIndex->getAccessor());
+        }
         auto acc = values.getAccessor();
         const auto skinValues = skin->getConstAccessor();
         for (std::size_t i = 0; i < band.size(); ++i) {
@@ -238,15 +242,17 @@ SourceField::SourceField(const Medium& medium, const openvdb::Vec3SGrid& source)
                 if (v.distance > -0.5) acc.setValueOnly(v.ijk, skinValues.getValue(v.ijk));
                 continue;
             }
-            index.setValue(v.ijk, int(mLayers.size()));
-            mLayers.push_back(*layers[i]);
+            const Layer& layer = *layers[i];
+            if (index) {
+                index->setValue(v.ijk, int(mLayers.size()));
+                mLayers.push_back(layer);
+            }
             if (v.distance <= -0.5) continue;
-            const Layer& layer = mLayers.back();
             const openvdb::Vec3d js(layer.surface);
             const openvdb::Vec3d j = v.distance <= 0.0 ? evaluate(layer, -v.distance) : js - (evaluate(layer, 1.0) - js) * v.distance;
             acc.setValueOnly(v.ijk, openvdb::Vec3f(j));
         }
-        mLayerIndexDense = DenseCopy<openvdb::Int32Grid>::create(*mLayerIndex, 2, kDenseCopyBytes);
+        if (mLayerIndex) mLayerIndexDense = DenseCopy<openvdb::Int32Grid>::create(*mLayerIndex, 2, kDenseCopyBytes);
     }
     mValuesDense = DenseCopy<openvdb::Vec3SGrid>::create(*mValues, 2, kDenseCopyBytes);
 }
@@ -273,6 +279,17 @@ openvdb::Vec3d SourceField::Sampler::lattice(const openvdb::Vec3d& ijk) const
 openvdb::Vec3d SourceField::Sampler::sample(const openvdb::Vec3d& ijk) const
 {
     if (!mField.mQuadratic) return openvdb::Vec3d(mValues.sampleTrilinear(ijk));
+    openvdb::Vec3d j = mLayerIndex ? nearSurface(ijk) : lattice(ijk);
+    // A parabola overshoots below zero next to a steep fall-off (σt of 1e6 per voxel), and a
+    // continued line may cross zero outside: a source without negative values reads none.
+    for (int ch = 0; ch < 3; ++ch) {
+        if (mField.mNonNegative[ch]) j[ch] = std::max(j[ch], 0.0);
+    }
+    return j;
+}
+
+openvdb::Vec3d SourceField::Sampler::nearSurface(const openvdb::Vec3d& ijk) const
+{
     const TrilinearCell cell(ijk);
     openvdb::Int32 index[2][2][2];
     mLayerIndex->getBlock(cell.base, index);
@@ -318,11 +335,6 @@ openvdb::Vec3d SourceField::Sampler::sample(const openvdb::Vec3d& ijk) const
                 j = j * (1.0 - w) + lattice(ijk) * w;
             }
         }
-    }
-    // A parabola overshoots below zero next to a steep fall-off (σt of 1e6 per voxel), and a
-    // continued line may cross zero outside: a source without negative values reads none.
-    for (int ch = 0; ch < 3; ++ch) {
-        if (mField.mNonNegative[ch]) j[ch] = std::max(j[ch], 0.0);
     }
     return j;
 }

@@ -45,7 +45,8 @@ namespace vxf {
 /// cosines 1, 0.5 and 0.25 sees them, +1.5%, +2.9%, +4.6% at 0.78 mean free paths per voxel
 /// and +4.5%, +6.8%, +8.8% at 1.56 (the lattice alone: −4.8%, −7.1%, −8.7% and −14%, −17%,
 /// −17%). On the thick bunny the layers pay through the camera; in the passes they gained
-/// nothing at dim 96 and lost at 48 and 64 against the lattice alone (docs/accuracy.md (h)).
+/// nothing at dim 96 and lost at 48 and 64 against the lattice alone (docs/accuracy.md (h)),
+/// which the passes read (Near::Lattice).
 ///
 /// Not for the lights' source J0: near a lit surface and at the terminator J0 varies within a
 /// voxel along the surface as much as across it, and a continuation along the normal misreads
@@ -55,8 +56,22 @@ namespace vxf {
 class SourceField
 {
 public:
+    /// How points near the surface are read (with a surface; without one, trilinear either way).
+    enum class Near
+    {
+        /// The layers to kModelDepth, blended into the lattice over kBlendWidth: the camera's
+        /// read of the `scatter` grid (Render), where the eye sees the first voxel's light.
+        Layers,
+        /// The lattice alone (its skin and outside voxels filled from the layers as above): the
+        /// passes' gathers. On the thick bunny against the layers: dim 48 7.00% → 6.52%, dim 64
+        /// 4.02% → 3.73%, dim 96 1.83% → 1.81% (docs/accuracy.md (h), (i)), and no distance
+        /// read per sample. On a flat face the second pass's skin then comes out up to 2.8% off a
+        /// 1-D quadrature (0.25% with the layers), the next voxel 0.7%, deeper 0.5% (ScatterTest).
+        Lattice
+    };
+
     /// From @a source, J per voxel on the medium's lattice (sourceFromFluence).
-    SourceField(const Medium& medium, const openvdb::Vec3SGrid& source);
+    SourceField(const Medium& medium, const openvdb::Vec3SGrid& source, Near near = Near::Layers);
 
     /// J near the surface along the normal at a surface point, z voxels deep:
     /// J(z) = surface + slope·z + rise·(1 − E2(τz)), τ = σt·dx per channel.
@@ -76,6 +91,7 @@ public:
 
     private:
         openvdb::Vec3d lattice(const openvdb::Vec3d& ijk) const;
+        openvdb::Vec3d nearSurface(const openvdb::Vec3d& ijk) const; ///< Near::Layers
         const SourceField& mField;
         GridLookup<openvdb::Vec3SGrid> mValues;
         std::optional<GridLookup<openvdb::Int32Grid>> mLayerIndex;
@@ -99,7 +115,7 @@ private:
     const Medium& mMedium;
     openvdb::Vec3SGrid::Ptr mValues;
     std::shared_ptr<const DenseCopy<openvdb::Vec3SGrid>> mValuesDense;
-    openvdb::Int32Grid::Ptr mLayerIndex; ///< index into mLayers, −1 (background) for none
+    openvdb::Int32Grid::Ptr mLayerIndex; ///< index into mLayers, −1 (background) for none; null for Near::Lattice
     std::shared_ptr<const DenseCopy<openvdb::Int32Grid>> mLayerIndexDense;
     std::vector<Layer> mLayers;
     bool mQuadratic = false;
