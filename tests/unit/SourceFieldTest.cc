@@ -59,13 +59,16 @@ TEST_CASE("the scattered light's source follows a field rising inward up to the 
     // (here 0.2, two voxels): a voxel outside, the line continued is half the surface value.
     const auto phi = [](const openvdb::Vec3d& x) { return 0.142 + (1.0 - x.length()); };
     const ScatteringSphere sphere(phi);
-    const vxf::SourceField field(*sphere.medium, *sphere.source);
-    for (const openvdb::Vec3d& dir : {openvdb::Vec3d(0.3, -0.8, 0.52).unit(), openvdb::Vec3d(0.71, 0.1, 0.7).unit(),
-             openvdb::Vec3d(0.0, 0.0, 1.0), openvdb::Vec3d(0.0, 0.6, 0.8)}) {
-        for (double depth : {0.0, 0.02, 0.05, 0.1, 0.15, 0.2, 0.3, 0.5}) {
-            const openvdb::Vec3d x = dir * (1.0 - depth);
-            INFO("direction " << dir << ", depth " << depth);
-            CHECK(sphere.read(field, x) == Approx(kSigmaS * phi(x) / (4.0 * M_PI)).epsilon(0.01));
+    // Both reads: the camera's through the layers, the passes' from the lattice they fill.
+    for (const auto near : {vxf::SourceField::Near::Layers, vxf::SourceField::Near::Lattice}) {
+        const vxf::SourceField field(*sphere.medium, *sphere.source, near);
+        for (const openvdb::Vec3d& dir : {openvdb::Vec3d(0.3, -0.8, 0.52).unit(), openvdb::Vec3d(0.71, 0.1, 0.7).unit(),
+                 openvdb::Vec3d(0.0, 0.0, 1.0), openvdb::Vec3d(0.0, 0.6, 0.8)}) {
+            for (double depth : {0.0, 0.02, 0.05, 0.1, 0.15, 0.2, 0.3, 0.5}) {
+                const openvdb::Vec3d x = dir * (1.0 - depth);
+                INFO((near == vxf::SourceField::Near::Layers ? "layers" : "lattice") << ", direction " << dir << ", depth " << depth);
+                CHECK(sphere.read(field, x) == Approx(kSigmaS * phi(x) / (4.0 * M_PI)).epsilon(0.01));
+            }
         }
     }
 }

@@ -183,8 +183,8 @@ private:
     /// per light, the @a point-th of the ray of @a key) with σs(p)·interior when
     /// options.directFromLights, else the `direct` grid's InteriorField. Multiple scattering:
     /// σs·φ/4π of the `scatter` grid, continued to the surface by SourceField's layers (the
-    /// passes read its lattice alone; σs·φ is one per-voxel quantity: interpolating σs and φ apart would square the ramp
-    /// where both fall to zero at the surface).
+    /// passes read its lattice alone; σs·φ is one per-voxel quantity: interpolating σs and φ
+    /// apart would square the ramp where both fall to zero at the surface).
     Emission emission(const openvdb::Vec3d& p, double interior, std::uint64_t key, std::uint64_t point)
     {
         Emission e;
