@@ -256,8 +256,8 @@ TEST_CASE("two passes from a uniform source near a flat face: the closed form an
     // free paths deep around the probed line. The skin's second pass comes out −0.9%, +1.4%,
     // −0.1%, −2.8% off at the four offsets (within 0.25% when the passes read the layers
     // themselves, which cost the thick bunny accuracy: SourceField::Near), the voxel 0.85
-    // deep −0.7%, every voxel deeper within 0.5%. (The linear continuation before the layers left it 6.6% low on the face
-    // where it passes through the centres.)
+    // deep −0.7%, every voxel deeper within 0.5%. (The linear continuation before the layers
+    // left it 6.6% low on the face where it passes through the centres.)
     const double dx = 1.0 / 32.0, sigmaT = 16.0, albedo = 0.8; // 2 voxels per mean free path
     const vxf::Material m = vxf::test::albedoMaterial(sigmaT, albedo);
     for (const double offset : {0.1, 0.35, 0.6, 0.85}) {

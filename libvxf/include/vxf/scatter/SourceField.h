@@ -18,35 +18,38 @@ namespace vxf {
 /// With one, the scattered light is taken to rise beneath the surface as it does from a
 /// uniform source, with an infinite slope on the surface itself: a pass's light at depth z
 /// (voxels) is A·φ0·(1 − E2(σt z)/2) there (E2' = −E1), which no parabola between voxel
-/// centres follows. Near the surface J is read from layers; deeper, from the lattice.
+/// centres follows. Near the surface the camera reads J from layers (Near::Layers), the passes
+/// from the lattice those layers fill there (Near::Lattice); deeper, both from the lattice.
 /// - The skin's voxels (centre within half a voxel of the surface, either side) hold J on the
 ///   surface, at their nearest surface point, where the passes gather them
 ///   (Medium::Sampler::skinPoint); divided by their volume fraction f = ½ − φs.
-/// - Every voxel within kLayerInside inside / kReach outside of the surface has a Layer: along the
-///   normal at its surface point J(z) = Js + slope·z + rise·(1 − E2(σt·dx·z)), through J on the
-///   surface (the skin around the point) and J at kAnchorA and kAnchorB beneath it over the
-///   voxels half a voxel deep or more, each anchor matched as the lattice holds it (the shapes
-///   averaged over the same corners at their own depths, not taken at the point).
-/// - A point shallower than kModelDepth reads the layers around it (their coefficients
-///   weighted trilinearly), one deeper than kModelDepth + kBlendWidth the lattice by the
-///   parabolas through the nearest voxel and its neighbours (QuadraticSampler's arithmetic on
-///   the 3³ voxels around the nearest one), linearly blended between. In the lattice a skin
-///   voxel inside holds its layer at its centre, one outside (and every voxel outside within
-///   kReach) the line through J on the surface and J a voxel beneath it, continued outward.
+/// - Every voxel within kLayerInside inside (Near::Lattice: half a voxel, the skin) / kReach
+///   outside of the surface has a Layer: along the normal at its surface point J(z) = Js + slope·z
+///   + rise·(1 − E2(σt·dx·z)), through J on the surface (the skin around the point) and J at
+///   kAnchorA and kAnchorB beneath it over the voxels half a voxel deep or more, each anchor
+///   matched as the lattice holds it (the shapes averaged over the same corners at their own
+///   depths, not taken at the point).
+/// - Near::Layers: a point shallower than kModelDepth reads the layers around it (their
+///   coefficients weighted trilinearly), one deeper than kModelDepth + kBlendWidth the lattice by
+///   the parabolas through the nearest voxel and its neighbours (QuadraticSampler's arithmetic on
+///   the 3³ voxels around the nearest one), linearly blended between. In the lattice a skin voxel
+///   inside holds its layer at its centre, one outside (and every voxel outside within kReach) the
+///   line through J on the surface and J a voxel beneath it, continued outward.
 /// A linear field is read as it is (z), and so is the first pass from a uniform source (the
 /// rise): on a flat face, 2 voxels per mean free path, to 0.03% at every depth with the face
-/// anywhere in its voxel, and the second pass then comes out within 0.25% of a 1-D quadrature
-/// at every depth (ScatterTest), where the line through J on the surface and J a voxel beneath
-/// left it 6.6% low on the face when it passed through the centres, and the fraction-weighted
-/// read (σs·φ interpolated, divided by the interpolated f) holds the field flat from the last
-/// centre out, too bright by as much. Near a lit face (bench/accuracy/slab_model, albedo 0.99,
-/// the scattered fluence 1.54 on the surface, 2.94 a mean free path deep, peaking at 2.99 and
-/// then falling), the layers through the exact values read, weighted as a camera leaving at
-/// cosines 1, 0.5 and 0.25 sees them, +1.5%, +2.9%, +4.6% at 0.78 mean free paths per voxel
-/// and +4.5%, +6.8%, +8.8% at 1.56 (the lattice alone: −4.8%, −7.1%, −8.7% and −14%, −17%,
-/// −17%). On the thick bunny the layers pay through the camera; in the passes they gained
-/// nothing at dim 96 and lost at 48 and 64 against the lattice alone (docs/accuracy.md (h)),
-/// which the passes read (Near::Lattice).
+/// anywhere in its voxel, and a second pass gathered through the layers then came out within
+/// 0.25% of a 1-D quadrature at every depth (ScatterTest, before the passes read
+/// Near::Lattice), where the line through J on the surface and J a voxel beneath left it 6.6%
+/// low on the face when it passed through the centres, and the fraction-weighted read (σs·φ
+/// interpolated, divided by the interpolated f) holds the field flat from the last centre out,
+/// too bright by as much. Near a lit face (bench/accuracy/slab_model, albedo 0.99, the
+/// scattered fluence 1.54 on the surface, 2.94 a mean free path deep, peaking at 2.99 and then
+/// falling), the layers through the exact values read, weighted as a camera leaving at cosines
+/// 1, 0.5 and 0.25 sees them, +1.5%, +2.9%, +4.6% at 0.78 mean free paths per voxel and +4.5%,
+/// +6.8%, +8.8% at 1.56 (the lattice alone: −4.8%, −7.1%, −8.7% and −14%, −17%, −17%). On the
+/// thick bunny the layers pay through the camera; in the passes they gained nothing at dim 96
+/// and lost at 48 and 64 against the lattice alone (docs/accuracy.md (h)), which the passes
+/// read (Near::Lattice).
 ///
 /// Not for the lights' source J0: near a lit surface and at the terminator J0 varies within a
 /// voxel along the surface as much as across it, and a continuation along the normal misreads
