@@ -260,9 +260,10 @@ SourceField::SourceField(const Medium& medium, const openvdb::Vec3SGrid& source,
 SourceField::Sampler::Sampler(const SourceField& field)
     : mField(field)
     , mValues(*field.mValues, field.mValuesDense.get())
-    , mMedium(field.mMedium)
 {
-    if (field.mLayerIndex) mLayerIndex.emplace(*field.mLayerIndex, field.mLayerIndexDense.get());
+    if (!field.mLayerIndex) return;
+    mLayerIndex.emplace(*field.mLayerIndex, field.mLayerIndexDense.get());
+    mMedium.emplace(field.mMedium);
 }
 
 openvdb::Vec3d SourceField::Sampler::lattice(const openvdb::Vec3d& ijk) const
@@ -303,7 +304,7 @@ openvdb::Vec3d SourceField::Sampler::nearSurface(const openvdb::Vec3d& ijk) cons
         const openvdb::Int32 own = index[nearest.x()][nearest.y()][nearest.z()];
         near = own < 0 || mField.mLayers[std::size_t(own)].depth < kModelDepth + kBlendWidth + 0.87;
     }
-    const double z = near ? -mMedium.signedDistance(ijk) : kModelDepth + kBlendWidth;
+    const double z = near ? -mMedium->signedDistance(ijk) : kModelDepth + kBlendWidth;
     if (z >= kModelDepth + kBlendWidth) {
         j = lattice(ijk);
     } else {

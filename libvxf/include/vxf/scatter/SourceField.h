@@ -98,7 +98,8 @@ public:
         const SourceField& mField;
         GridLookup<openvdb::Vec3SGrid> mValues;
         std::optional<GridLookup<openvdb::Int32Grid>> mLayerIndex;
-        mutable Medium::Sampler mMedium; ///< the depth of a point near the surface (its lookups' caches change)
+        /// The depth of a point near the surface (Near::Layers only; its lookups' caches change).
+        mutable std::optional<Medium::Sampler> mMedium;
     };
 
     /// Voxels whose centre lies this far outside the surface or less are continued and carry a
