@@ -153,4 +153,32 @@ void putConstantFluence(vxf::VoxelSet& set, const std::string& name, double phi)
     set.put(grid);
 }
 
+vxf::VoxelSet uniformSphere(const vxf::Material& m, double phi0, int cells)
+{
+    const double dx = 1.0 / cells;
+    vxf::VoxelSet set(openvdb::math::Transform::createLinearTransform(dx));
+    auto density = openvdb::FloatGrid::create(0.0f);
+    density->setName("density");
+    density->setTransform(set.transformPtr());
+    auto direct = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
+    direct->setName("direct");
+    direct->setTransform(set.transformPtr());
+    auto source = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
+    source->setName("scatter_source");
+    source->setTransform(set.transformPtr());
+    for (int i = -cells; i <= cells; ++i)
+        for (int j = -cells; j <= cells; ++j)
+            for (int k = -cells; k <= cells; ++k) {
+                const openvdb::Coord c(i, j, k);
+                if (c.asVec3d().length() * dx > 1.0) continue;
+                density->tree().setValueOn(c, 1.0f);
+                direct->tree().setValueOn(c, openvdb::Vec3f(float(phi0)));
+                source->tree().setValueOn(c, openvdb::Vec3f(m.sigmaS * phi0 / (4.0 * M_PI)));
+            }
+    set.put(density);
+    set.put(direct);
+    set.put(source);
+    return set;
+}
+
 } // namespace vxf::test

@@ -1,4 +1,4 @@
-// `vxf scatter IN.vdb -o OUT.vdb [--passes N] [--directions D] [--step H] [--cutoff C] [--tolerance E] [--keep-passes] [--band W] [--from-pass K] [--fine-passes N [--coarse-factor F]]`
+// `vxf scatter IN.vdb -o OUT.vdb [--passes N] [--directions D] [--step H] [--cutoff C] [--tolerance E] [--keep-passes] [--band W] [--from-pass K] [--fine-passes N [--coarse-factor F]] [--kernel gather|sweep] [--no-accelerate]`
 #include "CliSupport.h"
 #include "Commands.h"
 
@@ -50,6 +50,16 @@ public:
             ->check(CLI::Range(0, 10000));
         mApp->add_option("--coarse-factor", mOptions.coarseFactor, "How much coarser that lattice is: 2, 4 or 8 (default 4)")
             ->check(CLI::IsMember({2, 4, 8}));
+        mApp->add_option("--kernel", mKernel,
+               "How a pass carries light: gather (a ray march per voxel and direction, the thesis's) or sweep "
+               "(discrete ordinates: one upwind sweep over the tree per direction, O(1) per voxel and direction) "
+               "(default gather)")
+            ->check(CLI::IsMember({"gather", "sweep"}));
+        mApp->add_flag("--no-accelerate", [this](std::int64_t) { mOptions.accelerate = false; },
+            "Sweep kernel: plain source iteration, one scattering order per sweep. By default the sweep kernel solves "
+            "the whole sum with diffusion synthetic acceleration, where a sweep (reported as a pass) corrects the whole "
+            "sum and is no longer one scattering order; --keep-passes, --from-pass and --fine-passes need the orders "
+            "and imply this");
         mApp->add_flag("--keep-passes", mOptions.keepPasses, "Keep each pass as scatter_pass_K");
         mApp->add_option("--from-pass", mOptions.fromPass, "Continue from scatter_pass_K (as edited) instead of scatter_source")
             ->check(CLI::Range(1, 10000));
@@ -67,12 +77,14 @@ public:
         VoxelSet set = readVoxelSet(mInput);
         const Material material = mScene.empty() ? recordedMaterial(set) : sceneMaterial(loadScene(mScene));
         const Medium medium(set, material);
+        mOptions.pass.kernel = scatterKernelNamed(mKernel);
         const ScatterReport report = scatter(set, medium, mOptions, &progress);
         nlohmann::json params = {{"command", "scatter"}, {"input", mInput}, {"passes", mOptions.passes},
             {"directions", mOptions.pass.directions}, {"step", mOptions.pass.step}, {"cutoff", mOptions.pass.cutoff}, {"tolerance", mOptions.tolerance},
             {"keep_passes", mOptions.keepPasses}, {"band", mOptions.band}, {"extrapolate", mOptions.extrapolateTail}, {"from_pass", mOptions.fromPass},
             {"fine_passes", mOptions.finePasses}, {"coarse_factor", mOptions.coarseFactor},
-            {"rotate_per_voxel", mOptions.pass.rotatePerVoxel}, {"passes_run", report.passes.size()}};
+            {"rotate_per_voxel", mOptions.pass.rotatePerVoxel}, {"kernel", mKernel}, {"accelerate", mOptions.accelerate},
+            {"passes_run", report.passes.size()}};
         set.setProvenance("scatter", params.dump());
         recordMaterial(set, material);
         writeVoxelSet(mOutput, set, mWrite);
@@ -81,6 +93,17 @@ public:
         if (mOptions.band > 0.0) {
             std::cout << fmt::format("  band {}: {} voxels at full resolution, {} voxels in {} 8^3 and {} 128^3 tiles\n",
                 mOptions.band, report.band.fineVoxels, report.band.coarseVoxels, report.band.leafTiles, report.band.internalTiles);
+        }
+        if (report.accelerated) {
+            std::cout << fmt::format("  {} voxels swept per direction ({} directions), {} diffusion unknowns, setup {:.3f} s\n",
+                report.sweptVoxels, mOptions.pass.directions, report.diffusionUnknowns, report.setupSeconds);
+            std::cout << "  sweep  energy of the sum (over voxels, r g b)             change  rate    diffusion CG   seconds\n";
+            for (const auto& p : report.passes) {
+                std::cout << fmt::format("  {:>4}   {:>12.5g} {:>12.5g} {:>12.5g}   {:>7.1e} {:>7.4f} {:>8}   {:>7.3f}\n", p.index, p.energy[0],
+                    p.energy[1], p.energy[2], p.change, p.ratio, p.diffusionIterations, p.seconds);
+            }
+            std::cout << fmt::format("  seconds total {:.3f}\n", secondsSince(start));
+            return;
         }
         std::cout << "  pass   energy (sum of fluence over voxels, r g b)        ratio   seconds\n";
         for (const auto& p : report.passes) {
@@ -91,7 +114,7 @@ public:
     }
 
 private:
-    std::string mInput, mOutput, mScene;
+    std::string mInput, mOutput, mScene, mKernel = "gather";
     ScatterOptions mOptions;
     VoxelSetWriteOptions mWrite;
     bool mQuiet = false;

@@ -115,6 +115,15 @@ vxf::ScatterOptions coarsePasses()
     return o;
 }
 
+/// The sweep kernel solving the whole sum with diffusion synthetic acceleration (at most 40 sweeps).
+vxf::ScatterOptions acceleratedSweeps()
+{
+    vxf::ScatterOptions o = plainPasses(40);
+    o.pass.kernel = vxf::ScatterKernel::Sweep;
+    o.accelerate = true;
+    return o;
+}
+
 /// Two unit cubes sharing one edge: a non-manifold edge.
 vxf::TriangleMesh cubesSharingAnEdge()
 {
@@ -153,10 +162,13 @@ int main(int argc, char** argv)
         const vxf::Material m = albedoMaterial(50.0, albedo); // 100 mean free paths across
         print(runChain(fmt::format("albedo {}, sigma_t 50, plain passes (at most 300)", albedo), sphere, m, 48, plainPasses(300)));
         print(runChain(fmt::format("albedo {}, sigma_t 50, 4 fine passes then 4x coarser", albedo), sphere, m, 48, coarsePasses()));
+        print(runChain(fmt::format("albedo {}, sigma_t 50, accelerated sweeps", albedo), sphere, m, 48, acceleratedSweeps()));
     }
     // Extinction over twelve decades.
     for (double sigmaT : {1e-6, 1e-3, 1.0, 1e3, 1e6}) {
         print(runChain(fmt::format("sigma_t {:g} per unit, albedo 0.9", sigmaT), sphere, albedoMaterial(sigmaT, 0.9), 64, coarsePasses()));
+        print(runChain(fmt::format("sigma_t {:g} per unit, albedo 0.9, accelerated sweeps", sigmaT), sphere, albedoMaterial(sigmaT, 0.9), 64,
+            acceleratedSweeps()));
     }
     // Geometry.
     // Voxel size 1/32: shells one and half a voxel thick (too thin for the level set to place

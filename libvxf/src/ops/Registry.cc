@@ -629,9 +629,13 @@ std::vector<Operator> makeRegistry()
             number("band", "adaptive band, world units (0: full resolution)", 0.0, 0.0), flag("extrapolate", "add the geometric tail"),
             flag("keep_passes", "keep scatter_pass_K"),
             integer("fine_passes", "passes at full resolution before the rest run on a coarser lattice (0: all)", 0, 0, 10000),
-            integer("coarse_factor", "how much coarser (2, 4 or 8)", 4, 2, 8)},
+            integer("coarse_factor", "how much coarser (2, 4 or 8)", 4, 2, 8),
+            choice("kernel", "gather (a march per voxel and direction) or sweep (one upwind sweep over the tree per direction)", {"gather", "sweep"}, "gather"),
+            flag("no_accelerate", "sweep kernel: plain source iteration (one scattering order per sweep) instead of diffusion-accelerated sweeps")},
         [](OpContext& ctx) {
             ScatterOptions o;
+            o.pass.kernel = scatterKernelNamed(ctx.args.text("kernel"));
+            o.accelerate = !ctx.args.flag("no_accelerate");
             o.finePasses = ctx.args.integer("fine_passes");
             o.coarseFactor = ctx.args.integer("coarse_factor");
             o.passes = ctx.args.integer("passes");

@@ -137,7 +137,7 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
     } else {
         const json scatterInputs = {{"lit", lightHash}, {"passes", s.passes}, {"directions", s.directions}, {"step", s.step},
             {"cutoff", s.cutoff}, {"tolerance", s.tolerance}, {"extrapolate", s.extrapolate}, {"band", s.scatterBand}, {"keep", wants("scatter_passes")},
-            {"fine_passes", s.finePasses}, {"coarse_factor", s.coarseFactor}};
+            {"fine_passes", s.finePasses}, {"coarse_factor", s.coarseFactor}, {"kernel", s.kernel}, {"accelerate", s.accelerate}};
         // (every field scatterOptionsFrom reads)
         volumeHash = hashOf(scatterInputs);
         volumeFile = cache / ("scatter-" + volumeHash + ".vdb");

@@ -220,6 +220,8 @@ Scene parseScene(const std::string& text, const std::string& path)
         s.scatterBand = v.value("band", s.scatterBand);
         s.finePasses = v.value("fine_passes", s.finePasses);
         s.coarseFactor = v.value("coarse_factor", s.coarseFactor);
+        s.kernel = v.value("kernel", s.kernel);
+        s.accelerate = v.value("accelerate", s.accelerate);
     }
     if (document.contains("render")) {
         const json& v = document["render"];

@@ -34,6 +34,8 @@ ScatterOptions scatterOptionsFrom(const SceneSettings& s)
     o.band = s.scatterBand;
     o.finePasses = s.finePasses;
     o.coarseFactor = s.coarseFactor;
+    o.pass.kernel = scatterKernelNamed(s.kernel);
+    o.accelerate = s.accelerate;
     return o;
 }
 
@@ -253,8 +255,34 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
         throw UsageError(fmt::format("coarse factor must be 2, 4 or 8, got {}", options.coarseFactor));
     }
     double previous = 0.0;
+    const bool solveWhole = options.pass.kernel == ScatterKernel::Sweep && options.accelerate && options.fromPass == 0 &&
+        !options.keepPasses && options.finePasses == 0;
     if (!scatters) {
         report.stopReason = "the medium does not scatter (sigma_s = 0)";
+    } else if (solveWhole) {
+        // The whole sum at once: sweeps with diffusion synthetic acceleration.
+        SweepSolveOptions solve;
+        solve.maxSweeps = options.passes;
+        solve.tolerance = options.tolerance > 0.0 ? options.tolerance : 1e-6;
+        solve.directions = options.pass.directions;
+        SweepSolveReport solved;
+        sum = sweepSolve(medium, *j, solve, solved, interrupter);
+        for (const auto& it : solved.iterations) {
+            ScatterReport::Pass info;
+            info.index = it.index;
+            info.energy = it.energy;
+            info.ratio = it.ratio;
+            info.seconds = it.seconds;
+            info.change = it.change;
+            info.diffusionIterations = it.diffusionIterations;
+            report.passes.push_back(info);
+        }
+        report.accelerated = true;
+        report.sweptVoxels = solved.voxels;
+        report.diffusionUnknowns = solved.diffusionUnknowns;
+        report.setupSeconds = solved.setupSeconds;
+        report.stopReason = fmt::format("accelerated sweeps (each sweep corrects the whole sum; it is not one scattering order): {}",
+            solved.stopReason);
     } else {
         // The lattice the passes run on: the voxel set's, or after options.finePasses a coarse one.
         const Medium* levelMedium = &medium;
@@ -285,6 +313,7 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
             // The lights' source J0 is read fraction-weighted, every pass's own continued (SourceField).
             ScatterPassOptions passOptions = options.pass;
             if (k == 0) passOptions.source = ScatterPassOptions::SourceRead::FractionWeighted;
+            passOptions.rotationSeed = std::uint64_t(k + 1); // sweeps: each order's rays elsewhere
             auto phi = scatterPass(*levelMedium, *j, passOptions, interrupter);
             ++k;
             ScatterReport::Pass info;

@@ -1,13 +1,17 @@
 #include <vxf/scatter/ScatterPass.h>
 
+#include <vxf/core/Error.h>
 #include <vxf/core/Hash.h>
+#include <vxf/core/RandomRotation.h>
 #include <vxf/core/SphericalFibonacci.h>
 #include <vxf/light/Transmittance.h>
 #include <vxf/scatter/SourceField.h>
+#include <vxf/scatter/SweepPass.h>
 
 #include <openvdb/math/Mat3.h>
 #include <openvdb/tree/LeafManager.h>
 
+#include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
 #include <atomic>
@@ -19,17 +23,11 @@ namespace vxf {
 
 namespace {
 
-/// A uniformly random rotation (Shoemake's quaternion method) seeded by the voxel.
+/// A uniformly random rotation seeded by the voxel.
 openvdb::Mat3d voxelRotation(const openvdb::Coord& c)
 {
     const std::uint64_t key = coordKey(c);
-    const double u[3] = {unitHash(key, 0, 5), unitHash(key, 1, 5), unitHash(key, 2, 5)};
-    const double a = std::sqrt(1.0 - u[0]), b = std::sqrt(u[0]);
-    const double w = a * std::sin(2 * M_PI * u[1]), x = a * std::cos(2 * M_PI * u[1]);
-    const double y = b * std::sin(2 * M_PI * u[2]), z = b * std::cos(2 * M_PI * u[2]);
-    return openvdb::Mat3d(1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w),
-        2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w),
-        2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y));
+    return randomRotation(unitHash(key, 0, 5), unitHash(key, 1, 5), unitHash(key, 2, 5));
 }
 
 /// A rotation taking the z axis (the pole of sphericalFibonacci's bands) to @a normal, turned
@@ -50,9 +48,17 @@ openvdb::Mat3d surfaceRotation(const openvdb::Coord& c, const openvdb::Vec3d& no
 
 } // namespace
 
+ScatterKernel scatterKernelNamed(const std::string& name)
+{
+    if (name == "gather") return ScatterKernel::Gather;
+    if (name == "sweep") return ScatterKernel::Sweep;
+    throw UsageError(fmt::format("unknown scatter kernel '{}' (gather or sweep)", name));
+}
+
 openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGrid& source,
     const ScatterPassOptions& options, Interrupter* interrupter)
 {
+    if (options.kernel == ScatterKernel::Sweep) return sweepPass(medium, source, options, interrupter);
     InterruptStep step(interrupter, "scattering");
     auto fluence = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
     fluence->setName("fluence");

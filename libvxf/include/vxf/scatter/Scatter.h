@@ -3,6 +3,7 @@
 
 #include <vxf/scatter/AdaptiveBand.h>
 #include <vxf/scatter/ScatterPass.h>
+#include <vxf/scatter/SweepSolve.h>
 
 #include <vxf/core/VoxelSet.h>
 #include <vxf/pipeline/Scene.h>
@@ -38,6 +39,11 @@ struct ScatterOptions
     /// Adaptive narrow band (world units): full resolution within this distance of the
     /// surface, 8³ and 128³ tiles deeper (see coarsenBeyondBand). 0: full resolution everywhere.
     double band = 0.0;
+    /// With the sweep kernel (pass.kernel): solve for the whole sum at once by sweeps with
+    /// diffusion synthetic acceleration (sweepSolve), whose iterations are not scattering
+    /// orders. Not with keepPasses, fromPass or finePasses, which need the orders: those
+    /// run plain source iteration, one sweep per pass.
+    bool accelerate = true;
     ScatterPassOptions pass;
 };
 
@@ -50,6 +56,10 @@ struct ScatterReport
         double ratio = 0.0;           ///< energy (max channel) relative to the previous pass
         double seconds = 0.0;
         bool coarse = false;          ///< ran on the coarse lattice
+        /// Accelerated sweeps: |φ_l − φ_{l−1}|₁/|φ_l|₁ of the sum (the residual per iteration);
+        /// `energy` is then the whole sum's, not one order's.
+        double change = 0.0;
+        int diffusionIterations = 0;  ///< accelerated sweeps: conjugate-gradient iterations of the correction
     };
     std::vector<Pass> passes;
     std::string stopReason;
@@ -58,6 +68,10 @@ struct ScatterReport
     double fineGatherSeconds = 0.0; ///< after coarse passes: the fine gathers and the correction cycle
     int correctionPasses = 0;       ///< coarse passes of the correction cycles
     int correctionCycles = 0;       ///< how many correction cycles ran
+    bool accelerated = false;       ///< the sum was solved by accelerated sweeps (passes are iterations)
+    std::size_t sweptVoxels = 0;    ///< accelerated sweeps: voxels swept per direction (the touched leaves')
+    std::size_t diffusionUnknowns = 0; ///< accelerated sweeps: voxels of the diffusion correction
+    double setupSeconds = 0.0;      ///< accelerated sweeps: the lattice and the diffusion matrices
 };
 
 /// Scatter options from a scene's settings (keepPasses when "scatter_passes" is an output).

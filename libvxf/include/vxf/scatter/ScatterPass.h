@@ -4,11 +4,27 @@
 #include <vxf/core/Interrupter.h>
 #include <vxf/light/Medium.h>
 
+#include <cstdint>
+#include <string>
+
 namespace vxf {
+
+/// How a pass carries the source's light to every voxel: the thesis's per-voxel gather (a ray
+/// march per voxel and direction, below) or discrete-ordinates sweeps (sweepPass, SweepPass.h:
+/// one upwind pass over the tree per direction).
+enum class ScatterKernel { Gather, Sweep };
+
+/// The kernel called @a name ("gather" or "sweep"); throws vxf::UsageError naming the choices.
+ScatterKernel scatterKernelNamed(const std::string& name);
 
 struct ScatterPassOptions
 {
+    ScatterKernel kernel = ScatterKernel::Gather;
     int directions = 64;        ///< spherical Fibonacci directions per voxel (weights 4π/N)
+    /// Sweep kernel: the whole direction set is turned by a random rotation seeded by this
+    /// (deterministic; 0: unturned), so that passes with other seeds put their ray effects
+    /// elsewhere. The gather turns its set per voxel instead (rotatePerVoxel).
+    std::uint64_t rotationSeed = 0;
     double step = 1.0;          ///< march step in voxels
     /// A march stops when the transmittance of every channel is below this, and adds what lies
     /// beyond as J held at that point over an unbounded medium, T·J/σt (not where its last step
@@ -27,6 +43,8 @@ struct ScatterPassOptions
     enum class SourceRead { Continued, FractionWeighted } source = SourceRead::Continued;
 };
 
+/// One pass of the kernel options.kernel names: the gather below, or sweepPass (SweepPass.h).
+///
 /// The gather kernel: φ(x) = Σ_i (4π/N) ∫_0^{d_i} T(x, x+tω_i) J(x+tω_i) dt, rays stopping at
 /// the medium's bounds (index-matched boundary), x a voxel's centre or, in the surface's skin
 /// (centre within half a voxel of it, either side), its nearest surface point

@@ -1,0 +1,61 @@
+// vxf — the whole scattered light by sweeps, accelerated by a diffusion correction (DSA).
+#pragma once
+
+#include <vxf/core/Interrupter.h>
+#include <vxf/light/Medium.h>
+#include <vxf/scatter/ScatterPass.h>
+
+#include <string>
+#include <vector>
+
+namespace vxf {
+
+struct SweepSolveOptions
+{
+    int maxSweeps = 40;       ///< at most this many sweeps (iterations)
+    /// Stop when the estimated error of the sum, |φ_l − φ_{l−1}|·ρ/(1−ρ) with ρ the ratio of the
+    /// last two changes (L1 over voxels, per channel), is below this fraction of the sum.
+    double tolerance = 1e-3;
+    /// Diffusion synthetic acceleration after each sweep. Off: plain source iteration, each
+    /// sweep one more scattering order (slow near albedo 1).
+    bool accelerate = true;
+    int directions = 64;         ///< per sweep (ScatterPassOptions::directions)
+    std::uint64_t rotationSeed = 1; ///< one rotation of the direction set for the whole solve
+};
+
+struct SweepSolveReport
+{
+    struct Iteration
+    {
+        int index = 0;                ///< sweeps so far
+        openvdb::Vec3d energy{0.0};   ///< Σ over voxels of the scattered fluence after it
+        double change = 0.0;          ///< |φ_l − φ_{l−1}|₁ / |φ_l|₁, largest channel
+        double ratio = 0.0;           ///< change over the previous change (ρ, the convergence rate)
+        double error = 0.0;           ///< change·ρ/(1−ρ): the estimated error of the sum
+        int diffusionIterations = 0;  ///< conjugate-gradient iterations of the correction
+        double diffusionResidual = 0.0;
+        double seconds = 0.0;
+    };
+    std::vector<Iteration> iterations;
+    std::string stopReason;
+    bool converged = false;
+    bool accelerated = false;         ///< the diffusion correction ran (and was kept)
+    std::size_t voxels = 0;           ///< voxels swept per direction (the touched leaves')
+    std::size_t diffusionUnknowns = 0;
+    double setupSeconds = 0.0;        ///< lattice and diffusion matrices
+};
+
+/// The scattered fluence Σ_{k≥1} φ_k of the source J0 = @a source, solved as a whole:
+/// φ = K(J0 + Sφ) (K: the sweep kernel, sweepPass; S = σs/4π) by the iteration
+/// φ_{l+½} = K(J0 + Sφ_l), then with options.accelerate φ_{l+1} = φ_{l+½} + δ, δ the diffusion
+/// correction −∇·(D∇δ) + σa δ = σs(φ_{l+½} − φ_l) (Larsen's DSA: the error source iteration
+/// leaves is smooth and nearly isotropic, which diffusion captures). An iteration is then no
+/// longer one scattering order: its φ_l is an estimate of the whole sum. Every channel stops
+/// together when the estimated error is within options.tolerance of the sum. Should the
+/// correction make the changes grow (ρ ≥ 1 after the third sweep), it is dropped and plain
+/// source iteration goes on (the report says so). Output: a Vec3f grid named "scatter" on
+/// @a source's topology; finite. Results do not depend on the thread count.
+openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGrid& source, const SweepSolveOptions& options,
+    SweepSolveReport& report, Interrupter* interrupter = nullptr);
+
+} // namespace vxf

@@ -1,0 +1,97 @@
+// vxf — the voxels a transport sweep runs over, as flat per-leaf arrays (private to libvxf).
+#pragma once
+
+#include <vxf/core/Interrupter.h>
+#include <vxf/light/Medium.h>
+
+#include <openvdb/openvdb.h>
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace vxf::detail {
+
+/// The leaves of a voxel set's medium and of a source grid (their active topology, tiles
+/// voxelized), each held as 8³ values in flat arrays, with the 26 neighbouring leaves of each
+/// and their order along every octant of directions. Built once per solve: σt and σs per voxel
+/// (the medium's own values, density × material or the `sigma_a`/`sigma_s` grids) and the
+/// surface's signed distance are read here, so a sweep reads memory, not trees.
+///
+/// Sharp boundary, as the gathers have it: with a surface, a voxel's values are averages over
+/// its cube of which the fraction f = clamp(½ − φ/dx, 0, 1) lies inside, so the medium inside
+/// holds σt/f and J/f (f at least Medium::kMinFraction), and a sweep's step carries the medium
+/// only over its part inside the surface (the signed distance linear along the step). Without
+/// a surface every voxel is whole (f = 1) and the density's own ramp is the edge.
+///
+/// Arrays "per voxel" hold leafCount()·512 values, voxel (x, y, z) of leaf n at
+/// n·512 + x·64 + y·8 + z. "Padded" arrays hold 1000 per leaf: the leaf and one voxel of each
+/// neighbour around it, local coordinates −1…8 (paddedIndex), so that a voxel's upwind reads
+/// stay inside its leaf's block. Voxels of no leaf read as vacuum (σt = 0, J = 0).
+class SweepLattice
+{
+public:
+    static constexpr int kLeafVoxels = 512, kPaddedVoxels = 1000;
+
+    /// The lattice over @a medium's active density and @a topology's active values.
+    SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topology);
+
+    std::size_t leafCount() const { return mOrigins.size(); }
+    std::size_t voxelCount() const { return mOrigins.size() * kLeafVoxels; }
+    double voxelSize() const { return mVoxelSize; }
+    const openvdb::Coord& origin(std::size_t leaf) const { return mOrigins[leaf]; }
+
+    static int localIndex(int x, int y, int z) { return (x << 6) | (y << 3) | z; }
+    static int paddedIndex(int x, int y, int z) { return (x + 1) * 100 + (y + 1) * 10 + (z + 1); }
+
+    /// σt per voxel, the voxel's own (volume-fraction weighted; 1/world unit).
+    const std::vector<openvdb::Vec3f>& sigmaT() const { return mSigmaTVoxel; }
+    /// σs per voxel, the voxel's own (1/world unit).
+    const std::vector<openvdb::Vec3f>& sigmaS() const { return mSigmaS; }
+    /// The per-voxel index of local voxel (x, y, z) of leaf @a leaf, coordinates −8…15 reaching
+    /// into the neighbouring leaves; −1 where there is no leaf.
+    std::int64_t voxelIndex(std::size_t leaf, int x, int y, int z) const
+    {
+        const int dx = x < 0 ? -1 : (x > 7 ? 1 : 0), dy = y < 0 ? -1 : (y > 7 ? 1 : 0), dz = z < 0 ? -1 : (z > 7 ? 1 : 0);
+        const int n = neighbour(leaf, dx, dy, dz);
+        return n < 0 ? -1 : std::int64_t(n) * kLeafVoxels + localIndex(x - 8 * dx, y - 8 * dy, z - 8 * dz);
+    }
+
+    /// @a grid's values at the lattice's voxels (per voxel; tiles and inactive values as the
+    /// grid holds them at each voxel, only where @a grid is active, 0 elsewhere).
+    std::vector<openvdb::Vec3f> read(const openvdb::Vec3SGrid& grid) const;
+    /// A Vec3f grid on @a topology's active topology and transform holding @a values (per
+    /// voxel): its voxels their own value, an active tile the mean of its voxels. Non-finite
+    /// values are written as 0.
+    openvdb::Vec3SGrid::Ptr write(const std::vector<openvdb::Vec3f>& values, const openvdb::Vec3SGrid& topology) const;
+    /// @a values (per voxel) padded with their neighbours' values.
+    template <typename T>
+    std::vector<T> padded(const std::vector<T>& values) const;
+    /// A source J (per voxel, the voxels' own values) as a sweep reads it: padded, and inside
+    /// the surface (J/f).
+    std::vector<openvdb::Vec3f> sweepSource(const std::vector<openvdb::Vec3f>& source) const;
+
+    /// One transport sweep per direction: the radiance ψ(x, ω) of dψ/ds = −σt ψ + J with no
+    /// light entering the lattice from outside, and @a fluence += Σ_i @a weight·ψ(x, ω_i) (per
+    /// voxel). @a source: from sweepSource. Upwind order leaf by leaf (see SweepPass.h).
+    void sweep(const std::vector<openvdb::Vec3f>& source, const std::vector<openvdb::Vec3d>& directions, double weight,
+        std::vector<openvdb::Vec3f>& fluence, Interrupter* interrupter = nullptr) const;
+
+    /// The leaf at @a leaf's origin + 8·(dx, dy, dz), dx… ∈ {−1, 0, 1}, or −1 for none.
+    int neighbour(std::size_t leaf, int dx, int dy, int dz) const { return mNeighbours[leaf * 27 + (dx + 1) * 9 + (dy + 1) * 3 + (dz + 1)]; }
+
+private:
+    double mVoxelSize = 1.0;
+    std::vector<openvdb::Coord> mOrigins;
+    std::vector<std::int32_t> mNeighbours; ///< 27 per leaf
+    /// Per octant (bit a set: direction negative along axis a), the leaves in upwind order,
+    /// cut into wavefronts: leaves of one wavefront depend on none of each other.
+    std::array<std::vector<std::int32_t>, 8> mOrder;
+    std::array<std::vector<std::size_t>, 8> mWavefronts; ///< start of each wavefront in mOrder, then its end
+    std::vector<openvdb::Vec3f> mSigmaT;      ///< padded, inside the surface (σt/f)
+    std::vector<float> mDistance;             ///< padded, signed distance to the surface (voxels; −1 without one)
+    std::vector<float> mInterior;             ///< per voxel, 1/f
+    std::vector<openvdb::Vec3f> mSigmaTVoxel, mSigmaS;
+};
+
+} // namespace vxf::detail

@@ -1,0 +1,132 @@
+#include <vxf/scatter/SweepSolve.h>
+
+#include "DiffusionCorrection.h"
+#include "SweepLattice.h"
+
+#include <vxf/scatter/SweepPass.h>
+
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <optional>
+
+namespace vxf {
+
+namespace {
+
+double secondsSince(std::chrono::steady_clock::time_point start)
+{
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+/// Σ |v| per channel, in a fixed order (the same for every thread count).
+openvdb::Vec3d l1(const std::vector<openvdb::Vec3f>& values)
+{
+    openvdb::Vec3d sum(0.0);
+    for (const openvdb::Vec3f& v : values) sum += openvdb::Vec3d(std::abs(v[0]), std::abs(v[1]), std::abs(v[2]));
+    return sum;
+}
+
+} // namespace
+
+openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGrid& source, const SweepSolveOptions& options,
+    SweepSolveReport& report, Interrupter* interrupter)
+{
+    InterruptStep step(interrupter, "sweeping");
+    auto start = std::chrono::steady_clock::now();
+    const detail::SweepLattice lattice(medium, source);
+    const std::size_t count = lattice.voxelCount();
+    report.voxels = count;
+    std::optional<detail::DiffusionCorrection> diffusion;
+    if (options.accelerate) {
+        diffusion.emplace(lattice);
+        report.diffusionUnknowns = diffusion->size();
+    }
+    report.accelerated = options.accelerate;
+    report.setupSeconds = secondsSince(start);
+
+    const std::vector<openvdb::Vec3f> j0 = lattice.read(source);
+    const std::vector<openvdb::Vec3f>& sigmaS = lattice.sigmaS();
+    const std::vector<openvdb::Vec3d> directions = sweepDirections(std::max(options.directions, 1), options.rotationSeed);
+    const double weight = 4.0 * M_PI / double(directions.size());
+    std::vector<openvdb::Vec3f> phi(count, openvdb::Vec3f(0.0f)), next, j(count), delta, change;
+    double previousChange = 0.0;
+    std::string dropped; // why the correction was dropped, if it was
+    bool accelerate = options.accelerate;
+    for (int l = 1; l <= std::max(options.maxSweeps, 1); ++l) {
+        start = std::chrono::steady_clock::now();
+        // J = J0 + σs·φ/4π, then φ_{l+½} = K J.
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t v = r.begin(); v != r.end(); ++v) {
+                for (int ch = 0; ch < 3; ++ch) j[v][ch] = j0[v][ch] + sigmaS[v][ch] * phi[v][ch] * float(1.0 / (4.0 * M_PI));
+            }
+        });
+        next.assign(count, openvdb::Vec3f(0.0f));
+        lattice.sweep(lattice.sweepSource(j), directions, weight, next, nullptr);
+        SweepSolveReport::Iteration it;
+        it.index = l;
+        if (accelerate && diffusion) {
+            change.resize(count);
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
+                for (std::size_t v = r.begin(); v != r.end(); ++v) change[v] = next[v] - phi[v];
+            });
+            // The correction needs to be about as good as the change it corrects is small.
+            const auto solved = diffusion->solve(change, delta, 1e-3, 1000);
+            it.diffusionIterations = solved.iterations;
+            it.diffusionResidual = solved.residual;
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
+                for (std::size_t v = r.begin(); v != r.end(); ++v) next[v] += delta[v];
+            });
+        }
+        // How far this sweep moved the sum, per channel relative to it.
+        openvdb::Vec3d moved(0.0);
+        for (std::size_t v = 0; v < count; ++v) {
+            const openvdb::Vec3f d = next[v] - phi[v];
+            moved += openvdb::Vec3d(std::abs(d[0]), std::abs(d[1]), std::abs(d[2]));
+        }
+        const openvdb::Vec3d size = l1(next);
+        it.change = 0.0;
+        for (int ch = 0; ch < 3; ++ch) {
+            if (size[ch] > 0.0) it.change = std::max(it.change, moved[ch] / size[ch]);
+        }
+        phi.swap(next);
+        it.energy = openvdb::Vec3d(0.0);
+        for (const openvdb::Vec3f& v : phi) it.energy += openvdb::Vec3d(v);
+        it.ratio = previousChange > 0.0 ? it.change / previousChange : 0.0;
+        previousChange = it.change;
+        it.error = it.ratio > 0.0 && it.ratio < 1.0 ? it.change * it.ratio / (1.0 - it.ratio) : it.change;
+        it.seconds = secondsSince(start);
+        report.iterations.push_back(it);
+        if (interrupter && interrupter->wasInterrupted(int(100 * l / std::max(options.maxSweeps, 1)))) throw Interrupted();
+        if (std::max({size[0], size[1], size[2]}) == 0.0) {
+            report.stopReason = "the source is zero";
+            report.converged = true;
+            break;
+        }
+        if (l >= 2 && it.ratio < 1.0 && it.error <= options.tolerance) {
+            report.converged = true;
+            report.stopReason = dropped + fmt::format("converged in {} sweeps (estimated error {:.2g} of the sum, rate {:.3f})", l, it.error, it.ratio);
+            break;
+        }
+        if (accelerate && l >= 3 && it.ratio >= 1.0) {
+            // The correction amplifies what it should damp (diffusion is a poor model of this
+            // medium's transport): plain source iteration from here.
+            accelerate = false;
+            report.accelerated = false;
+            dropped = fmt::format("the diffusion correction diverged at sweep {} (rate {:.3f}) and was dropped; ", l, it.ratio);
+        }
+    }
+    if (!report.converged) {
+        report.stopReason = dropped + fmt::format("stopped after {} sweeps, estimated error {:.2g} of the sum", report.iterations.size(),
+            report.iterations.empty() ? 0.0 : report.iterations.back().error);
+    }
+    auto grid = lattice.write(phi, source);
+    grid->setName("scatter");
+    return grid;
+}
+
+} // namespace vxf

@@ -1,0 +1,96 @@
+#include <vxf/scatter/SweepSolve.h>
+
+#include <vxf/light/Medium.h>
+
+#include "TestSupport.h"
+
+#include <catch2/catch.hpp>
+#include <tbb/global_control.h>
+
+#include <cmath>
+
+namespace {
+
+struct Solved
+{
+    openvdb::Vec3SGrid::Ptr sum;
+    vxf::SweepSolveReport report;
+};
+
+/// A sphere of radius 8 voxels, sigma_t R = 8, lit uniformly; its scattered light solved.
+Solved solveSphere(double albedo, bool accelerate, double tolerance, int maxSweeps)
+{
+    const vxf::Material m = vxf::test::albedoMaterial(8.0, albedo);
+    vxf::VoxelSet set = vxf::test::uniformSphere(m, 1.0, 8);
+    const vxf::Medium medium(set, m);
+    vxf::SweepSolveOptions options;
+    options.accelerate = accelerate;
+    options.tolerance = tolerance;
+    options.maxSweeps = maxSweeps;
+    options.directions = 16;
+    Solved s;
+    s.sum = vxf::sweepSolve(medium, *set.get<openvdb::Vec3SGrid>("scatter_source"), options, s.report);
+    return s;
+}
+
+/// Σ|a − b| / Σ|b| over b's active voxels (x channel).
+double relativeL1(const openvdb::Vec3SGrid& a, const openvdb::Vec3SGrid& b)
+{
+    double difference = 0.0, size = 0.0;
+    auto acc = a.getConstAccessor();
+    for (auto it = b.cbeginValueOn(); it; ++it) {
+        difference += std::abs(acc.getValue(it.getCoord()).x() - (*it).x());
+        size += std::abs((*it).x());
+    }
+    return difference / size;
+}
+
+} // namespace
+
+TEST_CASE("diffusion-accelerated sweeps reach plain source iteration's sum in at most 20 sweeps", "[sweep][dsa]")
+{
+    for (const double albedo : {0.9, 0.99, 0.999, 0.9999}) {
+        INFO("albedo " << albedo);
+        const Solved fast = solveSphere(albedo, true, 1e-3, 20);
+        CHECK(fast.report.converged);
+        CHECK(fast.report.accelerated);
+        CHECK(fast.report.iterations.size() <= 20);
+        // Plain source iteration on the same sphere (it leaks enough to converge, slowly).
+        const Solved plain = solveSphere(albedo, false, 1e-7, 2000);
+        REQUIRE(plain.report.converged);
+        INFO("sweeps: accelerated " << fast.report.iterations.size() << ", plain " << plain.report.iterations.size());
+        CHECK(plain.report.iterations.size() > fast.report.iterations.size());
+        CHECK(relativeL1(*fast.sum, *plain.sum) < 2e-3);
+        for (auto it = fast.sum->cbeginValueOn(); it; ++it) REQUIRE(std::isfinite((*it).x()));
+    }
+}
+
+TEST_CASE("the sweep solve reports each iteration's change, which falls", "[sweep][dsa]")
+{
+    const Solved s = solveSphere(0.999, true, 1e-4, 20);
+    REQUIRE(s.report.iterations.size() >= 3);
+    for (std::size_t i = 1; i < s.report.iterations.size(); ++i) {
+        INFO("sweep " << i + 1);
+        CHECK(s.report.iterations[i].change < s.report.iterations[i - 1].change);
+        CHECK(s.report.iterations[i].diffusionIterations > 0);
+    }
+    CHECK(s.report.diffusionUnknowns > 0);
+    CHECK(s.sum->getName() == "scatter");
+}
+
+TEST_CASE("the sweep solve does not depend on the thread count", "[sweep][dsa][threads]")
+{
+    Solved one, two;
+    {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+        one = solveSphere(0.99, true, 1e-3, 20);
+    }
+    {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
+        two = solveSphere(0.99, true, 1e-3, 20);
+    }
+    std::string why;
+    CHECK(vxf::test::identicalGrids(*one.sum, *two.sum, &why));
+    INFO(why);
+    CHECK(one.report.iterations.size() == two.report.iterations.size());
+}
