@@ -101,4 +101,17 @@ TEST_CASE("sweepDirections turns the whole set by a seeded rotation", "[sweep]")
     // A rotation keeps the angles between directions.
     CHECK(a[2].dot(a[5]) == Approx(b[2].dot(b[5])).margin(1e-12));
     CHECK(b[4].length() == Approx(1.0));
+    // Antipodal pairs, isotropic second moments.
+    for (const int n : {8, 16, 32}) {
+        const auto d = vxf::sweepDirections(n, 3);
+        openvdb::Vec3d first(0.0);
+        openvdb::Mat3d second = openvdb::Mat3d::zero();
+        for (const auto& v : d) {
+            first += v;
+            second += openvdb::math::outerProduct(v, v);
+        }
+        CHECK(first.length() < 1e-12);
+        for (int a = 0; a < 3; ++a)
+            for (int b2 = 0; b2 < 3; ++b2) CHECK(second(a, b2) == Approx(a == b2 ? n / 3.0 : 0.0).margin(1e-9));
+    }
 }

@@ -142,6 +142,8 @@ SweepLattice::SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topol
     std::vector<float> distance(voxelCount(), -1.0f);
     std::vector<openvdb::Vec3f> inside(voxelCount());
     const bool surface = medium.surface() != nullptr;
+    std::vector<std::uint8_t> skin(surface ? voxelCount() : 0, 0);
+    std::vector<openvdb::Vec3f> skinNormal(surface ? voxelCount() : 0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mOrigins.size()), [&](const tbb::blocked_range<std::size_t>& r) {
         Medium::Sampler sampler(medium);
         for (std::size_t n = r.begin(); n != r.end(); ++n) {
@@ -160,6 +162,11 @@ SweepLattice::SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topol
                     const double d = sampler.signedDistance(c.asVec3d());
                     distance[i] = float(d);
                     mInterior[i] = float(1.0 / std::max(std::clamp(0.5 - d, 0.0, 1.0), Medium::kMinFraction));
+                    openvdb::Vec3d point, normal;
+                    if (sampler.skinPoint(c, point, normal)) {
+                        skin[i] = 1;
+                        skinNormal[i] = openvdb::Vec3f(normal);
+                    }
                 }
                 inside[i] = openvdb::Vec3f(t * double(mInterior[i]));
             }
@@ -167,6 +174,23 @@ SweepLattice::SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topol
     });
     mSigmaT = padded(inside);
     mDistance = padded(distance);
+    mSkinIndex.assign(surface ? voxelCount() : 0, -1);
+    for (std::size_t i = 0; i < skin.size(); ++i) {
+        if (!skin[i]) continue;
+        mSkinIndex[i] = std::int32_t(mSkin.size());
+        mSkin.push_back({std::uint32_t(i), skinNormal[i], float(std::max(-double(distance[i]), 0.0) * mVoxelSize)});
+    }
+}
+
+std::vector<openvdb::Vec3f> SweepLattice::withSkin(const std::vector<openvdb::Vec3f>& fluence,
+    const std::vector<openvdb::Vec3f>& skinFluence, const std::vector<openvdb::Vec3f>* shift) const
+{
+    std::vector<openvdb::Vec3f> out = fluence;
+    for (std::size_t s = 0; s < mSkin.size() && s < skinFluence.size(); ++s) {
+        const std::uint32_t v = mSkin[s].voxel;
+        out[v] = skinFluence[s] + (shift ? (*shift)[v] : openvdb::Vec3f(0.0f));
+    }
+    return out;
 }
 
 std::vector<openvdb::Vec3f> SweepLattice::sweepSource(const std::vector<openvdb::Vec3f>& source) const
@@ -257,8 +281,10 @@ openvdb::Vec3SGrid::Ptr SweepLattice::write(const std::vector<openvdb::Vec3f>& v
 }
 
 void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::vector<openvdb::Vec3d>& directions, double weight,
-    std::vector<openvdb::Vec3f>& fluence, Interrupter* interrupter) const
+    std::vector<openvdb::Vec3f>& fluence, std::vector<openvdb::Vec3f>* skinFluence, Interrupter* interrupter) const
 {
+    if (skinFluence) skinFluence->assign(mSkin.size(), openvdb::Vec3f(0.0f));
+    const bool skins = skinFluence && !mSkin.empty();
     if (source.size() != mOrigins.size() * kPaddedVoxels || fluence.size() != voxelCount()) {
         throw Error("sweep: source or fluence does not match the lattice");
     }
@@ -363,6 +389,22 @@ void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::v
                         const int v = localIndex(x, y, z);
                         out[v] = result;
                         phi[v] += w * result;
+                        const std::int32_t s = skins ? mSkinIndex[n * kLeafVoxels + v] : -1;
+                        if (s >= 0) {
+                            // On from the centre to the surface along ω, if ω leaves it.
+                            const Skin& k = mSkin[std::size_t(s)];
+                            const double cosine = double(k.normal.dot(openvdb::Vec3f(omega)));
+                            if (cosine > 0.0) {
+                                const double path = double(k.depth) / std::max(cosine, 0.05);
+                                openvdb::Vec3f onSurface;
+                                for (int ch = 0; ch < 3; ++ch) {
+                                    const double sigma = st[p][ch], tau = sigma * path;
+                                    onSurface[ch] = sigma > 0.0 ? float(result[ch] * std::exp(-tau) - double(j[p][ch]) / sigma * std::expm1(-tau))
+                                                                : float(result[ch] + double(j[p][ch]) * path);
+                                }
+                                (*skinFluence)[std::size_t(s)] += w * onSurface;
+                            }
+                        }
                     }
                 }
             }

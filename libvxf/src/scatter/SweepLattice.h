@@ -73,9 +73,25 @@ public:
 
     /// One transport sweep per direction: the radiance ψ(x, ω) of dψ/ds = −σt ψ + J with no
     /// light entering the lattice from outside, and @a fluence += Σ_i @a weight·ψ(x, ω_i) (per
-    /// voxel). @a source: from sweepSource. Upwind order leaf by leaf (see SweepPass.h).
+    /// voxel, at the voxels' centres). @a source: from sweepSource. Upwind order leaf by leaf
+    /// (see SweepPass.h). With @a skinFluence (skinCount() values), also the fluence of each
+    /// skin voxel on the surface (see withSkin).
     void sweep(const std::vector<openvdb::Vec3f>& source, const std::vector<openvdb::Vec3d>& directions, double weight,
-        std::vector<openvdb::Vec3f>& fluence, Interrupter* interrupter = nullptr) const;
+        std::vector<openvdb::Vec3f>& fluence, std::vector<openvdb::Vec3f>* skinFluence = nullptr,
+        Interrupter* interrupter = nullptr) const;
+
+    /// The surface's skin: voxels whose centre lies within half a voxel of it, either side
+    /// (Medium::Sampler::skinPoint). The gathers give them the fluence at their nearest surface
+    /// point, where the renderer and SourceField read them (the scattered light rises steeply
+    /// beneath a surface, as 1 − E2(σt z)/2: half a voxel deep it is far above its value on the
+    /// surface). A sweep carries each direction leaving the surface (ω·n > 0) on from the
+    /// centre to the surface, ψ e^{−τ'} + S(1 − e^{−τ'}) over the depth d/(ω·n) (none for a
+    /// centre outside), and drops those entering (no light comes from outside).
+    std::size_t skinCount() const { return mSkin.size(); }
+    /// @a fluence (per voxel) with its skin voxels' values replaced by @a skinFluence plus
+    /// @a shift at the voxel (e.g. a diffusion correction; null: none).
+    std::vector<openvdb::Vec3f> withSkin(const std::vector<openvdb::Vec3f>& fluence, const std::vector<openvdb::Vec3f>& skinFluence,
+        const std::vector<openvdb::Vec3f>* shift = nullptr) const;
 
     /// The leaf at @a leaf's origin + 8·(dx, dy, dz), dx… ∈ {−1, 0, 1}, or −1 for none.
     int neighbour(std::size_t leaf, int dx, int dy, int dz) const { return mNeighbours[leaf * 27 + (dx + 1) * 9 + (dy + 1) * 3 + (dz + 1)]; }
@@ -92,6 +108,14 @@ private:
     std::vector<float> mDistance;             ///< padded, signed distance to the surface (voxels; −1 without one)
     std::vector<float> mInterior;             ///< per voxel, 1/f
     std::vector<openvdb::Vec3f> mSigmaTVoxel, mSigmaS;
+    struct Skin
+    {
+        std::uint32_t voxel;     ///< per-voxel index
+        openvdb::Vec3f normal;   ///< outward unit normal
+        float depth;             ///< world units from the centre to the surface (0 for a centre outside)
+    };
+    std::vector<Skin> mSkin;
+    std::vector<std::int32_t> mSkinIndex; ///< per voxel, its entry in mSkin or −1
 };
 
 } // namespace vxf::detail

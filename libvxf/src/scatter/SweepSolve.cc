@@ -53,7 +53,8 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
     const std::vector<openvdb::Vec3f>& sigmaS = lattice.sigmaS();
     const std::vector<openvdb::Vec3d> directions = sweepDirections(std::max(options.directions, 1), options.rotationSeed);
     const double weight = 4.0 * M_PI / double(directions.size());
-    std::vector<openvdb::Vec3f> phi(count, openvdb::Vec3f(0.0f)), next, j(count), delta, change;
+    std::vector<openvdb::Vec3f> phi(count, openvdb::Vec3f(0.0f)), next, j(count), delta, change, skin;
+    bool corrected = false; // the last sweep's diffusion correction is in delta
     double previousChange = 0.0;
     std::string dropped; // why the correction was dropped, if it was
     bool accelerate = options.accelerate;
@@ -66,7 +67,8 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
             }
         });
         next.assign(count, openvdb::Vec3f(0.0f));
-        lattice.sweep(lattice.sweepSource(j), directions, weight, next, nullptr);
+        lattice.sweep(lattice.sweepSource(j), directions, weight, next, &skin, nullptr);
+        corrected = false;
         SweepSolveReport::Iteration it;
         it.index = l;
         if (accelerate && diffusion) {
@@ -76,6 +78,7 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
             });
             // The correction needs to be about as good as the change it corrects is small.
             const auto solved = diffusion->solve(change, delta, 1e-3, 1000);
+            corrected = true;
             it.diffusionIterations = solved.iterations;
             it.diffusionResidual = solved.residual;
             tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -124,7 +127,8 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
         report.stopReason = dropped + fmt::format("stopped after {} sweeps, estimated error {:.2g} of the sum", report.iterations.size(),
             report.iterations.empty() ? 0.0 : report.iterations.back().error);
     }
-    auto grid = lattice.write(phi, source);
+    // The skin voxels hold the fluence on the surface, as the gathers give it.
+    auto grid = lattice.write(lattice.withSkin(phi, skin, corrected ? &delta : nullptr), source);
     grid->setName("scatter");
     return grid;
 }
