@@ -97,10 +97,11 @@ public:
         if (report.accelerated) {
             std::cout << fmt::format("  {} voxels swept per direction ({} directions), {} diffusion unknowns, setup {:.3f} s\n",
                 report.sweptVoxels, mOptions.pass.directions, report.diffusionUnknowns, report.setupSeconds);
-            std::cout << "  sweep  energy of the sum (over voxels, r g b)             change  rate    diffusion CG   seconds\n";
+            std::cout << "  sweep  energy of the sum (over voxels, r g b)             change  rate    diffusion CG   seconds  (sweep, ns/voxel/direction)\n";
             for (const auto& p : report.passes) {
-                std::cout << fmt::format("  {:>4}   {:>12.5g} {:>12.5g} {:>12.5g}   {:>7.1e} {:>7.4f} {:>8}   {:>7.3f}\n", p.index, p.energy[0],
-                    p.energy[1], p.energy[2], p.change, p.ratio, p.diffusionIterations, p.seconds);
+                const double ns = 1e9 * p.sweepSeconds / std::max(1.0, double(report.sweptVoxels) * mOptions.pass.directions);
+                std::cout << fmt::format("  {:>4}   {:>12.5g} {:>12.5g} {:>12.5g}   {:>7.1e} {:>7.4f} {:>8}   {:>7.3f}  ({:.3f}, {:.1f})\n", p.index,
+                    p.energy[0], p.energy[1], p.energy[2], p.change, p.ratio, p.diffusionIterations, p.seconds, p.sweepSeconds, ns);
             }
             std::cout << fmt::format("  seconds total {:.3f}\n", secondsSince(start));
             return;

@@ -72,7 +72,7 @@ DiffusionCorrection::DiffusionCorrection(const SweepLattice& lattice)
                 matrix->setValue(openvdb::math::pcg::SizeType(i), openvdb::math::pcg::SizeType(i), diagonal);
             }
         });
-        mChannels[ch].preconditioner = std::make_unique<openvdb::math::pcg::IncompleteCholeskyPreconditioner<Matrix>>(*matrix);
+        mChannels[ch].preconditioner = std::make_unique<openvdb::math::pcg::JacobiPreconditioner<Matrix>>(*matrix);
         mChannels[ch].matrix = std::move(matrix);
     }
 }
@@ -89,6 +89,23 @@ DiffusionCorrection::Solve DiffusionCorrection::solve(const std::vector<openvdb:
     for (int ch = 0; ch < 3; ++ch) {
         const int source = mChannels[ch].same >= 0 ? mChannels[ch].same : ch;
         const Channel& channel = mChannels[source];
+        // A channel with the same matrix and right-hand side as one solved already (grey media
+        // lit white): its solution.
+        int solvedAs = -1;
+        for (int other = 0; other < ch && solvedAs < 0 && mChannels[ch].same >= 0; ++other) {
+            const int otherSource = mChannels[other].same >= 0 ? mChannels[other].same : other;
+            if (otherSource != source) continue;
+            bool equal = true;
+            for (std::size_t i = 0; i < mVoxels.size() && equal; ++i) {
+                const std::size_t v = mVoxels[i];
+                equal = change[v][ch] == change[v][other] && sigmaS[v][ch] == sigmaS[v][other];
+            }
+            if (equal) solvedAs = other;
+        }
+        if (solvedAs >= 0) {
+            for (const std::uint32_t v : mVoxels) delta[v][ch] = delta[v][solvedAs];
+            continue;
+        }
         openvdb::math::pcg::Vector<double> b(size), x(size, 0.0);
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mVoxels.size()), [&](const tbb::blocked_range<std::size_t>& r) {
             for (std::size_t i = r.begin(); i != r.end(); ++i) {

@@ -275,6 +275,7 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
             info.seconds = it.seconds;
             info.change = it.change;
             info.diffusionIterations = it.diffusionIterations;
+            info.sweepSeconds = it.sweepSeconds;
             report.passes.push_back(info);
         }
         report.accelerated = true;

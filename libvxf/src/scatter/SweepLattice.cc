@@ -371,6 +371,13 @@ void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::v
                                     result[ch] = float(psiIn[ch] + 0.5 * h * (double(jStart[ch]) + double(jEnd[ch])));
                                     continue;
                                 }
+                                if (sa == sb) { // the common case inside: S linear is J linear, no division
+                                    const double tau = sa * h;
+                                    if (tau != tauBefore) sw = stepWeights(tau);
+                                    tauBefore = tau;
+                                    result[ch] = float(sw.transmittance * psiIn[ch] + h * (sw.in * jStart[ch] + sw.own * jEnd[ch]));
+                                    continue;
+                                }
                                 // dψ/dτ = −ψ + S with the source function S = J/σt linear in the
                                 // optical depth τ = ½(σa + σb)·h: ψ = e^{−τ}ψ_in + τ(in·S_a + own·S_b),
                                 // exact for those, and S_b where the step is optically thick (the

@@ -35,6 +35,7 @@ struct SweepSolveReport
         int diffusionIterations = 0;  ///< conjugate-gradient iterations of the correction
         double diffusionResidual = 0.0;
         double seconds = 0.0;
+        double sweepSeconds = 0.0;    ///< of which the transport sweep (all directions)
     };
     std::vector<Iteration> iterations;
     std::string stopReason;
