@@ -81,7 +81,8 @@ DiffusionCorrection::Solve DiffusionCorrection::solve(const std::vector<openvdb:
     double tolerance, int maxIterations) const
 {
     Solve result;
-    delta.assign(mLattice.voxelCount(), openvdb::Vec3f(0.0f));
+    const bool guess = delta.size() == mLattice.voxelCount();
+    if (!guess) delta.assign(mLattice.voxelCount(), openvdb::Vec3f(0.0f));
     if (mVoxels.empty()) return result;
     const double dx = mLattice.voxelSize();
     const std::vector<openvdb::Vec3f>& sigmaS = mLattice.sigmaS();
@@ -111,6 +112,7 @@ DiffusionCorrection::Solve DiffusionCorrection::solve(const std::vector<openvdb:
             for (std::size_t i = r.begin(); i != r.end(); ++i) {
                 const std::size_t v = mVoxels[i];
                 b[openvdb::math::pcg::SizeType(i)] = double(sigmaS[v][ch]) * double(change[v][ch]) * dx;
+                if (guess) x[openvdb::math::pcg::SizeType(i)] = double(delta[v][ch]);
             }
         });
         if (b.infNorm() == 0.0) continue;

@@ -42,7 +42,9 @@ public:
     };
 
     /// δ per voxel (0 outside the domain) for @a change = φ_{l+½} − φ_l per voxel; solved to
-    /// @a tolerance relative residual (at most @a maxIterations).
+    /// @a tolerance relative residual (at most @a maxIterations), starting from @a delta as it
+    /// is when it has the lattice's size (a guess: the previous sweep's correction, scaled),
+    /// from 0 otherwise.
     Solve solve(const std::vector<openvdb::Vec3f>& change, std::vector<openvdb::Vec3f>& delta, double tolerance,
         int maxIterations) const;
 

@@ -36,6 +36,13 @@ openvdb::Vec3d l1(const std::vector<openvdb::Vec3f>& values)
     return sum;
 }
 
+/// The largest channel of l1(@a values).
+double l1Max(const std::vector<openvdb::Vec3f>& values)
+{
+    const openvdb::Vec3d s = l1(values);
+    return std::max({s[0], s[1], s[2]});
+}
+
 } // namespace
 
 openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGrid& source, const SweepSolveOptions& options,
@@ -61,6 +68,7 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
     std::vector<openvdb::Vec3f> phi(count, openvdb::Vec3f(0.0f)), next, j(count), delta, change, skin;
     bool corrected = false; // the last sweep's diffusion correction is in delta
     double previousChange = 0.0;
+    double previousMoved = 0.0; // |φ_{l+½} − φ_l|₁ of the last accelerated sweep, largest channel
     std::string dropped; // why the correction was dropped, if it was
     bool accelerate = options.accelerate;
     for (int l = 1; l <= std::max(options.maxSweeps, 1); ++l) {
@@ -83,7 +91,15 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
             tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
                 for (std::size_t v = r.begin(); v != r.end(); ++v) change[v] = next[v] - phi[v];
             });
-            // The correction needs to be about as good as the change it corrects is small.
+            // Start from the last correction scaled as the change shrank: near albedo 1 the error
+            // left is the slowest mode, its shape the same from sweep to sweep.
+            if (!delta.empty() && previousChange > 0.0) {
+                const float scale = float(std::min(1.0, l1Max(change) / std::max(previousMoved, 1e-300)));
+                tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
+                    for (std::size_t v = r.begin(); v != r.end(); ++v) delta[v] *= scale;
+                });
+            }
+            previousMoved = l1Max(change);
             const auto solved = diffusion->solve(change, delta, kDiffusionTolerance, 1000);
             corrected = true;
             it.diffusionIterations = solved.iterations;
@@ -120,6 +136,14 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
         if (l >= 2 && it.ratio < 1.0 && it.error <= options.tolerance) {
             report.converged = true;
             report.stopReason = dropped + fmt::format("converged in {} sweeps (estimated error {:.2g} of the sum, rate {:.3f})", l, it.error, it.ratio);
+            break;
+        }
+        if (l >= 3 && it.ratio >= 1.0 && it.change <= options.tolerance) {
+            // The changes stopped falling below the tolerance: the floor the diffusion solve's
+            // own residual (1e-2 of each change) leaves, not a divergence.
+            report.converged = true;
+            report.stopReason = dropped + fmt::format("converged in {} sweeps (the change {:.2g} of the sum, below the tolerance, "
+                "stopped falling)", l, it.change);
             break;
         }
         if (accelerate && l >= 3 && it.ratio >= 1.0) {
