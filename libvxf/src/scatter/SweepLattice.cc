@@ -363,7 +363,7 @@ void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::v
                         openvdb::Vec3f result = psiIn;
                         if (inside > 0.0) {
                             const double h = len * inside;
-                            StepWeights sw;
+                            StepWeights sw{0.0, 0.0, 1.0};
                             double tauBefore = -1.0;
                             for (int ch = 0; ch < 3; ++ch) {
                                 const double sa = sigmaStart[ch], sb = sigmaEnd[ch];
