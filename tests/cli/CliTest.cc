@@ -349,6 +349,25 @@ TEST_CASE("vxf light lights a voxel set from a scene file", "[cli][light]")
         INFO(name);
         CHECK(lit2.find(name));
     }
+    // The sweep kernel: accelerated sweeps report themselves as such; plain sweeps keep the orders.
+    const auto swept = run(fmt::format("{} scatter {} -o {} --kernel sweep --directions 16", binary("vxf"), dir.path("l.vdb"), dir.path("sw.vdb")));
+    INFO(swept.err);
+    REQUIRE(swept.status == 0);
+    CHECK(swept.out.find("accelerated sweeps") != std::string::npos);
+    CHECK(swept.out.find("converged in") != std::string::npos);
+    CHECK(swept.out.find("voxels swept per direction") != std::string::npos);
+    CHECK(vxf::readVoxelSet(dir.path("sw.vdb")).find("illumination"));
+    const auto ordered = run(fmt::format("{} scatter {} -o {} --kernel sweep --directions 8 --passes 2 --keep-passes --tolerance 0",
+        binary("vxf"), dir.path("l.vdb"), dir.path("sw2.vdb")));
+    INFO(ordered.err);
+    REQUIRE(ordered.status == 0);
+    CHECK(ordered.out.find("accelerated") == std::string::npos);
+    CHECK(vxf::readVoxelSet(dir.path("sw2.vdb")).find("scatter_pass_2"));
+    const auto badKernel = run(fmt::format("{} scatter {} -o {} --kernel march", binary("vxf"), dir.path("l.vdb"), dir.path("bk.vdb")));
+    CHECK(badKernel.status == 2);
+    CHECK(badKernel.err.find("--kernel") != std::string::npos);
+    CHECK_FALSE(fs::exists(dir.path("bk.vdb")));
+
     const auto notLit = run(fmt::format("{} scatter {} -o {}", binary("vxf"), dir.path("s.vdb"), dir.path("y.vdb")));
     CHECK(notLit.status == 1);
     CHECK(notLit.err.find("records no material") != std::string::npos);

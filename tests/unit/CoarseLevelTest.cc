@@ -9,27 +9,7 @@ namespace {
 
 /// A homogeneous ball of radius 1, @a cells voxels per unit (density 1), lit uniformly:
 /// φ0 = 1, so `scatter_source` = σs/(4π).
-vxf::VoxelSet uniformlyLitBall(const vxf::Material& m, int cells)
-{
-    const double dx = 1.0 / cells;
-    vxf::VoxelSet set(openvdb::math::Transform::createLinearTransform(dx));
-    auto density = openvdb::FloatGrid::create(0.0f);
-    density->setName("density");
-    auto source = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
-    source->setName("scatter_source");
-    for (auto* g : std::initializer_list<openvdb::GridBase*>{density.get(), source.get()}) g->setTransform(set.transformPtr());
-    for (int i = -cells; i <= cells; ++i)
-        for (int j = -cells; j <= cells; ++j)
-            for (int k = -cells; k <= cells; ++k) {
-                const openvdb::Coord c(i, j, k);
-                if (c.asVec3d().length() * dx > 1.0) continue;
-                density->tree().setValueOn(c, 1.0f);
-                source->tree().setValueOn(c, openvdb::Vec3f(float(m.sigmaS[0] / (4.0 * M_PI))));
-            }
-    set.put(density);
-    set.put(source);
-    return set;
-}
+vxf::VoxelSet uniformlyLitBall(const vxf::Material& m, int cells) { return vxf::test::uniformSphere(m, 1.0, cells); }
 
 } // namespace
 

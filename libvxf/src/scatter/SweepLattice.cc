@@ -17,13 +17,6 @@ namespace vxf::detail {
 
 namespace {
 
-struct CoordHasher
-{
-    std::size_t operator()(const openvdb::Coord& c) const { return std::size_t(coordKey(c)); }
-};
-
-using LeafIndex = std::unordered_map<openvdb::Coord, std::int32_t, CoordHasher>;
-
 /// A padded cell a sweep reads from a neighbouring leaf: its index in the padded block, the
 /// neighbour (0…26 as in SweepLattice::neighbour) and the voxel there.
 struct Ghost
@@ -95,6 +88,8 @@ inline StepWeights stepWeights(double tau)
 
 } // namespace
 
+std::size_t SweepLattice::CoordHasher::operator()(const openvdb::Coord& c) const { return std::size_t(coordKey(c)); }
+
 SweepLattice::SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topology)
     : mVoxelSize(medium.voxelSize())
 {
@@ -103,16 +98,15 @@ SweepLattice::SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topol
     mask.voxelizeActiveTiles();
     for (auto it = mask.cbeginLeaf(); it; ++it) mOrigins.push_back(it->origin());
 
-    LeafIndex index;
-    index.reserve(mOrigins.size());
-    for (std::size_t n = 0; n < mOrigins.size(); ++n) index.emplace(mOrigins[n], std::int32_t(n));
+    mLeafIndex.reserve(mOrigins.size());
+    for (std::size_t n = 0; n < mOrigins.size(); ++n) mLeafIndex.emplace(mOrigins[n], std::int32_t(n));
     mNeighbours.assign(mOrigins.size() * 27, -1);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mOrigins.size()), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t n = r.begin(); n != r.end(); ++n) {
             for (int s = 0; s < 27; ++s) {
                 const openvdb::Coord o = mOrigins[n].offsetBy(8 * (s / 9 - 1), 8 * (s / 3 % 3 - 1), 8 * (s % 3 - 1));
-                const auto found = index.find(o);
-                if (found != index.end()) mNeighbours[n * 27 + s] = found->second;
+                const auto found = mLeafIndex.find(o);
+                if (found != mLeafIndex.end()) mNeighbours[n * 27 + s] = found->second;
             }
         }
     });
@@ -244,12 +238,9 @@ template std::vector<openvdb::Vec3f> SweepLattice::padded(const std::vector<open
 
 openvdb::Vec3SGrid::Ptr SweepLattice::write(const std::vector<openvdb::Vec3f>& values, const openvdb::Vec3SGrid& topology) const
 {
-    LeafIndex index;
-    index.reserve(mOrigins.size());
-    for (std::size_t n = 0; n < mOrigins.size(); ++n) index.emplace(mOrigins[n], std::int32_t(n));
     const auto valueAt = [&](const openvdb::Coord& c) {
-        const auto found = index.find(c & ~7);
-        if (found == index.end()) return openvdb::Vec3f(0.0f);
+        const auto found = mLeafIndex.find(c & ~7);
+        if (found == mLeafIndex.end()) return openvdb::Vec3f(0.0f);
         const openvdb::Vec3f v = values[std::size_t(found->second) * kLeafVoxels + localIndex(c[0] & 7, c[1] & 7, c[2] & 7)];
         return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]) ? v : openvdb::Vec3f(0.0f);
     };

@@ -8,6 +8,7 @@
 
 #include <array>
 #include <cstdint>
+#include <unordered_map>
 #include <vector>
 
 namespace vxf::detail {
@@ -97,8 +98,13 @@ public:
     int neighbour(std::size_t leaf, int dx, int dy, int dz) const { return mNeighbours[leaf * 27 + (dx + 1) * 9 + (dy + 1) * 3 + (dz + 1)]; }
 
 private:
+    struct CoordHasher
+    {
+        std::size_t operator()(const openvdb::Coord& c) const;
+    };
     double mVoxelSize = 1.0;
     std::vector<openvdb::Coord> mOrigins;
+    std::unordered_map<openvdb::Coord, std::int32_t, CoordHasher> mLeafIndex; ///< leaf origin → n
     std::vector<std::int32_t> mNeighbours; ///< 27 per leaf
     /// Per octant (bit a set: direction negative along axis a), the leaves in upwind order,
     /// cut into wavefronts: leaves of one wavefront depend on none of each other.

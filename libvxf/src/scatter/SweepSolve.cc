@@ -93,13 +93,14 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
             });
             // Start from the last correction scaled as the change shrank: near albedo 1 the error
             // left is the slowest mode, its shape the same from sweep to sweep.
+            const double moved = l1Max(change);
             if (!delta.empty() && previousChange > 0.0) {
-                const float scale = float(std::min(1.0, l1Max(change) / std::max(previousMoved, 1e-300)));
+                const float scale = float(std::min(1.0, moved / std::max(previousMoved, 1e-300)));
                 tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
                     for (std::size_t v = r.begin(); v != r.end(); ++v) delta[v] *= scale;
                 });
             }
-            previousMoved = l1Max(change);
+            previousMoved = moved;
             const auto solved = diffusion->solve(change, delta, kDiffusionTolerance, 1000);
             corrected = true;
             it.diffusionIterations = solved.iterations;

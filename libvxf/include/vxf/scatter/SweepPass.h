@@ -5,8 +5,7 @@
 #include <vxf/light/Medium.h>
 #include <vxf/scatter/ScatterPass.h>
 
-#include <openvdb/math/Mat3.h>
-
+#include <cstdint>
 #include <vector>
 
 namespace vxf {
@@ -18,10 +17,11 @@ namespace vxf {
 /// wavefronts along the direction's octant (those of one wavefront in parallel), voxels inside
 /// a leaf in upwind order, each voxel from the four voxels upwind of it — short
 /// characteristics: the ray from its centre back to the previous layer of centres across the
-/// direction's dominant axis, ψ and J there interpolated bilinearly (weights in [0, 1]: ψ stays
-/// positive and bounded), σt the mean of the step's ends and J linear along it, integrated
-/// exactly (finite for σt from 0 to ∞). O(1) per voxel and direction: a few reads and one exp
-/// per channel (one for grey media), no march. Voxels of the leaves that hold no medium
+/// direction's dominant axis, ψ, J and σt there interpolated bilinearly (weights in [0, 1]: ψ
+/// stays positive and bounded), the medium only over the step's part inside the surface (see
+/// SweepLattice), the source function J/σt linear in optical depth along it, integrated exactly
+/// (finite for σt from 0 to ∞, J/σt where a step is optically thick). O(1) per voxel and
+/// direction: a few reads and one exp per channel (one for grey media), no march. Voxels of the leaves that hold no medium
 /// (σt = 0) carry light across as it is; light leaving the leaves is gone (light crossing
 /// a gap wider than a leaf between two parts of a concave medium is lost).
 ///
