@@ -1,4 +1,4 @@
-// `vxf light IN.vdb --scene S.json -o OUT.vdb [--step H]`
+// `vxf light IN.vdb --scene S.json -o OUT.vdb [--step H] [--march]`
 #include "CliSupport.h"
 #include "Commands.h"
 
@@ -29,6 +29,10 @@ public:
         mApp->add_option("--step", mOptions.march.step, "March step in voxels (default 0.5)")->check(CLI::Range(0.01, 64.0));
         mApp->add_option("--cutoff", mOptions.march.cutoff, "Stop marching below this transmittance (default 1e-4)")
             ->check(CLI::Range(0.0, 0.5));
+        mApp->add_flag("--march", mMarch,
+            "Every light by a march per voxel and sample (the reference; slow). By default directional and environment lights "
+            "take their transmittance from one optical-depth sweep over the medium per direction (the surface's rim is marched "
+            "either way, and so are point, spot and area lights)");
         mApp->add_flag("--half", mWrite.half, "Store floats as 16-bit halves");
         mApp->add_flag("-q,--quiet", mQuiet, "No summary");
     }
@@ -37,11 +41,12 @@ public:
     {
         TerminalProgress progress;
         const auto start = std::chrono::steady_clock::now();
+        mOptions.sweep = !mMarch;
         const Scene scene = loadScene(mScene);
         VoxelSet set = readVoxelSet(mInput);
         const DirectLightReport report = lightScene(set, scene, mOptions, &progress);
         nlohmann::json params = {{"command", "light"}, {"input", mInput}, {"scene", mScene}, {"step", mOptions.march.step},
-            {"cutoff", mOptions.march.cutoff}};
+            {"cutoff", mOptions.march.cutoff}, {"sweep", mOptions.sweep}};
         set.setProvenance("light", params.dump());
         writeVoxelSet(mOutput, set, mWrite);
         if (mQuiet) return;
@@ -64,6 +69,7 @@ private:
     DirectLightOptions mOptions;
     VoxelSetWriteOptions mWrite;
     bool mQuiet = false;
+    bool mMarch = false;
 };
 
 } // namespace

@@ -279,3 +279,93 @@ TEST_CASE("occluder meshes cast shadows in the light stage", "[light][direct][ra
     // Without occluders the centre is lit.
     CHECK(vxf::lightFluence(light, sampler, medium, openvdb::Coord(0), {}).x() == Approx(10.0 / 25.0));
 }
+
+namespace {
+
+/// `direct` of @a set lit by @a lights, swept (the default) or every light marched.
+openvdb::Vec3SGrid::Ptr litDirect(const vxf::VoxelSet& medium, const vxf::Material& material, const std::vector<vxf::Light>& lights,
+    bool sweep)
+{
+    vxf::VoxelSet set = medium;
+    vxf::DirectLightOptions options;
+    options.sweep = sweep;
+    vxf::computeDirectLight(set, vxf::Medium(set, material), lights, options);
+    return set.get<openvdb::Vec3SGrid>("direct");
+}
+
+} // namespace
+
+TEST_CASE("a directional light by sweeps: E exp(-sigma_t depth / cos) in a slab, exact along the front", "[light][direct][sweep]")
+{
+    // No surface: the box's density ends with a half-voxel ramp, which the sweep's first step
+    // (σt from 0 outside to σt inside) integrates as the march does. Optical depth is linear in
+    // x along any front, so the sweep's blend of upwind depths is exact here.
+    const double dx = 0.05, sigmaT = 2.0;
+    const vxf::VoxelSet set = boxMedium(openvdb::CoordBBox(openvdb::Coord(0, -40, -40), openvdb::Coord(29, 40, 40)), dx);
+    vxf::Light sun;
+    sun.type = vxf::Light::Type::Directional;
+    sun.direction = openvdb::Vec3d(1.0, 0.5, -0.3).unit(); // enters at x = 0, obliquely
+    sun.intensity = 2.0;
+    const auto direct = litDirect(set, vxf::test::greyMaterial(0.5, 1.5), {sun}, true);
+    for (int i : {0, 3, 11, 29}) {
+        const double expected = 2.0 * std::exp(-sigmaT * dx * (i + 0.5) / sun.direction.x());
+        INFO("voxel x = " << i);
+        CHECK(direct->tree().getValue(openvdb::Coord(i, 0, 0)).x() == Approx(expected).epsilon(1e-4));
+    }
+}
+
+TEST_CASE("directional and environment lights by sweeps match the march through a sphere's surface", "[light][direct][sweep]")
+{
+    // A sphere of radius 1 at 20 voxels per unit, mean free path 0.065 (0.77 voxels per mean
+    // free path, the accuracy bench's thick bunny at dim 64): light enters through a curved
+    // surface. Blending upwind optical depths across the surface's kink (0 outside, rising inside)
+    // left the voxels a voxel beneath the surface 7% darker than the march (5.6% with the sun
+    // continued only where it enters at cosines above 0.85; 16% on the bunny at dim 64).
+    vxf::VoxelizeOptions options;
+    options.voxelSize = 0.05;
+    const vxf::VoxelSet set = vxf::voxelize(vxf::makeSphere(openvdb::Vec3d(0.0), 1.0, 128, 256), options);
+    const vxf::Material material = vxf::test::greyMaterial(1.5, 13.9);
+    vxf::Light sun;
+    sun.type = vxf::Light::Type::Directional;
+    sun.name = "sun";
+    sun.direction = openvdb::Vec3d(0.3, -0.5, -0.8).unit();
+    vxf::Light sky;
+    sky.type = vxf::Light::Type::Environment;
+    sky.name = "sky";
+    sky.samples = 16;
+    sky.color = openvdb::Vec3d(0.2, 0.3, 0.4);
+    for (const vxf::Light& light : {sun, sky}) {
+        INFO(light.name);
+        const auto swept = litDirect(set, material, {light}, true), marched = litDirect(set, material, {light}, false);
+        const vxf::Medium medium(set, material);
+        vxf::Medium::Sampler sampler(medium);
+        // By depth below the surface: the skin (within half a voxel), the next voxel, deeper.
+        double sums[3][2] = {};
+        bool finite = true;
+        for (auto it = marched->cbeginValueOn(); it; ++it) {
+            const openvdb::Vec3f s = swept->tree().getValue(it.getCoord());
+            finite = finite && std::isfinite(s[0]) && s[0] >= 0.0f;
+            const double depth = -sampler.signedDistance(it.getCoord().asVec3d());
+            if (depth < -0.5) continue;
+            const int band = depth < 0.5 ? 0 : depth < 1.5 ? 1 : 2;
+            sums[band][0] += s[0];
+            sums[band][1] += (*it)[0];
+        }
+        CHECK(finite);
+        CHECK(sums[0][0] / sums[0][1] == Approx(1.0).margin(0.04));
+        CHECK(sums[1][0] / sums[1][1] == Approx(1.0).margin(0.02));
+        // Deeper the sweep reads 3-4% bright: the depth under a convex entry is concave across
+        // the light (σt times a chord), which blending upwind depths understates (~dx²·curvature).
+        CHECK(sums[2][0] / sums[2][1] == Approx(1.0).margin(0.05));
+    }
+    // The sweeps' order is fixed: identical grids with 1 and 2 threads.
+    const auto two = litDirect(set, material, {sun, sky}, true);
+    openvdb::Vec3SGrid::Ptr one;
+    {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+        one = litDirect(set, material, {sun, sky}, true);
+    }
+    std::string why;
+    CHECK(vxf::test::identicalGrids(*one, *two, &why));
+    INFO(why);
+}

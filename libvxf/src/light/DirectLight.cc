@@ -1,5 +1,7 @@
 #include <vxf/light/DirectLight.h>
 
+#include "../scatter/SweepLattice.h"
+
 #include <vxf/core/Hash.h>
 #include <vxf/io/VoxelSetFile.h>
 
@@ -11,6 +13,8 @@
 
 #include <atomic>
 #include <cmath>
+#include <limits>
+#include <optional>
 
 namespace vxf {
 
@@ -41,6 +45,61 @@ openvdb::Vec3d lightFluence(const LightSampler& light, Medium::Sampler& sampler,
     for (const LightSample& s : samples) phi += s.fluence * sampleTransmittance(s, sampler, medium, xWorld, options, occluders);
     return phi;
 }
+
+namespace {
+
+/// Whether sweepLight handles @a light (the others are marched voxel by voxel).
+bool sweepable(const Light& light)
+{
+    return light.type == Light::Type::Directional || light.type == Light::Type::Environment;
+}
+
+/// The fluence of a directional or environment light at the centre of every voxel of @a lattice
+/// (per voxel), its transmittance by one optical-depth sweep per direction
+/// (SweepLattice::opticalDepthAlong). Where every channel's transmittance is below
+/// options.march.cutoff the light counts as blocked, as a march stops there; occluder meshes
+/// are still asked per voxel and sample.
+std::vector<openvdb::Vec3f> sweepLight(const LightSampler& light, const detail::SweepLattice& lattice, const Medium& medium,
+    const DirectLightOptions& options)
+{
+    const openvdb::math::Transform& xform = medium.transform();
+    const std::size_t count = lattice.voxelCount();
+    const double tauCutoff = -std::log(std::max(options.march.cutoff, std::numeric_limits<double>::min()));
+    const double minDistance = 0.5 * medium.voxelSize();
+    std::vector<openvdb::Vec3f> phi(count, openvdb::Vec3f(0.0f)), tau;
+    const auto worldOf = [&](std::size_t i) {
+        const openvdb::Coord& o = lattice.origin(i / detail::SweepLattice::kLeafVoxels);
+        const int v = int(i % detail::SweepLattice::kLeafVoxels);
+        return xform.indexToWorld(o.offsetBy(v >> 6, (v >> 3) & 7, v & 7));
+    };
+    const auto transmittanceOf = [&](const openvdb::Vec3f& t) {
+        if (std::min({t[0], t[1], t[2]}) > tauCutoff) return openvdb::Vec3d(0.0);
+        return openvdb::Vec3d(std::exp(-double(t[0])), std::exp(-double(t[1])), std::exp(-double(t[2])));
+    };
+    const auto visible = [&](const openvdb::Vec3d& x, const LightSample& s) {
+        return !options.occluders || !options.occluders->occluded(x, s.direction, 1e-4 * medium.voxelSize(), s.distance);
+    };
+    const openvdb::Vec3d anywhere = xform.indexToWorld(medium.activeBounds().getCenter());
+
+    std::vector<LightSample> samples;
+    for (std::size_t d = 0; d < light.count(); ++d) {
+        light.sample(anywhere, 0, minDistance, samples, d, d + 1);
+        if (samples.empty()) continue; // carries nothing
+        const LightSample s = samples.front();
+        // The light travels along −s.direction; in index space (the transform may scale).
+        const openvdb::Vec3d travel = (xform.worldToIndex(anywhere - s.direction) - xform.worldToIndex(anywhere)).unit();
+        lattice.opticalDepthAlong(travel, tau);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                const openvdb::Vec3d t = transmittanceOf(tau[i]);
+                if (t != openvdb::Vec3d(0.0) && visible(worldOf(i), s)) phi[i] += openvdb::Vec3f(s.fluence * t);
+            }
+        });
+    }
+    return phi;
+}
+
+} // namespace
 
 DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const std::vector<Light>& lights,
     const DirectLightOptions& options, Interrupter* interrupter)
@@ -113,12 +172,28 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
     std::atomic<std::size_t> done{0};
     std::atomic<bool> cancelled{false};
 
+    // Lights by sweeps: their fluence at every voxel centre, read below except at the rim.
+    std::optional<detail::SweepLattice> lattice;
+    std::vector<std::vector<openvdb::Vec3f>> swept(active.size());
+    if (options.sweep) {
+        for (std::size_t l = 0; l < active.size(); ++l) {
+            if (!sweepable(active[l].light())) continue;
+            if (!lattice) lattice.emplace(medium, *direct);
+            swept[l] = sweepLight(active[l], *lattice, medium, options);
+            checkInterrupt(interrupter);
+        }
+    }
+
     const auto evaluate = [&](Medium::Sampler& sampler, const openvdb::Coord& ijk, const openvdb::Vec3d& pointIjk,
                               std::vector<openvdb::Vec3d>& sums, openvdb::Vec3f& outDirect, openvdb::Vec3f& outSource,
                               double weight) {
         openvdb::Vec3d phi(0.0);
+        // A rim voxel's light is marched from its medium point (lightFluence), for every light.
+        const std::int64_t index = lattice && sampler.mediumPoint(ijk) == ijk.asVec3d() ? lattice->indexOf(ijk) : -1;
         for (std::size_t l = 0; l < active.size(); ++l) {
-            const openvdb::Vec3d f = lightFluence(active[l], sampler, medium, ijk, options.march, options.occluders);
+            const openvdb::Vec3d f = index >= 0 && !swept[l].empty()
+                ? openvdb::Vec3d(swept[l][std::size_t(index)])
+                : lightFluence(active[l], sampler, medium, ijk, options.march, options.occluders);
             phi += f;
             sums[l] += f * weight;
         }

@@ -612,11 +612,14 @@ std::vector<Operator> makeRegistry()
 
     ops.push_back({"light", "the light stage: `direct` and `scatter_source` from a scene's lights, material and occluders",
         {text("scene", "scene file (schemas/scene.schema.json)"), number("step", "march step, voxels", 0.5, 0.01, 64.0),
-            number("cutoff", "stop marching below this transmittance", 1e-4, 0.0, 0.5)},
+            number("cutoff", "stop marching below this transmittance", 1e-4, 0.0, 0.5),
+            flag("march", "every light by a march per voxel and sample (the reference; slow) instead of one optical-depth sweep "
+                          "per direction for directional and environment lights")},
         [](OpContext& ctx) {
             DirectLightOptions o;
             o.march.step = ctx.args.number("step");
             o.march.cutoff = ctx.args.number("cutoff");
+            o.sweep = !ctx.args.flag("march");
             const auto report = lightScene(ctx.set, loadScene(ctx.args.text("scene")), o, ctx.interrupter);
             return fmt::format("lit by {} lights", report.lights.size());
         }});

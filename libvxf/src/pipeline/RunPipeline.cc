@@ -108,7 +108,7 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
         if (!l.file.empty()) lights.push_back(fileFingerprint(l.file)); // environment map, emission grid: their bytes
     }
     const json lightInputs = {{"voxels", voxelHash}, {"sigma_a", vec(material.sigmaA)}, {"sigma_s", vec(material.sigmaS)},
-        {"lights", lights}, {"occluders", occluders}, {"step", s.step}};
+        {"lights", lights}, {"occluders", occluders}, {"step", s.step}, {"sweep", true}};
     const std::string lightHash = hashOf(lightInputs);
     const fs::path lightFile = cache / ("light-" + lightHash + ".vdb");
     if (fs::exists(lightFile)) {

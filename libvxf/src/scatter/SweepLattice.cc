@@ -86,6 +86,63 @@ inline StepWeights stepWeights(double tau)
     return w;
 }
 
+/// A short characteristic of direction ω: from a voxel's centre back along −ω to the plane of
+/// the previous layer of centres across the dominant axis m, whose crossing lies between the
+/// four upwind voxels there (bilinear weights, all in [0, 1]: positive, no new extrema),
+/// 1/|ω_m| voxels away.
+struct Characteristic
+{
+    float weight[4];
+    int offset[4]; ///< of the four upwind voxels, in padded indices
+    double length; ///< voxels
+};
+
+inline Characteristic characteristic(const openvdb::Vec3d& omega)
+{
+    static constexpr int stride[3] = {100, 10, 1};
+    int sign[3];
+    for (int a = 0; a < 3; ++a) sign[a] = omega[a] < 0.0 ? -1 : 1;
+    const int m = std::abs(omega[0]) >= std::abs(omega[1]) ? (std::abs(omega[0]) >= std::abs(omega[2]) ? 0 : 2)
+                                                           : (std::abs(omega[1]) >= std::abs(omega[2]) ? 1 : 2);
+    const int b = (m + 1) % 3, c = (m + 2) % 3;
+    const double am = std::abs(omega[m]);
+    const double ub = std::abs(omega[b]) / am, uc = std::abs(omega[c]) / am;
+    const int o0 = -sign[m] * stride[m], ob = -sign[b] * stride[b], oc = -sign[c] * stride[c];
+    return {{float((1 - ub) * (1 - uc)), float(ub * (1 - uc)), float((1 - ub) * uc), float(ub * uc)},
+        {o0, o0 + ob, o0 + oc, o0 + ob + oc}, 1.0 / am};
+}
+
+/// opticalDepthAlong continues the outside voxels' depth through the surface where the light
+/// enters it at least this steeply (cosine to the inward normal); more grazing, the plane's
+/// distance along the light is too uncertain and the step's inside part is taken as it is.
+/// The accuracy bench's translucent bunny (sun and sky, dim 64, 16 directions): 2.36% without
+/// the continuation, 1.718% from 0.3, 1.713% from 0.45, 2.18% from 0.6 (every light marched:
+/// 1.734%); a sphere's voxels a voxel deep (DirectLightTest): −7%, +3.7%, ±2%, −3.3% of the march.
+constexpr double kContinuedCosine = 0.45;
+
+/// The octant of direction ω: bit a set where it runs toward −a.
+inline int octantOf(const openvdb::Vec3d& omega)
+{
+    return (omega[0] < 0.0 ? 1 : 0) | (omega[1] < 0.0 ? 2 : 0) | (omega[2] < 0.0 ? 4 : 0);
+}
+
+/// The part of a short characteristic's step inside the surface, from the signed distances at
+/// its start (the upwind crossing) and its end (the centre), linear along it: all of it, none,
+/// or the part next to the end inside, whose values then hold over that part.
+struct InsidePart
+{
+    double fraction = 1.0;
+    bool startOutside = false, endOutside = false;
+};
+
+inline InsidePart insidePart(float dStart, float dEnd)
+{
+    if (dEnd >= 0.0f && dStart >= 0.0f) return {0.0, true, true};
+    if (dEnd >= 0.0f) return {double(dStart) / double(dStart - dEnd), false, true};
+    if (dStart >= 0.0f) return {double(dEnd) / double(dEnd - dStart), true, false};
+    return {};
+}
+
 } // namespace
 
 std::size_t SweepLattice::CoordHasher::operator()(const openvdb::Coord& c) const { return std::size_t(coordKey(c)); }
@@ -271,6 +328,36 @@ openvdb::Vec3SGrid::Ptr SweepLattice::write(const std::vector<openvdb::Vec3f>& v
     return grid;
 }
 
+template <typename Visit>
+void SweepLattice::inUpwindOrder(const openvdb::Vec3d& omega, std::vector<openvdb::Vec3f>& values, const Visit& visit) const
+{
+    const int octant = octantOf(omega);
+    int sign[3];
+    for (int a = 0; a < 3; ++a) sign[a] = (octant >> a) & 1 ? -1 : 1;
+    const std::vector<Ghost> upwind = upwindGhosts(octant);
+    const auto sweepLeaf = [&](std::size_t n, openvdb::Vec3f* buffer) {
+        for (const Ghost& g : upwind) {
+            const int leaf = mNeighbours[n * 27 + g.slot];
+            buffer[g.padded] = leaf < 0 ? openvdb::Vec3f(0.0f) : values[std::size_t(leaf) * kLeafVoxels + g.local];
+        }
+        for (int qx = 0; qx < 8; ++qx) {
+            const int x = sign[0] > 0 ? qx : 7 - qx;
+            for (int qy = 0; qy < 8; ++qy) {
+                const int y = sign[1] > 0 ? qy : 7 - qy;
+                for (int qz = 0; qz < 8; ++qz) visit(n, buffer, x, y, sign[2] > 0 ? qz : 7 - qz);
+            }
+        }
+    };
+    const std::vector<std::int32_t>& order = mOrder[octant];
+    const std::vector<std::size_t>& fronts = mWavefronts[octant];
+    for (std::size_t f = 0; f + 1 < fronts.size(); ++f) {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(fronts[f], fronts[f + 1], 1), [&](const tbb::blocked_range<std::size_t>& r) {
+            std::vector<openvdb::Vec3f> buffer(kPaddedVoxels, openvdb::Vec3f(0.0f));
+            for (std::size_t k = r.begin(); k != r.end(); ++k) sweepLeaf(std::size_t(order[k]), buffer.data());
+        });
+    }
+}
+
 void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::vector<openvdb::Vec3d>& directions, double weight,
     std::vector<openvdb::Vec3f>& fluence, std::vector<openvdb::Vec3f>* skinFluence, Interrupter* interrupter) const
 {
@@ -279,142 +366,153 @@ void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::v
     if (source.size() != mOrigins.size() * kPaddedVoxels || fluence.size() != voxelCount()) {
         throw Error("sweep: source or fluence does not match the lattice");
     }
-    std::array<std::vector<Ghost>, 8> ghosts;
-    for (int octant = 0; octant < 8; ++octant) ghosts[octant] = upwindGhosts(octant);
     std::vector<openvdb::Vec3f> psi(voxelCount()); // ψ of the direction being swept
     const float w = float(weight);
-    const int stride[3] = {100, 10, 1};
 
     for (std::size_t d = 0; d < directions.size(); ++d) {
         const openvdb::Vec3d& omega = directions[d];
-        int octant = 0, sign[3];
-        for (int a = 0; a < 3; ++a) {
-            sign[a] = omega[a] < 0.0 ? -1 : 1;
-            if (omega[a] < 0.0) octant |= 1 << a;
-        }
-        // Short characteristics: from a voxel's centre back along −ω to the plane of the
-        // previous layer of centres across the dominant axis m, whose crossing lies between
-        // the four upwind voxels there (bilinear weights, all in [0, 1]: positive, no new
-        // extrema), len = dx/|ω_m| away.
-        const int m = std::abs(omega[0]) >= std::abs(omega[1]) ? (std::abs(omega[0]) >= std::abs(omega[2]) ? 0 : 2)
-                                                               : (std::abs(omega[1]) >= std::abs(omega[2]) ? 1 : 2);
-        const int b = (m + 1) % 3, c = (m + 2) % 3;
-        const double am = std::abs(omega[m]);
-        const double ub = std::abs(omega[b]) / am, uc = std::abs(omega[c]) / am;
-        const float wt[4] = {float((1 - ub) * (1 - uc)), float(ub * (1 - uc)), float((1 - ub) * uc), float(ub * uc)};
-        const int o0 = -sign[m] * stride[m];
-        const int off[4] = {o0, o0 - sign[b] * stride[b], o0 - sign[c] * stride[c], o0 - sign[b] * stride[b] - sign[c] * stride[c]};
-        const double len = mVoxelSize / am;
-        const std::vector<std::int32_t>& order = mOrder[octant];
-        const std::vector<std::size_t>& fronts = mWavefronts[octant];
-        const std::vector<Ghost>& upwind = ghosts[octant];
-
-        const auto sweepLeaf = [&](std::size_t n, openvdb::Vec3f* buffer) {
-            for (const Ghost& g : upwind) {
-                const int leaf = mNeighbours[n * 27 + g.slot];
-                buffer[g.padded] = leaf < 0 ? openvdb::Vec3f(0.0f) : psi[std::size_t(leaf) * kLeafVoxels + g.local];
-            }
+        const Characteristic path = characteristic(omega);
+        const float* wt = path.weight;
+        const int* off = path.offset;
+        const double len = mVoxelSize * path.length;
+        inUpwindOrder(omega, psi, [&](std::size_t n, openvdb::Vec3f* buffer, int x, int y, int z) {
             const openvdb::Vec3f* st = &mSigmaT[n * kPaddedVoxels];
             const openvdb::Vec3f* j = &source[n * kPaddedVoxels];
             const float* distance = &mDistance[n * kPaddedVoxels];
             openvdb::Vec3f* out = &psi[n * kLeafVoxels];
             openvdb::Vec3f* phi = &fluence[n * kLeafVoxels];
-            for (int qx = 0; qx < 8; ++qx) {
-                const int x = sign[0] > 0 ? qx : 7 - qx;
-                for (int qy = 0; qy < 8; ++qy) {
-                    const int y = sign[1] > 0 ? qy : 7 - qy;
-                    for (int qz = 0; qz < 8; ++qz) {
-                        const int z = sign[2] > 0 ? qz : 7 - qz;
-                        const int p = paddedIndex(x, y, z);
-                        openvdb::Vec3f psiIn(0.0f), jIn(0.0f), stIn(0.0f);
-                        float dIn = 0.0f;
-                        for (int i = 0; i < 4; ++i) {
-                            psiIn += wt[i] * buffer[p + off[i]];
-                            jIn += wt[i] * j[p + off[i]];
-                            stIn += wt[i] * st[p + off[i]];
-                            dIn += wt[i] * distance[p + off[i]];
-                        }
-                        // The step's part inside the surface (signed distance linear along it):
-                        // all of it, none, or the part next to the end inside, whose σt and J
-                        // then hold over that part.
-                        const float dHere = distance[p];
-                        double inside = 1.0;
-                        openvdb::Vec3f sigmaStart = stIn, sigmaEnd = st[p], jStart = jIn, jEnd = j[p];
-                        if (dHere >= 0.0f && dIn >= 0.0f) {
-                            inside = 0.0;
-                        } else if (dHere >= 0.0f) {
-                            inside = dIn / (dIn - dHere);
-                            sigmaEnd = stIn;
-                            jEnd = jIn;
-                        } else if (dIn >= 0.0f) {
-                            inside = dHere / (dHere - dIn);
-                            sigmaStart = st[p];
-                            jStart = j[p];
-                        }
-                        openvdb::Vec3f result = psiIn;
-                        if (inside > 0.0) {
-                            const double h = len * inside;
-                            StepWeights sw{0.0, 0.0, 1.0};
-                            double tauBefore = -1.0;
-                            for (int ch = 0; ch < 3; ++ch) {
-                                const double sa = sigmaStart[ch], sb = sigmaEnd[ch];
-                                if (sa <= 0.0 && sb <= 0.0) { // no extinction: J integrates as it is
-                                    result[ch] = float(psiIn[ch] + 0.5 * h * (double(jStart[ch]) + double(jEnd[ch])));
-                                    continue;
-                                }
-                                if (sa == sb) { // the common case inside: S linear is J linear, no division
-                                    const double tau = sa * h;
-                                    if (tau != tauBefore) sw = stepWeights(tau);
-                                    tauBefore = tau;
-                                    result[ch] = float(sw.transmittance * psiIn[ch] + h * (sw.in * jStart[ch] + sw.own * jEnd[ch]));
-                                    continue;
-                                }
-                                // dψ/dτ = −ψ + S with the source function S = J/σt linear in the
-                                // optical depth τ = ½(σa + σb)·h: ψ = e^{−τ}ψ_in + τ(in·S_a + own·S_b),
-                                // exact for those, and S_b where the step is optically thick (the
-                                // local equilibrium J/σt, whatever σt does along the step). An end
-                                // without medium (σt = 0) takes the other end's S.
-                                double Sa = sa > 0.0 ? double(jStart[ch]) / sa : 0.0, Sb = sb > 0.0 ? double(jEnd[ch]) / sb : 0.0;
-                                if (sa <= 0.0) Sa = Sb;
-                                if (sb <= 0.0) Sb = Sa;
-                                const double tau = 0.5 * (sa + sb) * h;
-                                if (tau != tauBefore) sw = stepWeights(tau);
-                                tauBefore = tau;
-                                result[ch] = float(sw.transmittance * psiIn[ch] + tau * (sw.in * Sa + sw.own * Sb));
-                            }
-                        }
-                        buffer[p] = result;
-                        const int v = localIndex(x, y, z);
-                        out[v] = result;
-                        phi[v] += w * result;
-                        const std::int32_t s = skins ? mSkinIndex[n * kLeafVoxels + v] : -1;
-                        if (s >= 0) {
-                            // On from the centre to the surface along ω, if ω leaves it.
-                            const Skin& k = mSkin[std::size_t(s)];
-                            const double cosine = double(k.normal.dot(openvdb::Vec3f(omega)));
-                            if (cosine > 0.0) {
-                                const double path = double(k.depth) / std::max(cosine, 0.05);
-                                openvdb::Vec3f onSurface;
-                                for (int ch = 0; ch < 3; ++ch) {
-                                    const double sigma = st[p][ch], tau = sigma * path;
-                                    onSurface[ch] = sigma > 0.0 ? float(result[ch] * std::exp(-tau) - double(j[p][ch]) / sigma * std::expm1(-tau))
-                                                                : float(result[ch] + double(j[p][ch]) * path);
-                                }
-                                (*skinFluence)[std::size_t(s)] += w * onSurface;
-                            }
-                        }
+            const int p = paddedIndex(x, y, z);
+            openvdb::Vec3f psiIn(0.0f), jIn(0.0f), stIn(0.0f);
+            float dIn = 0.0f;
+            for (int i = 0; i < 4; ++i) {
+                psiIn += wt[i] * buffer[p + off[i]];
+                jIn += wt[i] * j[p + off[i]];
+                stIn += wt[i] * st[p + off[i]];
+                dIn += wt[i] * distance[p + off[i]];
+            }
+            // The step's part inside the surface (signed distance linear along it):
+            // all of it, none, or the part next to the end inside, whose σt and J
+            // then hold over that part.
+            const InsidePart part = insidePart(dIn, distance[p]);
+            const double inside = part.fraction;
+            openvdb::Vec3f sigmaStart = stIn, sigmaEnd = st[p], jStart = jIn, jEnd = j[p];
+            if (part.endOutside) {
+                sigmaEnd = stIn;
+                jEnd = jIn;
+            } else if (part.startOutside) {
+                sigmaStart = st[p];
+                jStart = j[p];
+            }
+            openvdb::Vec3f result = psiIn;
+            if (inside > 0.0) {
+                const double h = len * inside;
+                StepWeights sw{0.0, 0.0, 1.0};
+                double tauBefore = -1.0;
+                for (int ch = 0; ch < 3; ++ch) {
+                    const double sa = sigmaStart[ch], sb = sigmaEnd[ch];
+                    if (sa <= 0.0 && sb <= 0.0) { // no extinction: J integrates as it is
+                        result[ch] = float(psiIn[ch] + 0.5 * h * (double(jStart[ch]) + double(jEnd[ch])));
+                        continue;
                     }
+                    if (sa == sb) { // the common case inside: S linear is J linear, no division
+                        const double tau = sa * h;
+                        if (tau != tauBefore) sw = stepWeights(tau);
+                        tauBefore = tau;
+                        result[ch] = float(sw.transmittance * psiIn[ch] + h * (sw.in * jStart[ch] + sw.own * jEnd[ch]));
+                        continue;
+                    }
+                    // dψ/dτ = −ψ + S with the source function S = J/σt linear in the
+                    // optical depth τ = ½(σa + σb)·h: ψ = e^{−τ}ψ_in + τ(in·S_a + own·S_b),
+                    // exact for those, and S_b where the step is optically thick (the
+                    // local equilibrium J/σt, whatever σt does along the step). An end
+                    // without medium (σt = 0) takes the other end's S.
+                    double Sa = sa > 0.0 ? double(jStart[ch]) / sa : 0.0, Sb = sb > 0.0 ? double(jEnd[ch]) / sb : 0.0;
+                    if (sa <= 0.0) Sa = Sb;
+                    if (sb <= 0.0) Sb = Sa;
+                    const double tau = 0.5 * (sa + sb) * h;
+                    if (tau != tauBefore) sw = stepWeights(tau);
+                    tauBefore = tau;
+                    result[ch] = float(sw.transmittance * psiIn[ch] + tau * (sw.in * Sa + sw.own * Sb));
                 }
             }
-        };
-        for (std::size_t f = 0; f + 1 < fronts.size(); ++f) {
-            tbb::parallel_for(tbb::blocked_range<std::size_t>(fronts[f], fronts[f + 1], 1), [&](const tbb::blocked_range<std::size_t>& r) {
-                std::vector<openvdb::Vec3f> buffer(kPaddedVoxels);
-                for (std::size_t i = r.begin(); i != r.end(); ++i) sweepLeaf(std::size_t(order[i]), buffer.data());
-            });
-        }
+            buffer[p] = result;
+            const int v = localIndex(x, y, z);
+            out[v] = result;
+            phi[v] += w * result;
+            const std::int32_t s = skins ? mSkinIndex[n * kLeafVoxels + v] : -1;
+            if (s >= 0) {
+                // On from the centre to the surface along ω, if ω leaves it.
+                const Skin& k = mSkin[std::size_t(s)];
+                const double cosine = double(k.normal.dot(openvdb::Vec3f(omega)));
+                if (cosine > 0.0) {
+                    const double path = double(k.depth) / std::max(cosine, 0.05);
+                    openvdb::Vec3f onSurface;
+                    for (int ch = 0; ch < 3; ++ch) {
+                        const double sigma = st[p][ch], tau = sigma * path;
+                        onSurface[ch] = sigma > 0.0 ? float(result[ch] * std::exp(-tau) - double(j[p][ch]) / sigma * std::expm1(-tau))
+                                                    : float(result[ch] + double(j[p][ch]) * path);
+                    }
+                    (*skinFluence)[std::size_t(s)] += w * onSurface;
+                }
+            }
+        });
         if (interrupter && interrupter->wasInterrupted(int(100 * (d + 1) / directions.size()))) throw Interrupted();
     }
+}
+
+void SweepLattice::opticalDepthAlong(const openvdb::Vec3d& omega, std::vector<openvdb::Vec3f>& tau) const
+{
+    tau.assign(voxelCount(), openvdb::Vec3f(0.0f));
+    const Characteristic c = characteristic(omega);
+    inUpwindOrder(omega, tau, [&](std::size_t n, openvdb::Vec3f* buffer, int x, int y, int z) {
+        const openvdb::Vec3f* st = &mSigmaT[n * kPaddedVoxels];
+        const float* distance = &mDistance[n * kPaddedVoxels];
+        const int p = paddedIndex(x, y, z);
+        const std::size_t i = n * kLeafVoxels + std::size_t(localIndex(x, y, z));
+        openvdb::Vec3f tauIn(0.0f), stIn(0.0f);
+        float dIn = 0.0f;
+        bool outside = false, inside = false; // upwind voxels on either side of the surface
+        for (int k = 0; k < 4; ++k) {
+            const int q = p + c.offset[k];
+            tauIn += c.weight[k] * buffer[q];
+            stIn += c.weight[k] * st[q];
+            dIn += c.weight[k] * distance[q];
+            if (c.weight[k] > 0.0f) (distance[q] >= 0.0f ? outside : inside) = true;
+        }
+        const float dHere = distance[p];
+        // Light entering through the surface between the upwind voxels: τ rises
+        // linearly from the surface, 0 before it, and blending across that kink
+        // overstates it (the first voxel inside came out 16% dark at 0.77 mean free
+        // paths per voxel). The outside voxels' τ is continued through the surface
+        // instead, as far as a plane (the level set's normal here) puts it, with
+        // this voxel's σt, and the step taken whole.
+        double cosine = 0.0;
+        if (outside && inside && dHere < 0.0f) {
+            const openvdb::Vec3d normal(distance[p + 100] - distance[p - 100], distance[p + 10] - distance[p - 10],
+                distance[p + 1] - distance[p - 1]);
+            if (normal.length() > 1e-6) cosine = -omega.dot(normal.unit());
+        }
+        openvdb::Vec3f result = tauIn;
+        if (cosine > kContinuedCosine) {
+            result = openvdb::Vec3f(float(c.length * mVoxelSize) * st[p]);
+            for (int k = 0; k < 4; ++k) {
+                const int q = p + c.offset[k];
+                openvdb::Vec3f t = buffer[q];
+                if (distance[q] >= 0.0f) t -= float(distance[q] / cosine * mVoxelSize) * st[p];
+                result += c.weight[k] * t;
+            }
+            for (int ch = 0; ch < 3; ++ch) result[ch] = std::max(result[ch], 0.0f);
+        } else {
+            const InsidePart part = insidePart(dIn, dHere);
+            if (part.fraction > 0.0) {
+                const openvdb::Vec3f sigmaStart = part.startOutside ? st[p] : stIn,
+                                     sigmaEnd = part.endOutside ? stIn : st[p];
+                result += float(0.5 * c.length * part.fraction * mVoxelSize) * (sigmaStart + sigmaEnd);
+            }
+        }
+        buffer[p] = result;
+        tau[i] = result;
+    });
 }
 
 } // namespace vxf::detail

@@ -19,6 +19,15 @@ struct DirectLightOptions
     /// resolution) instead of voxel by voxel. Only for media so thick that the deep interior
     /// never shows; thinner media show the tiles as blocks.
     bool coarseTiles = false;
+    /// Directional and environment lights by optical-depth sweeps over the medium's leaves (one
+    /// per direction, SweepLattice::opticalDepthAlong), their transmittance at each voxel centre,
+    /// instead of a march per voxel and direction; the rim (centres outside the surface, whose
+    /// light is taken at the surface) is marched either way, as are point, spot and area lights
+    /// (one march per voxel and sample: a point light swept from its position came out 6.1%
+    /// off the reference on the thick bunny at dim 64 against 3.9% marched, the surface's
+    /// curvature under a light that close). Off: every light marched (the reference).
+    /// Bunny dim 128, a 16-direction sky: 18.4 s marched, 1.7 s swept.
+    bool sweep = true;
     /// Meshes that block the light entirely (the scene's occluders); null: none.
     const RayScene* occluders = nullptr;
     /// The meshes the medium's level set was made from: shadow rays take their crossings of
