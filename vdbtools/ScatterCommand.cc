@@ -95,8 +95,9 @@ public:
                 mOptions.band, report.band.fineVoxels, report.band.coarseVoxels, report.band.leafTiles, report.band.internalTiles);
         }
         if (report.accelerated) {
-            std::cout << fmt::format("  {} voxels swept per direction ({} directions), {} diffusion unknowns, setup {:.3f} s\n",
-                report.sweptVoxels, mOptions.pass.directions, report.diffusionUnknowns, report.setupSeconds);
+            std::cout << fmt::format("  {} voxels swept per direction ({} directions), {} diffusion unknowns (cells of {}^3 voxels), "
+                "setup {:.3f} s\n", report.sweptVoxels, mOptions.pass.directions, report.diffusionUnknowns, report.diffusionCoarsening,
+                report.setupSeconds);
             std::cout << "  sweep  energy of the sum (over voxels, r g b)             change  rate    diffusion CG   seconds  (sweep, ns/voxel/direction)\n";
             for (const auto& p : report.passes) {
                 const double ns = 1e9 * p.sweepSeconds / std::max(1.0, double(report.sweptVoxels) * mOptions.pass.directions);

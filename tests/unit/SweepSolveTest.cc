@@ -94,3 +94,28 @@ TEST_CASE("the sweep solve does not depend on the thread count", "[sweep][dsa][t
     INFO(why);
     CHECK(one.report.iterations.size() == two.report.iterations.size());
 }
+
+TEST_CASE("where voxels are optically thin the diffusion correction runs on coarser cells, to the same sum", "[sweep][dsa]")
+{
+    // σt·dx = 1/3: cells of 2³ voxels (σt·h = 2/3); 4³ would be thicker than a mean free path.
+    const vxf::Material m = vxf::test::albedoMaterial(8.0, 0.999);
+    vxf::VoxelSet set = vxf::test::uniformSphere(m, 1.0, 24);
+    const vxf::Medium medium(set, m);
+    const auto& source = *set.get<openvdb::Vec3SGrid>("scatter_source");
+    vxf::SweepSolveOptions options;
+    options.directions = 16;
+    options.tolerance = 1e-4;
+    options.maxSweeps = 20;
+    vxf::SweepSolveReport coarse, fine;
+    const auto coarseSum = vxf::sweepSolve(medium, source, options, coarse);
+    options.diffusionCoarsening = 1;
+    const auto fineSum = vxf::sweepSolve(medium, source, options, fine);
+    CHECK(coarse.diffusionCoarsening == 2);
+    CHECK(fine.diffusionCoarsening == 1);
+    CHECK(coarse.diffusionUnknowns * 6 < fine.diffusionUnknowns); // an eighth, and the surface's part cells
+    REQUIRE(coarse.converged);
+    REQUIRE(fine.converged);
+    INFO("sweeps: coarse " << coarse.iterations.size() << ", fine " << fine.iterations.size());
+    CHECK(coarse.iterations.size() <= fine.iterations.size() + 2);
+    CHECK(relativeL1(*coarseSum, *fineSum) < 1e-3);
+}

@@ -1,6 +1,7 @@
 #include "DiffusionCorrection.h"
 
 #include <vxf/core/Error.h>
+#include <vxf/core/Hash.h>
 
 #include <openvdb/util/NullInterrupter.h>
 
@@ -9,30 +10,85 @@
 
 #include <algorithm>
 #include <cmath>
+#include <unordered_map>
 
 namespace vxf::detail {
 
-DiffusionCorrection::DiffusionCorrection(const SweepLattice& lattice)
+int DiffusionCorrection::coarseningFor(const SweepLattice& lattice)
+{
+    // The mean optical thickness σt·dx of the domain's voxels (the thickest channel).
+    const std::vector<openvdb::Vec3f>& sigmaT = lattice.sigmaT();
+    double sum = 0.0;
+    std::size_t count = 0;
+    for (const openvdb::Vec3f& t : sigmaT) {
+        if (std::min({t[0], t[1], t[2]}) * lattice.voxelSize() < kThinVoxel) continue;
+        sum += std::max({t[0], t[1], t[2]}) * lattice.voxelSize();
+        ++count;
+    }
+    int factor = 1;
+    while (count > 0 && factor < kMaxCoarsening && 2 * factor * sum <= kCoarseThickness * double(count)) factor *= 2;
+    return factor;
+}
+
+DiffusionCorrection::DiffusionCorrection(const SweepLattice& lattice, int coarsening)
     : mLattice(lattice)
+    , mFactor(std::max(coarsening, 1))
 {
     constexpr int L = SweepLattice::kLeafVoxels;
     const double dx = lattice.voxelSize();
+    int shift = 0; // log2 of the coarsening (1, 2, 4, …)
+    while ((2 << shift) <= mFactor) ++shift;
+    mFactor = 1 << shift;
+    const double h = dx * mFactor; // a cell's width
     const std::vector<openvdb::Vec3f>& sigmaT = lattice.sigmaT();
     const std::vector<openvdb::Vec3f>& sigmaS = lattice.sigmaS();
     const auto inDomain = [&](const openvdb::Vec3f& t) {
         return std::min({t[0], t[1], t[2]}) * dx >= kThinVoxel;
     };
-    // Unknowns in lattice order, and each voxel's row (−1: not in the domain).
-    std::vector<std::int32_t> row(lattice.voxelCount(), -1);
+    // Cells (blocks of mFactor³ voxels holding a voxel of the domain) in lattice order, and
+    // each voxel's cell.
+    struct CoordHasher
+    {
+        std::size_t operator()(const openvdb::Coord& c) const { return std::size_t(coordKey(c)); }
+    };
+    std::unordered_map<openvdb::Coord, std::int32_t, CoordHasher> cellIndex;
+    std::vector<openvdb::Coord> cells;
+    mCellOf.assign(lattice.voxelCount(), -1);
     for (std::size_t n = 0; n < lattice.leafCount(); ++n) {
         for (int v = 0; v < L; ++v) {
             if (!inDomain(sigmaT[n * L + v])) continue;
-            row[n * L + v] = std::int32_t(mVoxels.size());
+            const openvdb::Coord c = lattice.origin(n).offsetBy(v >> 6, (v >> 3) & 7, v & 7);
+            const openvdb::Coord cell(c[0] >> shift, c[1] >> shift, c[2] >> shift);
+            const auto [it, added] = cellIndex.emplace(cell, std::int32_t(cells.size()));
+            if (added) cells.push_back(cell);
+            mCellOf[n * L + v] = it->second;
             mVoxels.push_back(std::uint32_t(n * L + v));
         }
     }
-    if (mVoxels.empty()) return;
-
+    if (cells.empty()) return;
+    // Each cell's voxels, contiguous: mMembers[mStart[c] .. mStart[c + 1]).
+    mStart.assign(cells.size() + 1, 0);
+    for (const std::uint32_t v : mVoxels) ++mStart[std::size_t(mCellOf[v]) + 1];
+    for (std::size_t c = 0; c < cells.size(); ++c) mStart[c + 1] += mStart[c];
+    mMembers.resize(mVoxels.size());
+    {
+        std::vector<std::uint32_t> next(mStart.begin(), mStart.end() - 1);
+        for (const std::uint32_t v : mVoxels) mMembers[next[std::size_t(mCellOf[v])]++] = v;
+    }
+    // A cell's coefficients: the means over its voxels of the domain.
+    std::vector<openvdb::Vec3d> cellSigmaT(cells.size(), openvdb::Vec3d(0.0)), cellSigmaA(cells.size(), openvdb::Vec3d(0.0));
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t c = r.begin(); c != r.end(); ++c) {
+            for (std::uint32_t k = mStart[c]; k < mStart[c + 1]; ++k) {
+                const openvdb::Vec3d t(sigmaT[mMembers[k]]), s(sigmaS[mMembers[k]]);
+                cellSigmaT[c] += t;
+                for (int ch = 0; ch < 3; ++ch) cellSigmaA[c][ch] += std::max(0.0, t[ch] - s[ch]);
+            }
+            const double count = double(mStart[c + 1] - mStart[c]);
+            cellSigmaT[c] /= count;
+            cellSigmaA[c] /= count;
+        }
+    });
 
     for (int ch = 0; ch < 3; ++ch) {
         for (int other = 0; other < ch && mChannels[ch].same < 0; ++other) {
@@ -45,28 +101,24 @@ DiffusionCorrection::DiffusionCorrection(const SweepLattice& lattice)
             if (equal) mChannels[ch].same = other;
         }
         if (mChannels[ch].same >= 0) continue;
-        // In units of the voxel: D̃ = D/dx = 1/(3σt·dx), σ̃a = σa·dx; row i:
-        // (σ̃a + Σ_faces D̃_f + Σ_vacuum faces D̃/(½ + 2D̃)) δ_i − Σ_faces D̃_f δ_j = σs·Δφ·dx,
-        // D̃_f = 2D̃_iD̃_j/(D̃_i + D̃_j). (Marshak: the face's flux D(δ_i − δ_b)/(dx/2) = δ_b/2.)
-        auto matrix = std::make_unique<Matrix>(openvdb::math::pcg::SizeType(mVoxels.size()));
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mVoxels.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+        // In units of the cell: D̃ = D/h = 1/(3σt·h), σ̃a = σa·h; row i:
+        // (σ̃a + Σ_faces D̃_f + Σ_vacuum faces D̃/(½ + 2D̃)) δ_i − Σ_faces D̃_f δ_j = σs·Δφ·h,
+        // D̃_f = 2D̃_iD̃_j/(D̃_i + D̃_j). (Marshak: the face's flux D(δ_i − δ_b)/(h/2) = δ_b/2.)
+        auto matrix = std::make_unique<Matrix>(openvdb::math::pcg::SizeType(cells.size()));
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells.size()), [&](const tbb::blocked_range<std::size_t>& r) {
             for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                const std::size_t v = mVoxels[i], n = v / L;
-                const int x = int(v % L) >> 6, y = (int(v % L) >> 3) & 7, z = int(v % L) & 7;
-                const double t = sigmaT[v][ch] * dx;
-                const double d = 1.0 / (3.0 * t);
-                double diagonal = std::max(0.0, t - sigmaS[v][ch] * dx);
+                const double d = 1.0 / (3.0 * cellSigmaT[i][ch] * h);
+                double diagonal = cellSigmaA[i][ch] * h;
                 const int face[6][3] = {{-1, 0, 0}, {1, 0, 0}, {0, -1, 0}, {0, 1, 0}, {0, 0, -1}, {0, 0, 1}};
                 for (const auto& f : face) {
-                    const std::int64_t w = lattice.voxelIndex(n, x + f[0], y + f[1], z + f[2]);
-                    const std::int32_t j = w < 0 ? -1 : row[std::size_t(w)];
-                    if (j < 0) {
+                    const auto found = cellIndex.find(cells[i].offsetBy(f[0], f[1], f[2]));
+                    if (found == cellIndex.end()) {
                         diagonal += d / (0.5 + 2.0 * d);
                     } else {
-                        const double dj = 1.0 / (3.0 * sigmaT[std::size_t(w)][ch] * dx);
+                        const double dj = 1.0 / (3.0 * cellSigmaT[std::size_t(found->second)][ch] * h);
                         const double df = 2.0 * d * dj / (d + dj);
                         diagonal += df;
-                        matrix->setValue(openvdb::math::pcg::SizeType(i), openvdb::math::pcg::SizeType(j), -df);
+                        matrix->setValue(openvdb::math::pcg::SizeType(i), openvdb::math::pcg::SizeType(found->second), -df);
                     }
                 }
                 matrix->setValue(openvdb::math::pcg::SizeType(i), openvdb::math::pcg::SizeType(i), diagonal);
@@ -84,9 +136,10 @@ DiffusionCorrection::Solve DiffusionCorrection::solve(const std::vector<openvdb:
     const bool guess = delta.size() == mLattice.voxelCount();
     if (!guess) delta.assign(mLattice.voxelCount(), openvdb::Vec3f(0.0f));
     if (mVoxels.empty()) return result;
-    const double dx = mLattice.voxelSize();
+    const double h = mLattice.voxelSize() * mFactor;
     const std::vector<openvdb::Vec3f>& sigmaS = mLattice.sigmaS();
-    const auto size = openvdb::math::pcg::SizeType(mVoxels.size());
+    const std::size_t cells = size();
+    const auto count = openvdb::math::pcg::SizeType(cells);
     for (int ch = 0; ch < 3; ++ch) {
         const int source = mChannels[ch].same >= 0 ? mChannels[ch].same : ch;
         const Channel& channel = mChannels[source];
@@ -107,12 +160,19 @@ DiffusionCorrection::Solve DiffusionCorrection::solve(const std::vector<openvdb:
             for (const std::uint32_t v : mVoxels) delta[v][ch] = delta[v][solvedAs];
             continue;
         }
-        openvdb::math::pcg::Vector<double> b(size), x(size, 0.0);
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mVoxels.size()), [&](const tbb::blocked_range<std::size_t>& r) {
-            for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                const std::size_t v = mVoxels[i];
-                b[openvdb::math::pcg::SizeType(i)] = double(sigmaS[v][ch]) * double(change[v][ch]) * dx;
-                if (guess) x[openvdb::math::pcg::SizeType(i)] = double(delta[v][ch]);
+        // A cell's right-hand side and guess: the means over its voxels.
+        openvdb::math::pcg::Vector<double> b(count), x(count, 0.0);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t c = r.begin(); c != r.end(); ++c) {
+                double rhs = 0.0, start = 0.0;
+                for (std::uint32_t k = mStart[c]; k < mStart[c + 1]; ++k) {
+                    const std::size_t v = mMembers[k];
+                    rhs += double(sigmaS[v][ch]) * double(change[v][ch]);
+                    if (guess) start += double(delta[v][ch]);
+                }
+                const double members = double(mStart[c + 1] - mStart[c]);
+                b[openvdb::math::pcg::SizeType(c)] = rhs / members * h;
+                x[openvdb::math::pcg::SizeType(c)] = start / members;
             }
         });
         if (b.infNorm() == 0.0) continue;
@@ -123,9 +183,10 @@ DiffusionCorrection::Solve DiffusionCorrection::solve(const std::vector<openvdb:
         const openvdb::math::pcg::State state = openvdb::math::pcg::solve(*channel.matrix, b, x, *channel.preconditioner, never, termination);
         result.iterations = std::max(result.iterations, state.iterations);
         result.residual = std::max(result.residual, state.relativeError);
+        // Each voxel takes its cell's correction.
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mVoxels.size()), [&](const tbb::blocked_range<std::size_t>& r) {
             for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                const double value = x[openvdb::math::pcg::SizeType(i)];
+                const double value = x[openvdb::math::pcg::SizeType(mCellOf[mVoxels[i]])];
                 delta[mVoxels[i]][ch] = std::isfinite(value) ? float(value) : 0.0f;
             }
         });

@@ -281,6 +281,7 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
         report.accelerated = true;
         report.sweptVoxels = solved.voxels;
         report.diffusionUnknowns = solved.diffusionUnknowns;
+        report.diffusionCoarsening = solved.diffusionCoarsening;
         report.setupSeconds = solved.setupSeconds;
         report.stopReason = fmt::format("accelerated sweeps (each sweep corrects the whole sum; it is not one scattering order): {}",
             solved.stopReason);

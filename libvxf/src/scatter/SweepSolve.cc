@@ -55,8 +55,10 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
     report.voxels = count;
     std::optional<detail::DiffusionCorrection> diffusion;
     if (options.accelerate) {
-        diffusion.emplace(lattice);
+        diffusion.emplace(lattice, options.diffusionCoarsening > 0 ? options.diffusionCoarsening
+                                                                   : detail::DiffusionCorrection::coarseningFor(lattice));
         report.diffusionUnknowns = diffusion->size();
+        report.diffusionCoarsening = diffusion->coarsening();
     }
     report.accelerated = options.accelerate;
     report.setupSeconds = secondsSince(start);

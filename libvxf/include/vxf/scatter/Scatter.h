@@ -71,7 +71,8 @@ struct ScatterReport
     int correctionCycles = 0;       ///< how many correction cycles ran
     bool accelerated = false;       ///< the sum was solved by accelerated sweeps (passes are iterations)
     std::size_t sweptVoxels = 0;    ///< accelerated sweeps: voxels swept per direction (the touched leaves')
-    std::size_t diffusionUnknowns = 0; ///< accelerated sweeps: voxels of the diffusion correction
+    std::size_t diffusionUnknowns = 0; ///< accelerated sweeps: cells of the diffusion correction
+    int diffusionCoarsening = 1;       ///< accelerated sweeps: those cells are blocks of this many voxels cubed
     double setupSeconds = 0.0;      ///< accelerated sweeps: the lattice and the diffusion matrices
 };
 

@@ -21,6 +21,9 @@ struct SweepSolveOptions
     bool accelerate = true;
     int directions = 64;         ///< per sweep (ScatterPassOptions::directions)
     std::uint64_t rotationSeed = 1; ///< one rotation of the direction set for the whole solve
+    /// The diffusion correction's cells: blocks of 1, 2 or 4 voxels a side; 0: the largest whose
+    /// mean optical thickness is at most 1 (coarse-mesh DSA, see DiffusionCorrection).
+    int diffusionCoarsening = 0;
 };
 
 struct SweepSolveReport
@@ -43,6 +46,7 @@ struct SweepSolveReport
     bool accelerated = false;         ///< the diffusion correction ran (and was kept)
     std::size_t voxels = 0;           ///< voxels swept per direction (the touched leaves')
     std::size_t diffusionUnknowns = 0;
+    int diffusionCoarsening = 1;      ///< the correction's cells: blocks of this many voxels cubed
     double setupSeconds = 0.0;        ///< lattice and diffusion matrices
 };
 
