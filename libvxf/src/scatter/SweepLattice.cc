@@ -244,13 +244,12 @@ std::vector<openvdb::Vec3f> SweepLattice::withSkin(const std::vector<openvdb::Ve
     return out;
 }
 
-std::vector<openvdb::Vec3f> SweepLattice::sweepSource(const std::vector<openvdb::Vec3f>& source) const
+std::vector<openvdb::Vec3f> SweepLattice::sweepSource(std::vector<openvdb::Vec3f> source) const
 {
-    std::vector<openvdb::Vec3f> inside(source.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, source.size()), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t i = r.begin(); i != r.end(); ++i) inside[i] = source[i] * mInterior[i];
+        for (std::size_t i = r.begin(); i != r.end(); ++i) source[i] *= mInterior[i];
     });
-    return padded(inside);
+    return padded(source);
 }
 
 std::vector<openvdb::Vec3f> SweepLattice::read(const openvdb::Vec3SGrid& grid) const
@@ -384,12 +383,15 @@ void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::v
             const int p = paddedIndex(x, y, z);
             openvdb::Vec3f psiIn(0.0f), jIn(0.0f), stIn(0.0f);
             float dIn = 0.0f;
+            bool uniform = true; // σt the same upwind as here: then exactly so, and the step's weights repeat
             for (int i = 0; i < 4; ++i) {
                 psiIn += wt[i] * buffer[p + off[i]];
                 jIn += wt[i] * j[p + off[i]];
                 stIn += wt[i] * st[p + off[i]];
                 dIn += wt[i] * distance[p + off[i]];
+                uniform = uniform && st[p + off[i]] == st[p];
             }
+            if (uniform) stIn = st[p];
             // The step's part inside the surface (signed distance linear along it):
             // all of it, none, or the part next to the end inside, whose σt and J
             // then hold over that part.
@@ -406,8 +408,11 @@ void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::v
             openvdb::Vec3f result = psiIn;
             if (inside > 0.0) {
                 const double h = len * inside;
-                StepWeights sw{0.0, 0.0, 1.0};
-                double tauBefore = -1.0;
+                // The last step's weights on this thread: a uniform medium's steps all have one τ
+                // (one exp a direction instead of one a voxel); a pure function of τ, so the
+                // result does not depend on which voxel came before.
+                static thread_local StepWeights sw{0.0, 0.0, 1.0};
+                static thread_local double tauBefore = -1.0;
                 for (int ch = 0; ch < 3; ++ch) {
                     const double sa = sigmaStart[ch], sb = sigmaEnd[ch];
                     if (sa <= 0.0 && sb <= 0.0) { // no extinction: J integrates as it is

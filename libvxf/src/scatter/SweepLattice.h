@@ -70,7 +70,8 @@ public:
     std::vector<T> padded(const std::vector<T>& values) const;
     /// A source J (per voxel, the voxels' own values) as a sweep reads it: padded, and inside
     /// the surface (J/f).
-    std::vector<openvdb::Vec3f> sweepSource(const std::vector<openvdb::Vec3f>& source) const;
+    /// (By value: a caller done with @a source moves it in, and its memory goes.)
+    std::vector<openvdb::Vec3f> sweepSource(std::vector<openvdb::Vec3f> source) const;
 
     /// One transport sweep per direction: the radiance ψ(x, ω) of dψ/ds = −σt ψ + J with no
     /// light entering the lattice from outside, and @a fluence += Σ_i @a weight·ψ(x, ω_i) (per

@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cmath>
 #include <optional>
+#include <utility>
 
 namespace vxf {
 
@@ -67,7 +68,9 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
     const std::vector<openvdb::Vec3f>& sigmaS = lattice.sigmaS();
     const std::vector<openvdb::Vec3d> directions = sweepDirections(std::max(options.directions, 1), options.rotationSeed);
     const double weight = 4.0 * M_PI / double(directions.size());
-    std::vector<openvdb::Vec3f> phi(count, openvdb::Vec3f(0.0f)), next, j(count), delta, change, skin;
+    // Per voxel: what the iteration keeps (the sweep's own arrays and J come and go, so that at
+    // most six such arrays and the padded source live at once: 950 MB at dim 256, 4.5M voxels).
+    std::vector<openvdb::Vec3f> phi(count, openvdb::Vec3f(0.0f)), next, delta, skin;
     bool corrected = false; // the last sweep's diffusion correction is in delta
     double previousChange = 0.0;
     double previousMoved = 0.0; // |φ_{l+½} − φ_l|₁ of the last accelerated sweep, largest channel
@@ -76,6 +79,7 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
     for (int l = 1; l <= std::max(options.maxSweeps, 1); ++l) {
         start = std::chrono::steady_clock::now();
         // J = J0 + σs·φ/4π, then φ_{l+½} = K J.
+        std::vector<openvdb::Vec3f> j(count);
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
             for (std::size_t v = r.begin(); v != r.end(); ++v) {
                 for (int ch = 0; ch < 3; ++ch) j[v][ch] = j0[v][ch] + sigmaS[v][ch] * phi[v][ch] * float(1.0 / (4.0 * M_PI));
@@ -84,12 +88,12 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
         next.assign(count, openvdb::Vec3f(0.0f));
         SweepSolveReport::Iteration it;
         const auto sweepStart = std::chrono::steady_clock::now();
-        lattice.sweep(lattice.sweepSource(j), directions, weight, next, &skin, nullptr);
+        lattice.sweep(lattice.sweepSource(std::move(j)), directions, weight, next, &skin, nullptr);
         it.sweepSeconds = secondsSince(sweepStart);
         corrected = false;
         it.index = l;
         if (accelerate && diffusion) {
-            change.resize(count);
+            std::vector<openvdb::Vec3f> change(count);
             tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
                 for (std::size_t v = r.begin(); v != r.end(); ++v) change[v] = next[v] - phi[v];
             });
