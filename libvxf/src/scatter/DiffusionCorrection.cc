@@ -129,12 +129,10 @@ DiffusionCorrection::DiffusionCorrection(const SweepLattice& lattice, int coarse
     }
 }
 
-DiffusionCorrection::Solve DiffusionCorrection::solve(const std::vector<openvdb::Vec3f>& change, std::vector<openvdb::Vec3f>& delta,
-    double tolerance, int maxIterations) const
+DiffusionCorrection::Solve DiffusionCorrection::solve(const std::vector<openvdb::Vec3f>& change, double guessScale, double tolerance,
+    int maxIterations)
 {
     Solve result;
-    const bool guess = delta.size() == mLattice.voxelCount();
-    if (!guess) delta.assign(mLattice.voxelCount(), openvdb::Vec3f(0.0f));
     if (mVoxels.empty()) return result;
     const double h = mLattice.voxelSize() * mFactor;
     const std::vector<openvdb::Vec3f>& sigmaS = mLattice.sigmaS();
@@ -157,24 +155,24 @@ DiffusionCorrection::Solve DiffusionCorrection::solve(const std::vector<openvdb:
             if (equal) solvedAs = other;
         }
         if (solvedAs >= 0) {
-            for (const std::uint32_t v : mVoxels) delta[v][ch] = delta[v][solvedAs];
+            mSolution[ch] = mSolution[solvedAs];
             continue;
         }
-        // A cell's right-hand side and guess: the means over its voxels.
+        // A cell's right-hand side: the mean over its voxels; the guess: the last solution, scaled.
         openvdb::math::pcg::Vector<double> b(count), x(count, 0.0);
+        const bool guess = mSolution[ch].size() == cells && guessScale > 0.0;
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells), [&](const tbb::blocked_range<std::size_t>& r) {
             for (std::size_t c = r.begin(); c != r.end(); ++c) {
-                double rhs = 0.0, start = 0.0;
+                double rhs = 0.0;
                 for (std::uint32_t k = mStart[c]; k < mStart[c + 1]; ++k) {
                     const std::size_t v = mMembers[k];
                     rhs += double(sigmaS[v][ch]) * double(change[v][ch]);
-                    if (guess) start += double(delta[v][ch]);
                 }
-                const double members = double(mStart[c + 1] - mStart[c]);
-                b[openvdb::math::pcg::SizeType(c)] = rhs / members * h;
-                x[openvdb::math::pcg::SizeType(c)] = start / members;
+                b[openvdb::math::pcg::SizeType(c)] = rhs / double(mStart[c + 1] - mStart[c]) * h;
+                if (guess) x[openvdb::math::pcg::SizeType(c)] = mSolution[ch][c] * guessScale;
             }
         });
+        mSolution[ch].assign(cells, 0.0);
         if (b.infNorm() == 0.0) continue;
         openvdb::math::pcg::State termination = openvdb::math::pcg::terminationDefaults<double>();
         termination.iterations = maxIterations;
@@ -183,15 +181,25 @@ DiffusionCorrection::Solve DiffusionCorrection::solve(const std::vector<openvdb:
         const openvdb::math::pcg::State state = openvdb::math::pcg::solve(*channel.matrix, b, x, *channel.preconditioner, never, termination);
         result.iterations = std::max(result.iterations, state.iterations);
         result.residual = std::max(result.residual, state.relativeError);
-        // Each voxel takes its cell's correction.
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mVoxels.size()), [&](const tbb::blocked_range<std::size_t>& r) {
-            for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                const double value = x[openvdb::math::pcg::SizeType(mCellOf[mVoxels[i]])];
-                delta[mVoxels[i]][ch] = std::isfinite(value) ? float(value) : 0.0f;
-            }
-        });
+        for (std::size_t c = 0; c < cells; ++c) {
+            const double value = x[openvdb::math::pcg::SizeType(c)];
+            mSolution[ch][c] = std::isfinite(value) ? value : 0.0;
+        }
     }
     return result;
+}
+
+void DiffusionCorrection::addTo(std::vector<openvdb::Vec3f>& values) const
+{
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mVoxels.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+            const std::uint32_t v = mVoxels[i];
+            const std::size_t c = std::size_t(mCellOf[v]);
+            for (int ch = 0; ch < 3; ++ch) {
+                if (mSolution[ch].size() > c) values[v][ch] += float(mSolution[ch][c]);
+            }
+        }
+    });
 }
 
 } // namespace vxf::detail

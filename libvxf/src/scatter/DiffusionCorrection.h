@@ -58,12 +58,14 @@ public:
         double residual = 0.0; ///< largest relative residual |b − Aδ|/|b| of a channel
     };
 
-    /// δ per voxel (0 outside the domain; its cell's) for @a change = φ_{l+½} − φ_l per voxel; solved to
-    /// @a tolerance relative residual (at most @a maxIterations), starting from @a delta as it
-    /// is when it has the lattice's size (a guess: the previous sweep's correction, scaled),
-    /// from 0 otherwise.
-    Solve solve(const std::vector<openvdb::Vec3f>& change, std::vector<openvdb::Vec3f>& delta, double tolerance,
-        int maxIterations) const;
+    /// δ per cell for @a change = φ_{l+½} − φ_l per voxel, kept here (addTo); solved to
+    /// @a tolerance relative residual (at most @a maxIterations), starting from the last
+    /// solution times @a guessScale (the previous sweep's correction scaled as the change
+    /// shrank; 0, or before the first solve: from 0).
+    Solve solve(const std::vector<openvdb::Vec3f>& change, double guessScale, double tolerance, int maxIterations);
+
+    /// @a values (per voxel) += the last solution δ, each voxel of the domain its cell's.
+    void addTo(std::vector<openvdb::Vec3f>& values) const;
 
 private:
     using Matrix = openvdb::math::pcg::SparseStencilMatrix<double, 7>;
@@ -80,6 +82,7 @@ private:
     std::vector<std::uint32_t> mStart;   ///< cell c's voxels: mMembers[mStart[c] … mStart[c + 1])
     std::vector<std::uint32_t> mMembers;
     Channel mChannels[3];
+    std::vector<double> mSolution[3]; ///< per channel, δ per cell (empty: none yet)
 };
 
 } // namespace vxf::detail

@@ -47,6 +47,9 @@ public:
 
     /// σt per voxel, the voxel's own (volume-fraction weighted; 1/world unit).
     const std::vector<openvdb::Vec3f>& sigmaT() const { return mSigmaTVoxel; }
+    /// Free sigmaT() (empty afterwards): only the diffusion correction's matrices read it, and
+    /// a solve at dim 256 needs its 54 MB back (the sweeps read σt inside the surface, padded).
+    void releaseSigmaT() { std::vector<openvdb::Vec3f>().swap(mSigmaTVoxel); }
     /// σs per voxel, the voxel's own (1/world unit).
     const std::vector<openvdb::Vec3f>& sigmaS() const { return mSigmaS; }
     /// The per-voxel index of local voxel (x, y, z) of leaf @a leaf, coordinates −8…15 reaching

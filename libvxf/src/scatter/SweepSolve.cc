@@ -51,7 +51,7 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
 {
     InterruptStep step(interrupter, "sweeping");
     auto start = std::chrono::steady_clock::now();
-    const detail::SweepLattice lattice(medium, source);
+    detail::SweepLattice lattice(medium, source);
     const std::size_t count = lattice.voxelCount();
     report.voxels = count;
     std::optional<detail::DiffusionCorrection> diffusion;
@@ -60,6 +60,7 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
                                                                    : detail::DiffusionCorrection::coarseningFor(lattice));
         report.diffusionUnknowns = diffusion->size();
         report.diffusionCoarsening = diffusion->coarsening();
+        lattice.releaseSigmaT(); // the matrices are built
     }
     report.accelerated = options.accelerate;
     report.setupSeconds = secondsSince(start);
@@ -70,8 +71,8 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
     const double weight = 4.0 * M_PI / double(directions.size());
     // Per voxel: what the iteration keeps (the sweep's own arrays and J come and go, so that at
     // most six such arrays and the padded source live at once: 950 MB at dim 256, 4.5M voxels).
-    std::vector<openvdb::Vec3f> phi(count, openvdb::Vec3f(0.0f)), next, delta, skin;
-    bool corrected = false; // the last sweep's diffusion correction is in delta
+    std::vector<openvdb::Vec3f> phi(count, openvdb::Vec3f(0.0f)), next, skin;
+    bool corrected = false; // the last sweep added the diffusion correction (it holds it)
     double previousChange = 0.0;
     double previousMoved = 0.0; // |φ_{l+½} − φ_l|₁ of the last accelerated sweep, largest channel
     std::string dropped; // why the correction was dropped, if it was
@@ -100,20 +101,13 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
             // Start from the last correction scaled as the change shrank: near albedo 1 the error
             // left is the slowest mode, its shape the same from sweep to sweep.
             const double moved = l1Max(change);
-            if (!delta.empty() && previousChange > 0.0) {
-                const float scale = float(std::min(1.0, moved / std::max(previousMoved, 1e-300)));
-                tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
-                    for (std::size_t v = r.begin(); v != r.end(); ++v) delta[v] *= scale;
-                });
-            }
+            const double scale = previousChange > 0.0 ? std::min(1.0, moved / std::max(previousMoved, 1e-300)) : 0.0;
             previousMoved = moved;
-            const auto solved = diffusion->solve(change, delta, kDiffusionTolerance, 1000);
+            const auto solved = diffusion->solve(change, scale, kDiffusionTolerance, 1000);
             corrected = true;
             it.diffusionIterations = solved.iterations;
             it.diffusionResidual = solved.residual;
-            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
-                for (std::size_t v = r.begin(); v != r.end(); ++v) next[v] += delta[v];
-            });
+            diffusion->addTo(next);
         }
         // How far this sweep moved the sum, per channel relative to it.
         openvdb::Vec3d moved(0.0);
@@ -166,7 +160,12 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
             report.iterations.empty() ? 0.0 : report.iterations.back().error);
     }
     // The skin voxels hold the fluence on the surface, as the gathers give it.
-    auto grid = lattice.write(lattice.withSkin(phi, skin, corrected ? &delta : nullptr), source);
+    std::vector<openvdb::Vec3f> shift;
+    if (corrected) {
+        shift.assign(count, openvdb::Vec3f(0.0f));
+        diffusion->addTo(shift);
+    }
+    auto grid = lattice.write(lattice.withSkin(phi, skin, corrected ? &shift : nullptr), source);
     grid->setName("scatter");
     return grid;
 }
