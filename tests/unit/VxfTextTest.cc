@@ -1,6 +1,9 @@
 #include <vxf/io/VxfText.h>
 
+#include <vxf/core/ProceduralMesh.h>
 #include <vxf/io/VoxelSetFile.h>
+#include <vxf/ops/Blend.h>
+#include <vxf/voxelize/Voxelize.h>
 
 #include "TestSupport.h"
 
@@ -159,16 +162,51 @@ TEST_CASE("vdb grids write as text and read back identically", "[io][vxf]")
     CHECK(text.find("size 9 8 8 0.25\n") != std::string::npos);
     CHECK(text.find("count 513\n") != std::string::npos);
 
+    CHECK(text.find("min -4.375 -0.125 -0.125\n") != std::string::npos); // the corner of voxel (-17, 0, 0)
+
+    // Back at the same index coordinates under the same transform: min lies on the corners of
+    // the grid's own lattice (-4.375 / 0.25 + 0.5 = -17), so the text's index origin is known.
     const vxf::VoxelSet back = vxf::readVxfText(dir.path("out.vxf"));
+    CHECK(back.transform() == *xform);
     auto readDensity = back.get<openvdb::FloatGrid>("density");
+    CHECK(*readDensity->transformPtr() == *xform);
+    CHECK(readDensity->getGridClass() == openvdb::GRID_FOG_VOLUME);
     CHECK(readDensity->activeVoxelCount() == 513);
-    // The text index space starts at the bounding box, so the 8^3 tile is no longer leaf-aligned.
-    CHECK(readDensity->tree().activeTileCount() == 0);
-    // World positions agree even though the index space starts at 0 in the text.
-    const openvdb::Vec3d original = xform->indexToWorld(openvdb::Coord(-17, 3, 3));
-    const openvdb::Coord moved = back.transform().worldToIndexCellCentered(original);
-    CHECK(readDensity->tree().getValue(moved) == 0.5f);
-    CHECK(back.get<openvdb::Vec3SGrid>("illumination")->tree().getValue(moved) == openvdb::Vec3f(1, 2, 3));
+    CHECK(readDensity->tree().activeTileCount() == 1); // the 8^3 tile is leaf-aligned again, and pruned back
+    CHECK(readDensity->tree().getValue(openvdb::Coord(-17, 3, 3)) == 0.5f);
+    CHECK(readDensity->tree().getValue(openvdb::Coord(-12, 5, 1)) == 1.0f);
+    CHECK(back.get<openvdb::Vec3SGrid>("illumination")->tree().getValue(openvdb::Coord(-17, 3, 3)) == openvdb::Vec3f(1, 2, 3));
+}
+
+TEST_CASE("a voxelized mesh's grids come back from text at their own index coordinates, and blend with the originals", "[io][vxf]")
+{
+    TempDir dir;
+    vxf::VoxelizeOptions options;
+    options.dim = 24;
+    const vxf::VoxelSet set = vxf::voxelize(vxf::makeSphere(openvdb::Vec3d(0.3, -0.2, 0.1), 1.0, 32, 64), options);
+    vxf::writeVoxelSet(dir.path("a.vdb"), set);
+    for (const char* name : {"density", "surface"}) {
+        INFO(name);
+        vxf::VxfWriteOptions write;
+        write.grids = {name};
+        vxf::writeVxfText(dir.path("a.vxf"), vxf::readVoxelSet(dir.path("a.vdb")), write);
+        const vxf::VoxelSet back = vxf::readVxfText(dir.path("a.vxf"));
+        const auto original = set.get<openvdb::FloatGrid>(name);
+        const auto returned = back.get<openvdb::FloatGrid>(name);
+        CHECK(*returned->transformPtr() == original->transform());
+        CHECK(returned->getGridClass() == original->getGridClass());
+        CHECK(returned->activeVoxelCount() == original->activeVoxelCount());
+        bool same = true;
+        auto acc = returned->getConstAccessor();
+        for (auto it = original->cbeginValueOn(); it; ++it) same = same && acc.isValueOn(it.getCoord()) && acc.getValue(it.getCoord()) == *it;
+        CHECK(same); // every active voxel at its index, bit-exact
+        // Edited in text and back, the grid blends with its original as it is (no resample).
+        auto sum = original->deepCopy();
+        vxf::ops::BlendOptions add;
+        add.mode = vxf::ops::BlendMode::Add;
+        CHECK_NOTHROW(vxf::ops::blend(*sum, *returned, add));
+        CHECK(sum->tree().getValue(original->cbeginValueOn().getCoord()) == 2.0f * *original->cbeginValueOn());
+    }
 }
 
 TEST_CASE("writing text refuses what it cannot represent", "[io][vxf]")

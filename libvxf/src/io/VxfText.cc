@@ -137,6 +137,37 @@ private:
     std::string mPath;
 };
 
+/// Whether the corner @a minCorner of text voxel (0, 0, 0) lies on the voxel corners of a
+/// transform that only scales by @a voxelSize (min/voxelsize + ½ integral to within 1e-6 on
+/// every axis, as vdb2vxf writes it for such grids, which vxf's own are, and within 2¹⁶ voxels
+/// of the origin); then that voxel's
+/// index under it in @a origin. Text voxel (i, j, k) is then VDB voxel origin + (i, j, k), so
+/// that a round trip keeps every voxel's index coordinates (and leaves, tiles, and the
+/// alignment with the sibling grids of the .vdb it came from).
+bool originOnLattice(const openvdb::Vec3d& minCorner, double voxelSize, openvdb::Coord& origin)
+{
+    for (int a = 0; a < 3; ++a) {
+        const double index = minCorner[a] / voxelSize + 0.5, nearest = std::round(index);
+        // (Far from the origin vxf's lattices are translated instead: see voxelLattice.)
+        if (!(std::abs(index - nearest) <= 1e-6) || std::abs(nearest) > double(1 << 16)) return false;
+        origin[a] = openvdb::Int32(nearest);
+    }
+    return true;
+}
+
+/// The transform of a text header's voxels (see originOnLattice): a uniform scale by
+/// @a voxelSize, translated so that voxel (0, 0, 0)'s centre is min + voxelsize/2 unless min
+/// lies on the scale's own lattice (@a origin then holds that voxel's index, else 0).
+openvdb::math::Transform::Ptr textTransform(const openvdb::Vec3d& minCorner, double voxelSize, openvdb::Coord& origin)
+{
+    auto xform = openvdb::math::Transform::createLinearTransform(voxelSize);
+    if (!originOnLattice(minCorner, voxelSize, origin)) {
+        origin = openvdb::Coord(0);
+        xform->postTranslate(minCorner + openvdb::Vec3d(0.5 * voxelSize));
+    }
+    return xform;
+}
+
 template<typename GridT>
 typename GridT::Ptr makeGrid(const GridColumn& column, const openvdb::math::Transform::Ptr& xform)
 {
@@ -340,9 +371,9 @@ VoxelSet readVxfText(const std::string& path, Interrupter* interrupter)
     }
     if (columns.empty()) columns.push_back(GridColumn{"color", ColumnType::Vec3, openvdb::GRID_UNKNOWN, openvdb::Vec3f(0.0f)});
 
-    // Grids: text voxel (i,j,k) is VDB voxel (i,j,k); its centre is min + voxelsize·(ijk + ½).
-    auto xform = openvdb::math::Transform::createLinearTransform(voxelSize);
-    xform->postTranslate(*minCorner + openvdb::Vec3d(0.5 * voxelSize));
+    // Grids: text voxel (i,j,k) is VDB voxel origin + (i,j,k); its centre is min + voxelsize·(ijk + ½).
+    openvdb::Coord origin;
+    const auto xform = textTransform(*minCorner, voxelSize, origin);
     std::vector<ColumnWriter> writers(columns.size());
     std::size_t valuesPerLine = 4;
     std::string lineForm = "i j k active";
@@ -423,6 +454,7 @@ VoxelSet readVxfText(const std::string& path, Interrupter* interrupter)
             reader.fail(1, fmt::format("duplicate voxel ({}, {}, {}), first given on line {}", ijk[0], ijk[1], ijk[2], firstLine));
         }
         seenAcc.setValueOn(ijk);
+        const openvdb::Coord at = ijk + origin; // in the .vdb
 
         std::size_t t = 4;
         for (ColumnWriter& w : writers) {
@@ -430,14 +462,14 @@ VoxelSet readVxfText(const std::string& path, Interrupter* interrupter)
             case ColumnType::Bool: {
                 const std::string_view b = tokens[t].text;
                 if (b != "0" && b != "1") reader.fail(tokens[t].column, fmt::format("expected 0 or 1 for bool grid '{}', found '{}'", w.column.name, b));
-                if (active) w.boolAcc->setValueOn(ijk, b == "1");
-                else w.boolAcc->setValueOff(ijk, b == "1");
+                if (active) w.boolAcc->setValueOn(at, b == "1");
+                else w.boolAcc->setValueOff(at, b == "1");
                 break;
             }
             case ColumnType::Float: {
                 const float v = reader.parseReal<float>(tokens[t], fmt::format("grid '{}'", w.column.name));
-                if (active) w.floatAcc->setValueOn(ijk, v);
-                else w.floatAcc->setValueOff(ijk, v);
+                if (active) w.floatAcc->setValueOn(at, v);
+                else w.floatAcc->setValueOff(at, v);
                 break;
             }
             case ColumnType::Vec3: {
@@ -445,8 +477,8 @@ VoxelSet readVxfText(const std::string& path, Interrupter* interrupter)
                 for (int a = 0; a < 3; ++a) {
                     v[a] = reader.parseReal<float>(tokens[t + std::size_t(a)], fmt::format("grid '{}' {}", w.column.name, "rgb"[a]));
                 }
-                if (active) w.vecAcc->setValueOn(ijk, v);
-                else w.vecAcc->setValueOff(ijk, v);
+                if (active) w.vecAcc->setValueOn(at, v);
+                else w.vecAcc->setValueOff(at, v);
                 break;
             }
             }
@@ -684,11 +716,11 @@ std::vector<std::string> writeVxfText(const std::string& path, const VoxelSet& s
         auto textMin = meta.getMetadata<openvdb::Vec3DMetadata>(kTextMinMetaKey);
         auto textMax = meta.getMetadata<openvdb::Vec3DMetadata>(kTextMaxMetaKey);
         if (textSize && textMin && textMax) {
-            auto textXform = openvdb::math::Transform::createLinearTransform(voxelSize);
-            textXform->postTranslate(textMin->value() + openvdb::Vec3d(0.5 * voxelSize));
-            const openvdb::CoordBBox textBox(openvdb::Coord(0), openvdb::Coord(textSize->value()) - openvdb::Coord(1));
+            openvdb::Coord textOrigin;
+            const auto textXform = textTransform(textMin->value(), voxelSize, textOrigin);
+            const openvdb::CoordBBox textBox(textOrigin, textOrigin + openvdb::Coord(textSize->value()) - openvdb::Coord(1));
             if (*textXform == xform && (count == 0 || textBox.isInside(bbox))) {
-                origin = openvdb::Coord(0);
+                origin = textOrigin;
                 size = textSize->value();
                 minCorner = textMin->value();
                 maxCorner = textMax->value();

@@ -19,7 +19,11 @@ inline constexpr const char* kTextMaxMetaKey = "vxf:text_max";
 /// Each declared column group becomes a grid (default: `color`, Vec3f); the voxel's active
 /// flag sets its active state in every grid; level-set grids get their inside sign back by
 /// signed flood fill, and uniform leaves are pruned to tiles. Voxel (i, j, k) of the text
-/// has its centre at min + voxelsize·(i + ½, j + ½, k + ½).
+/// has its centre at min + voxelsize·(i + ½, j + ½, k + ½). Where min lies on the voxel corners
+/// of a transform that only scales (min/voxelsize + ½ integral to within 1e-6, within 2¹⁶
+/// voxels of the origin, as vdb2vxf writes vxf's grids), that is the grids' transform and text
+/// voxel (i, j, k) is VDB voxel (i, j, k) + round(min/voxelsize + ½): a grid comes back at its
+/// own index coordinates. Otherwise the transform is translated to put voxel (0, 0, 0) there.
 /// Throws vxf::InputError "path:line:column: what was expected" on any malformed input.
 VoxelSet readVxfText(const std::string& path, Interrupter* interrupter = nullptr);
 
