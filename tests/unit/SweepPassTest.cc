@@ -1,6 +1,10 @@
 #include <vxf/scatter/SweepPass.h>
 
+#include <vxf/core/ProceduralMesh.h>
+#include <vxf/light/DirectLight.h>
 #include <vxf/light/Medium.h>
+#include <vxf/scatter/Scatter.h>
+#include <vxf/voxelize/Voxelize.h>
 
 #include "TestSupport.h"
 
@@ -113,5 +117,42 @@ TEST_CASE("sweepDirections turns the whole set by a seeded rotation", "[sweep]")
         CHECK(first.length() < 1e-12);
         for (int a = 0; a < 3; ++a)
             for (int b2 = 0; b2 < 3; ++b2) CHECK(second(a, b2) == Approx(a == b2 ? n / 3.0 : 0.0).margin(1e-9));
+    }
+}
+
+TEST_CASE("plain sweeps carry each scattering order on as the gather does, through a surface's skin", "[sweep][scatter]")
+{
+    // A voxelized sphere (its `surface` present: skin voxels hold each pass's light on the
+    // surface), 2 voxels per mean free path, albedo 0.9, lit by a directional light. The
+    // sweep read those surface values as centre values, and each order lost 2-3% more against
+    // the gather's (the bunny: orders 1-3 at 0.977, 0.951, 0.937 of the gather's; read at the
+    // centres, 0.977, 0.970, 0.970); here the ratios of orders 2 and 3 to the one before came
+    // out 1.7% and 2.1% below the gather's, now 0.7% and 0.4% above.
+    vxf::VoxelizeOptions voxelize;
+    voxelize.voxelSize = 1.0 / 12;
+    const vxf::VoxelSet mesh = vxf::voxelize(vxf::makeSphere(openvdb::Vec3d(0.0), 1.0, 64, 128), voxelize);
+    const vxf::Material m = vxf::test::albedoMaterial(6.0, 0.9);
+    vxf::Light sun;
+    sun.type = vxf::Light::Type::Directional;
+    sun.direction = openvdb::Vec3d(0.2, 0.3, -1.0).unit();
+    std::vector<openvdb::Vec3d> energies[2];
+    for (const vxf::ScatterKernel kernel : {vxf::ScatterKernel::Gather, vxf::ScatterKernel::Sweep}) {
+        vxf::VoxelSet set = mesh;
+        const vxf::Medium medium(set, m);
+        vxf::computeDirectLight(set, medium, {sun});
+        vxf::ScatterOptions options;
+        options.passes = 3;
+        options.tolerance = 0.0;
+        options.keepPasses = true;
+        options.pass.directions = 16;
+        options.pass.kernel = kernel;
+        const auto report = vxf::scatter(set, medium, options);
+        REQUIRE(report.passes.size() == 3);
+        for (const auto& pass : report.passes) energies[kernel == vxf::ScatterKernel::Sweep].push_back(pass.energy);
+    }
+    for (int k = 1; k < 3; ++k) {
+        const double gather = energies[0][k].x() / energies[0][k - 1].x(), sweep = energies[1][k].x() / energies[1][k - 1].x();
+        INFO("order " << k + 1 << ": gather ratio " << gather << ", sweep ratio " << sweep);
+        CHECK(sweep == Approx(gather).epsilon(0.01));
     }
 }

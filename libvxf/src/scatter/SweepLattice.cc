@@ -244,6 +244,19 @@ std::vector<openvdb::Vec3f> SweepLattice::withSkin(const std::vector<openvdb::Ve
     return out;
 }
 
+void SweepLattice::skinAtCentres(std::vector<openvdb::Vec3f>& values,
+    const std::function<openvdb::Vec3f(const openvdb::Coord&)>& centre) const
+{
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mSkin.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t s = r.begin(); s != r.end(); ++s) {
+            const std::uint32_t v = mSkin[s].voxel;
+            const int local = int(v % kLeafVoxels);
+            const openvdb::Coord c = mOrigins[v / kLeafVoxels].offsetBy(local >> 6, (local >> 3) & 7, local & 7);
+            values[v] = centre(c) / mInterior[v];
+        }
+    });
+}
+
 std::vector<openvdb::Vec3f> SweepLattice::sweepSource(std::vector<openvdb::Vec3f> source) const
 {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, source.size()), [&](const tbb::blocked_range<std::size_t>& r) {

@@ -8,6 +8,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <unordered_map>
 #include <vector>
 
@@ -103,6 +104,12 @@ public:
         const auto found = mLeafIndex.find(ijk & ~7);
         return found == mLeafIndex.end() ? -1 : std::int64_t(found->second) * kLeafVoxels + localIndex(ijk[0] & 7, ijk[1] & 7, ijk[2] & 7);
     }
+
+    /// @a values (per voxel) with each skin voxel's replaced by centre(voxel)·f: for a source made
+    /// from a pass's fluence, whose skin voxels hold the light on the surface (withSkin), the
+    /// value at the centre that sweepSource takes it for (@a centre: the source inside the
+    /// surface at a voxel's centre, e.g. SourceField's; f its volume fraction).
+    void skinAtCentres(std::vector<openvdb::Vec3f>& values, const std::function<openvdb::Vec3f(const openvdb::Coord&)>& centre) const;
 
     /// The surface's skin: voxels whose centre lies within half a voxel of it, either side
     /// (Medium::Sampler::skinPoint). The gathers give them the fluence at their nearest surface

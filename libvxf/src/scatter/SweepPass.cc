@@ -5,11 +5,15 @@
 #include <vxf/core/Hash.h>
 #include <vxf/core/RandomRotation.h>
 #include <vxf/core/SphericalFibonacci.h>
+#include <vxf/scatter/SourceField.h>
 
 #include <openvdb/math/Mat3.h>
 
+#include <tbb/enumerable_thread_specific.h>
+
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace vxf {
 
@@ -55,7 +59,16 @@ openvdb::Vec3SGrid::Ptr sweepPass(const Medium& medium, const openvdb::Vec3SGrid
     std::vector<openvdb::Vec3f> fluence(lattice.voxelCount(), openvdb::Vec3f(0.0f)), skin;
     if (options.directions >= 1) {
         const std::vector<openvdb::Vec3d> directions = sweepDirections(options.directions, options.rotationSeed);
-        lattice.sweep(lattice.sweepSource(lattice.read(source)), directions, 4.0 * M_PI / double(directions.size()), fluence, &skin,
+        std::vector<openvdb::Vec3f> j = lattice.read(source);
+        if (options.source == ScatterPassOptions::SourceRead::Continued && medium.surface()) {
+            // A pass's source holds the light on the surface at its skin (withSkin); the sweep
+            // steps from centre to centre. Without this, the second order came out 7% below
+            // the gather's on the thick bunny (the first 1.7%).
+            const SourceField field(medium, source, SourceField::Near::Lattice);
+            tbb::enumerable_thread_specific<SourceField::Sampler> samplers([&field] { return SourceField::Sampler(field); });
+            lattice.skinAtCentres(j, [&](const openvdb::Coord& c) { return openvdb::Vec3f(samplers.local().sample(c.asVec3d())); });
+        }
+        lattice.sweep(lattice.sweepSource(std::move(j)), directions, 4.0 * M_PI / double(directions.size()), fluence, &skin,
             interrupter);
     }
     auto grid = lattice.write(lattice.withSkin(fluence, skin), source);
