@@ -1,6 +1,9 @@
 #include <vxf/scatter/SweepSolve.h>
 
+#include <vxf/core/ProceduralMesh.h>
+#include <vxf/light/DirectLight.h>
 #include <vxf/light/Medium.h>
+#include <vxf/voxelize/Voxelize.h>
 
 #include "TestSupport.h"
 
@@ -118,4 +121,32 @@ TEST_CASE("where voxels are optically thin the diffusion correction runs on coar
     INFO("sweeps: coarse " << coarse.iterations.size() << ", fine " << fine.iterations.size());
     CHECK(coarse.iterations.size() <= fine.iterations.size() + 2);
     CHECK(relativeL1(*coarseSum, *fineSum) < 1e-3);
+}
+
+TEST_CASE("a diffusion correction that stalls in voxels thicker than a mean free path is halved, not dropped", "[sweep][dsa]")
+{
+    // The stability suite's sphere: dim 48, σt 50 (2 mean free paths per voxel), albedo 0.999,
+    // a point light above. The whole correction stalls at a change of about 1% by sweep 9;
+    // dropped there, plain iteration stopped two sweeps later on a false rate.
+    vxf::VoxelizeOptions voxelize;
+    voxelize.dim = 48;
+    vxf::VoxelSet set = vxf::voxelize(vxf::makeSphere(openvdb::Vec3d(0.0), 1.0, 64, 128), voxelize);
+    const vxf::Material m = vxf::test::albedoMaterial(50.0, 0.999);
+    const vxf::Medium medium(set, m);
+    vxf::Light light;
+    light.type = vxf::Light::Type::Point;
+    light.position = openvdb::Vec3d(0, 0, 3);
+    vxf::computeDirectLight(set, medium, {light});
+    vxf::SweepSolveOptions options;
+    options.directions = 16;
+    options.tolerance = 1e-3;
+    vxf::SweepSolveReport report;
+    const auto sum = vxf::sweepSolve(medium, *set.get<openvdb::Vec3SGrid>("scatter_source"), options, report);
+    INFO(report.stopReason);
+    CHECK(report.converged);
+    CHECK(report.accelerated);
+    CHECK(report.iterations.size() <= 20);
+    CHECK(report.stopReason.find("halved") != std::string::npos);
+    CHECK(report.iterations.back().ratio < 0.7); // converging, not a transient
+    for (auto it = sum->cbeginValueOn(); it; ++it) REQUIRE(std::isfinite((*it).x()));
 }

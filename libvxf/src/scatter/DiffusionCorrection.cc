@@ -189,14 +189,14 @@ DiffusionCorrection::Solve DiffusionCorrection::solve(const std::vector<openvdb:
     return result;
 }
 
-void DiffusionCorrection::addTo(std::vector<openvdb::Vec3f>& values) const
+void DiffusionCorrection::addTo(std::vector<openvdb::Vec3f>& values, double weight) const
 {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mVoxels.size()), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t i = r.begin(); i != r.end(); ++i) {
             const std::uint32_t v = mVoxels[i];
             const std::size_t c = std::size_t(mCellOf[v]);
             for (int ch = 0; ch < 3; ++ch) {
-                if (mSolution[ch].size() > c) values[v][ch] += float(mSolution[ch][c]);
+                if (mSolution[ch].size() > c) values[v][ch] += float(weight * mSolution[ch][c]);
             }
         }
     });

@@ -64,8 +64,8 @@ public:
     /// shrank; 0, or before the first solve: from 0).
     Solve solve(const std::vector<openvdb::Vec3f>& change, double guessScale, double tolerance, int maxIterations);
 
-    /// @a values (per voxel) += the last solution δ, each voxel of the domain its cell's.
-    void addTo(std::vector<openvdb::Vec3f>& values) const;
+    /// @a values (per voxel) += @a weight × the last solution δ, each voxel of the domain its cell's.
+    void addTo(std::vector<openvdb::Vec3f>& values, double weight = 1.0) const;
 
 private:
     using Matrix = openvdb::math::pcg::SparseStencilMatrix<double, 7>;

@@ -225,6 +225,15 @@ SweepLattice::SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topol
     });
     mSigmaT = padded(inside);
     mDistance = padded(distance);
+    // Leaves whose padded block lies wholly inside the surface (or without one): a sweep there
+    // needs no cut of its steps and holds no skin voxel.
+    mDeep.assign(mOrigins.size(), 0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mOrigins.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t n = r.begin(); n != r.end(); ++n) {
+            const float* d = &mDistance[n * kPaddedVoxels];
+            mDeep[n] = std::all_of(d, d + kPaddedVoxels, [](float v) { return v < -0.5f; }) ? 1 : 0;
+        }
+    });
     mSkinIndex.assign(surface ? voxelCount() : 0, -1);
     for (std::size_t i = 0; i < skin.size(); ++i) {
         if (!skin[i]) continue;
@@ -394,21 +403,25 @@ void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::v
             openvdb::Vec3f* out = &psi[n * kLeafVoxels];
             openvdb::Vec3f* phi = &fluence[n * kLeafVoxels];
             const int p = paddedIndex(x, y, z);
+            const bool deep = mDeep[n] != 0; // no surface within reach: every step whole, no skin
             openvdb::Vec3f psiIn(0.0f), jIn(0.0f), stIn(0.0f);
-            float dIn = 0.0f;
+            float dIn = -1.0f;
             bool uniform = true; // σt the same upwind as here: then exactly so, and the step's weights repeat
             for (int i = 0; i < 4; ++i) {
                 psiIn += wt[i] * buffer[p + off[i]];
                 jIn += wt[i] * j[p + off[i]];
                 stIn += wt[i] * st[p + off[i]];
-                dIn += wt[i] * distance[p + off[i]];
                 uniform = uniform && st[p + off[i]] == st[p];
+            }
+            if (!deep) {
+                dIn = 0.0f;
+                for (int i = 0; i < 4; ++i) dIn += wt[i] * distance[p + off[i]];
             }
             if (uniform) stIn = st[p];
             // The step's part inside the surface (signed distance linear along it):
             // all of it, none, or the part next to the end inside, whose σt and J
             // then hold over that part.
-            const InsidePart part = insidePart(dIn, distance[p]);
+            const InsidePart part = deep ? InsidePart{} : insidePart(dIn, distance[p]);
             const double inside = part.fraction;
             openvdb::Vec3f sigmaStart = stIn, sigmaEnd = st[p], jStart = jIn, jEnd = j[p];
             if (part.endOutside) {
@@ -457,7 +470,7 @@ void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::v
             const int v = localIndex(x, y, z);
             out[v] = result;
             phi[v] += w * result;
-            const std::int32_t s = skins ? mSkinIndex[n * kLeafVoxels + v] : -1;
+            const std::int32_t s = skins && !deep ? mSkinIndex[n * kLeafVoxels + v] : -1;
             if (s >= 0) {
                 // On from the centre to the surface along ω, if ω leaves it.
                 const Skin& k = mSkin[std::size_t(s)];

@@ -150,6 +150,7 @@ private:
     std::array<std::vector<std::size_t>, 8> mWavefronts; ///< start of each wavefront in mOrder, then its end
     std::vector<openvdb::Vec3f> mSigmaT;      ///< padded, inside the surface (σt/f)
     std::vector<float> mDistance;             ///< padded, signed distance to the surface (voxels; −1 without one)
+    std::vector<std::uint8_t> mDeep;          ///< per leaf: its padded block more than half a voxel inside the surface
     std::vector<float> mInterior;             ///< per voxel, 1/f
     std::vector<openvdb::Vec3f> mSigmaTVoxel, mSigmaS;
     struct Skin
