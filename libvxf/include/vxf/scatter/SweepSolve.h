@@ -58,11 +58,15 @@ struct SweepSolveReport
 /// longer one scattering order: its φ_l is an estimate of the whole sum. Every channel stops
 /// together when the estimated error is within options.tolerance of the sum, or when the
 /// change itself is below it and stops falling (the floor of the diffusion solve). Should the
-/// correction make larger changes grow (ρ ≥ 1 after the third sweep), it is dropped and plain
-/// source iteration goes on (the report says so): the correction's diffusion is not the sweeps'
-/// discretisation (no consistent DSA), and in voxels many mean free paths thick (σt·dx ≫ 1: the
-/// stability suite's σt 1000 and 1e6 at 32 voxels per unit) it amplifies instead of damping. Output: a Vec3f grid named "scatter" on
-/// @a source's topology; finite. Results do not depend on the thread count.
+/// correction make larger changes grow (ρ ≥ 1 after the third sweep), it is halved if it had
+/// helped for five sweeps or more (voxels about two mean free paths thick: it overshoots), and
+/// dropped otherwise or when it grows again, plain source iteration going on (the report says
+/// which): the correction's diffusion is not the sweeps' discretisation (no consistent DSA),
+/// and in voxels many mean free paths thick (σt·dx ≫ 1: the stability suite's σt 1000 and 1e6
+/// at 32 voxels per unit) it amplifies instead of damping. The correction runs on cells of 2³
+/// or 4³ voxels where those stay within a mean free path (coarse-mesh DSA, see
+/// SweepSolveOptions::diffusionCoarsening). Output: a Vec3f grid named "scatter" on @a source's
+/// topology; finite. Results do not depend on the thread count.
 openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGrid& source, const SweepSolveOptions& options,
     SweepSolveReport& report, Interrupter* interrupter = nullptr);
 
