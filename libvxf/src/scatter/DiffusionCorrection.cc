@@ -47,12 +47,9 @@ DiffusionCorrection::DiffusionCorrection(const SweepLattice& lattice, int coarse
     };
     // Cells (blocks of mFactor³ voxels holding a voxel of the domain) in lattice order, and
     // each voxel's cell.
-    struct CoordHasher
-    {
-        std::size_t operator()(const openvdb::Coord& c) const { return std::size_t(coordKey(c)); }
-    };
-    std::unordered_map<openvdb::Coord, std::int32_t, CoordHasher> cellIndex;
+    std::unordered_map<openvdb::Coord, std::int32_t, CoordHash> cellIndex;
     std::vector<openvdb::Coord> cells;
+    std::vector<std::uint32_t> voxels; // the domain's, in lattice order
     mCellOf.assign(lattice.voxelCount(), -1);
     for (std::size_t n = 0; n < lattice.leafCount(); ++n) {
         for (int v = 0; v < L; ++v) {
@@ -62,18 +59,18 @@ DiffusionCorrection::DiffusionCorrection(const SweepLattice& lattice, int coarse
             const auto [it, added] = cellIndex.emplace(cell, std::int32_t(cells.size()));
             if (added) cells.push_back(cell);
             mCellOf[n * L + v] = it->second;
-            mVoxels.push_back(std::uint32_t(n * L + v));
+            voxels.push_back(std::uint32_t(n * L + v));
         }
     }
     if (cells.empty()) return;
     // Each cell's voxels, contiguous: mMembers[mStart[c] .. mStart[c + 1]).
     mStart.assign(cells.size() + 1, 0);
-    for (const std::uint32_t v : mVoxels) ++mStart[std::size_t(mCellOf[v]) + 1];
+    for (const std::uint32_t v : voxels) ++mStart[std::size_t(mCellOf[v]) + 1];
     for (std::size_t c = 0; c < cells.size(); ++c) mStart[c + 1] += mStart[c];
-    mMembers.resize(mVoxels.size());
+    mMembers.resize(voxels.size());
     {
         std::vector<std::uint32_t> next(mStart.begin(), mStart.end() - 1);
-        for (const std::uint32_t v : mVoxels) mMembers[next[std::size_t(mCellOf[v])]++] = v;
+        for (const std::uint32_t v : voxels) mMembers[next[std::size_t(mCellOf[v])]++] = v;
     }
     // A cell's coefficients: the means over its voxels of the domain.
     std::vector<openvdb::Vec3d> cellSigmaT(cells.size(), openvdb::Vec3d(0.0)), cellSigmaA(cells.size(), openvdb::Vec3d(0.0));
@@ -94,8 +91,8 @@ DiffusionCorrection::DiffusionCorrection(const SweepLattice& lattice, int coarse
         for (int other = 0; other < ch && mChannels[ch].same < 0; ++other) {
             if (mChannels[other].same >= 0) continue;
             bool equal = true;
-            for (std::size_t i = 0; i < mVoxels.size() && equal; ++i) {
-                const std::size_t v = mVoxels[i];
+            for (std::size_t i = 0; i < mMembers.size() && equal; ++i) {
+                const std::size_t v = mMembers[i];
                 equal = sigmaT[v][ch] == sigmaT[v][other] && sigmaS[v][ch] == sigmaS[v][other];
             }
             if (equal) mChannels[ch].same = other;
@@ -133,7 +130,7 @@ DiffusionCorrection::Solve DiffusionCorrection::solve(const std::vector<openvdb:
     int maxIterations)
 {
     Solve result;
-    if (mVoxels.empty()) return result;
+    if (mMembers.empty()) return result;
     const double h = mLattice.voxelSize() * mFactor;
     const std::vector<openvdb::Vec3f>& sigmaS = mLattice.sigmaS();
     const std::size_t cells = size();
@@ -148,8 +145,8 @@ DiffusionCorrection::Solve DiffusionCorrection::solve(const std::vector<openvdb:
             const int otherSource = mChannels[other].same >= 0 ? mChannels[other].same : other;
             if (otherSource != source) continue;
             bool equal = true;
-            for (std::size_t i = 0; i < mVoxels.size() && equal; ++i) {
-                const std::size_t v = mVoxels[i];
+            for (std::size_t i = 0; i < mMembers.size() && equal; ++i) {
+                const std::size_t v = mMembers[i];
                 equal = change[v][ch] == change[v][other] && sigmaS[v][ch] == sigmaS[v][other];
             }
             if (equal) solvedAs = other;
@@ -191,9 +188,9 @@ DiffusionCorrection::Solve DiffusionCorrection::solve(const std::vector<openvdb:
 
 void DiffusionCorrection::addTo(std::vector<openvdb::Vec3f>& values, double weight) const
 {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mVoxels.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mMembers.size()), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t i = r.begin(); i != r.end(); ++i) {
-            const std::uint32_t v = mVoxels[i];
+            const std::uint32_t v = mMembers[i];
             const std::size_t c = std::size_t(mCellOf[v]);
             for (int ch = 0; ch < 3; ++ch) {
                 if (mSolution[ch].size() > c) values[v][ch] += float(weight * mSolution[ch][c]);

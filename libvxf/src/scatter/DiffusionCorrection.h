@@ -77,10 +77,9 @@ private:
     };
     const SweepLattice& mLattice;
     int mFactor = 1;
-    std::vector<std::uint32_t> mVoxels;  ///< the domain's voxels (per-voxel indices), in lattice order
     std::vector<std::int32_t> mCellOf;   ///< per voxel, its cell (−1: not in the domain)
     std::vector<std::uint32_t> mStart;   ///< cell c's voxels: mMembers[mStart[c] … mStart[c + 1])
-    std::vector<std::uint32_t> mMembers;
+    std::vector<std::uint32_t> mMembers; ///< the domain's voxels (per-voxel indices), cell by cell
     Channel mChannels[3];
     std::vector<double> mSolution[3]; ///< per channel, δ per cell (empty: none yet)
 };

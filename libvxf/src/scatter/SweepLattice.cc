@@ -145,8 +145,6 @@ inline InsidePart insidePart(float dStart, float dEnd)
 
 } // namespace
 
-std::size_t SweepLattice::CoordHasher::operator()(const openvdb::Coord& c) const { return std::size_t(coordKey(c)); }
-
 SweepLattice::SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topology)
     : mVoxelSize(medium.voxelSize())
 {
@@ -317,9 +315,9 @@ template std::vector<openvdb::Vec3f> SweepLattice::padded(const std::vector<open
 openvdb::Vec3SGrid::Ptr SweepLattice::write(const std::vector<openvdb::Vec3f>& values, const openvdb::Vec3SGrid& topology) const
 {
     const auto valueAt = [&](const openvdb::Coord& c) {
-        const auto found = mLeafIndex.find(c & ~7);
-        if (found == mLeafIndex.end()) return openvdb::Vec3f(0.0f);
-        const openvdb::Vec3f v = values[std::size_t(found->second) * kLeafVoxels + localIndex(c[0] & 7, c[1] & 7, c[2] & 7)];
+        const std::int64_t i = indexOf(c);
+        if (i < 0) return openvdb::Vec3f(0.0f);
+        const openvdb::Vec3f v = values[std::size_t(i)];
         return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]) ? v : openvdb::Vec3f(0.0f);
     };
 
@@ -350,7 +348,7 @@ openvdb::Vec3SGrid::Ptr SweepLattice::write(const std::vector<openvdb::Vec3f>& v
 }
 
 template <typename Visit>
-void SweepLattice::inUpwindOrder(const openvdb::Vec3d& omega, std::vector<openvdb::Vec3f>& values, const Visit& visit) const
+void SweepLattice::inUpwindOrder(const openvdb::Vec3d& omega, const std::vector<openvdb::Vec3f>& values, const Visit& visit) const
 {
     const int octant = octantOf(omega);
     int sign[3];

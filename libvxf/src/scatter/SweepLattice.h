@@ -1,6 +1,7 @@
 // vxf — the voxels a transport sweep runs over, as flat per-leaf arrays (private to libvxf).
 #pragma once
 
+#include <vxf/core/Hash.h>
 #include <vxf/core/Interrupter.h>
 #include <vxf/light/Medium.h>
 
@@ -134,15 +135,11 @@ private:
     /// its voxels in upwind order, which writes the voxel's own value to the buffer and to
     /// @a values.
     template <typename Visit>
-    void inUpwindOrder(const openvdb::Vec3d& omega, std::vector<openvdb::Vec3f>& values, const Visit& visit) const;
+    void inUpwindOrder(const openvdb::Vec3d& omega, const std::vector<openvdb::Vec3f>& values, const Visit& visit) const;
 
-    struct CoordHasher
-    {
-        std::size_t operator()(const openvdb::Coord& c) const;
-    };
     double mVoxelSize = 1.0;
     std::vector<openvdb::Coord> mOrigins;
-    std::unordered_map<openvdb::Coord, std::int32_t, CoordHasher> mLeafIndex; ///< leaf origin → n
+    std::unordered_map<openvdb::Coord, std::int32_t, CoordHash> mLeafIndex; ///< leaf origin → n
     std::vector<std::int32_t> mNeighbours; ///< 27 per leaf
     /// Per octant (bit a set: direction negative along axis a), the leaves in upwind order,
     /// cut into wavefronts: leaves of one wavefront depend on none of each other.

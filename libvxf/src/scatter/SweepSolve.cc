@@ -85,7 +85,7 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
     bool corrected = false; // the last sweep added the diffusion correction (it holds it)
     double previousChange = 0.0;
     double previousMoved = 0.0; // |φ_{l+½} − φ_l|₁ of the last accelerated sweep, largest channel
-    std::string dropped; // why the correction was dropped, if it was
+    std::string correctionNote; // whether and why the correction was halved or dropped
     bool accelerate = options.accelerate;
     double damping = 1.0; // of the correction: kDampedCorrection once it stalled
     for (int l = 1; l <= std::max(options.maxSweeps, 1); ++l) {
@@ -147,14 +147,14 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
         }
         if (l >= 2 && it.ratio < 1.0 && it.error <= options.tolerance) {
             report.converged = true;
-            report.stopReason = dropped + fmt::format("converged in {} sweeps (estimated error {:.2g} of the sum, rate {:.3f})", l, it.error, it.ratio);
+            report.stopReason = correctionNote + fmt::format("converged in {} sweeps (estimated error {:.2g} of the sum, rate {:.3f})", l, it.error, it.ratio);
             break;
         }
         if (l >= 3 && it.ratio >= 1.0 && it.change <= options.tolerance) {
             // The changes stopped falling below the tolerance: the floor the diffusion solve's
             // own residual (1e-2 of each change) leaves, not a divergence.
             report.converged = true;
-            report.stopReason = dropped + fmt::format("converged in {} sweeps (the change {:.2g} of the sum, below the tolerance, "
+            report.stopReason = correctionNote + fmt::format("converged in {} sweeps (the change {:.2g} of the sum, below the tolerance, "
                 "stopped falling)", l, it.change);
             break;
         }
@@ -165,17 +165,17 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
             // it is dropped: plain source iteration from here.
             if (damping == 1.0 && l >= kDampAfter) {
                 damping = kDampedCorrection;
-                dropped = fmt::format("the diffusion correction stalled at sweep {} (rate {:.3f}) and was halved; ", l, it.ratio);
+                correctionNote = fmt::format("the diffusion correction stalled at sweep {} (rate {:.3f}) and was halved; ", l, it.ratio);
             } else {
                 accelerate = false;
                 report.accelerated = false;
-                dropped += fmt::format("{} diverged at sweep {} (rate {:.3f}) and was dropped; ", dropped.empty() ? "the diffusion correction" : "it",
+                correctionNote += fmt::format("{} diverged at sweep {} (rate {:.3f}) and was dropped; ", correctionNote.empty() ? "the diffusion correction" : "it",
                     l, it.ratio);
             }
         }
     }
     if (!report.converged) {
-        report.stopReason = dropped + fmt::format("stopped after {} sweeps, estimated error {:.2g} of the sum", report.iterations.size(),
+        report.stopReason = correctionNote + fmt::format("stopped after {} sweeps, estimated error {:.2g} of the sum", report.iterations.size(),
             report.iterations.empty() ? 0.0 : report.iterations.back().error);
     }
     // The skin voxels hold the fluence on the surface, as the gathers give it.

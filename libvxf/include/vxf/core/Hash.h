@@ -1,7 +1,7 @@
 // vxf — deterministic hashing for sample jitter (results never depend on threads or runs).
 #pragma once
 
-#include <openvdb/math/Coord.h>
+#include <openvdb/Types.h>
 
 #include <cstdint>
 
@@ -22,6 +22,12 @@ inline std::uint64_t coordKey(const openvdb::Coord& c)
     return mixBits(std::uint64_t(std::uint32_t(c[0])) ^ mixBits(std::uint64_t(std::uint32_t(c[1])) ^
                                                                 mixBits(std::uint64_t(std::uint32_t(c[2])))));
 }
+
+/// coordKey as a hash function object, for unordered containers keyed by coordinates.
+struct CoordHash
+{
+    std::size_t operator()(const openvdb::Coord& c) const { return std::size_t(coordKey(c)); }
+};
 
 /// A number in [0, 1) determined by (@a key, @a index, @a salt).
 inline double unitHash(std::uint64_t key, std::uint64_t index, std::uint64_t salt = 0)
