@@ -106,7 +106,7 @@ public:
     {
         mApp = parent.add_subcommand("voxelize", "Voxelize a mesh into `surface` (level set) and `density` (fog volume).");
         mApp->add_option("mesh", mRequest.mesh,
-               "Mesh file (.obj .ply .off .stl) or a built-in mesh: builtin:candle, builtin:sphere, builtin:box")
+               "Mesh file (.obj .ply .off .stl) or a built-in mesh: builtin:candle, builtin:flame, builtin:sphere, builtin:box")
             ->required();
         mApp->add_option("-o,--output", mRequest.output, "Output .vdb file")->required();
         auto* size = mApp->add_option("--voxel-size", mRequest.voxelize.voxelSize, "Voxel size in world units")

@@ -1,6 +1,7 @@
 // The real binaries on real files, as a user runs them.
 #include "TestSupport.h"
 
+#include <vxf/io/ImageFile.h>
 #include <vxf/io/VoxelSetFile.h>
 
 #include <OpenEXR/ImfChannelList.h>
@@ -14,6 +15,7 @@
 #include <valijson/schema_parser.hpp>
 #include <valijson/validator.hpp>
 
+#include <algorithm>
 #include <filesystem>
 
 using vxf::test::binary;
@@ -306,6 +308,16 @@ TEST_CASE("vxf demo runs the main job on the embedded scene", "[cli][demo]")
     }
     CHECK(fs::file_size(dir.path("out/demo.exr")) > 0);
     CHECK(slurp(dir.path("out/demo.png")).substr(1, 3) == "PNG");
+    // The flame shows: the brightest pixel is its emission (3, 1.7, 0.55), above the candle
+    // (its top at row 8 of 36), on the centre line.
+    const vxf::RgbImage image = vxf::readExr(dir.path("out/demo.exr"));
+    const auto brightest = std::max_element(image.pixels.begin(), image.pixels.end(),
+        [](const openvdb::Vec3f& a, const openvdb::Vec3f& b) { return a.x() < b.x(); });
+    const std::ptrdiff_t at = brightest - image.pixels.begin();
+    CHECK(brightest->x() == Approx(3.0f));
+    CHECK(brightest->z() == Approx(0.55f));
+    CHECK(at / image.width < 8);
+    CHECK(std::abs(int(at % image.width) - image.width / 2) <= 1);
     // The embedded scene is examples/candle.json, and it is valid.
     CHECK(run(fmt::format("{} light {} --scene {} -o {} -q", binary("vxf"), dir.path("out/demo.vdb"),
               source("examples/candle.json"), dir.path("relit.vdb"))).status == 0);

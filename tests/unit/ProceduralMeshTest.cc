@@ -40,6 +40,16 @@ TEST_CASE("procedural meshes are closed, consistent and outward", "[core][mesh]"
     CHECK(closedAndConsistent(candle));
     CHECK(candle.volume() > 0.9 * M_PI * 3.0 * 0.95);
     CHECK(candle.volume() < M_PI * 3.0);
+
+    // The flame r(u) = k√u(1 − u)^1.2 holds π k² B(2, 3.4) = π k² / (3.4 · 4.4).
+    const auto flame = vxf::makeFlame();
+    CHECK(closedAndConsistent(flame));
+    const openvdb::BBoxd bounds = flame.bounds();
+    CHECK(bounds.min().z() == 0.0);
+    CHECK(bounds.max().z() == 1.0);
+    CHECK(bounds.max().x() == Approx(0.22).epsilon(0.01));
+    const double k = 0.22 / (std::sqrt(0.5 / 1.7) * std::pow(1.2 / 1.7, 1.2));
+    CHECK(flame.volume() == Approx(M_PI * k * k / (3.4 * 4.4)).epsilon(0.03));
 }
 
 TEST_CASE("built-in meshes are found by name", "[core][mesh]")

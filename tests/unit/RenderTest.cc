@@ -3,6 +3,7 @@
 #include <vxf/core/Hash.h>
 #include <vxf/core/ProceduralMesh.h>
 #include <vxf/io/ImageFile.h>
+#include <vxf/pipeline/SceneGeometry.h>
 #include <vxf/voxelize/Voxelize.h>
 
 #include "TestSupport.h"
@@ -254,6 +255,61 @@ TEST_CASE("surface term: Lambert + normalized Blinn-Phong in closed form, occlud
     const vxf::RenderedImage plain = vxf::render(set, medium, scene, options, {&visible, &occluders});
     CHECK(plain.combined[lit][0] == 0.0f);
     CHECK(plain.alpha[lit] == 1.0f);
+}
+
+TEST_CASE("an emitter is seen by its emission and casts no shadow; an occluder in its place does", "[render][rayscene]")
+{
+    // A wall (front face y = 1) lit by a point light inside a small emitting sphere between
+    // it and the camera: the sphere covers the centre pixel, the light reaches the wall
+    // through it. No medium object: camera rays meet only the two meshes.
+    vxf::VoxelSet set = litSphere(0.0);
+    const vxf::Medium medium(set, vxf::test::greyMaterial(0.0, 0.0));
+    const auto placed = [](const char* mesh, const openvdb::Vec3d& scale, const openvdb::Vec3d& at) {
+        vxf::SceneObject o;
+        o.mesh = mesh;
+        o.objectToWorld.setToScale(scale);
+        o.objectToWorld.postTranslate(at);
+        return o;
+    };
+    vxf::Scene scene = frontView();
+    vxf::SceneObject wall = placed("builtin:box", {1.5, 0.2, 1.5}, {0, 1.2, 0});
+    wall.role = vxf::SceneObject::Role::Occluder;
+    wall.surface.diffuse = openvdb::Vec3d(0.5);
+    vxf::SceneObject flame = placed("builtin:sphere", openvdb::Vec3d(0.3), {0, -1, 0});
+    flame.role = vxf::SceneObject::Role::Emitter;
+    flame.surface.emission = openvdb::Vec3d(3, 2, 1);
+    scene.objects = {wall, flame};
+    vxf::Light bulb;
+    bulb.position = openvdb::Vec3d(0, -1, 0);
+    bulb.intensity = 4.0;
+    scene.lights.push_back(bulb);
+
+    vxf::RenderOptions options;
+    options.width = options.height = 21;
+    options.samples = 1;
+    const auto rendered = [&](const vxf::Scene& s) {
+        const vxf::SceneRayScenes meshes = vxf::sceneRayScenes(s);
+        return vxf::render(set, medium, s, options, {&meshes.visible, &meshes.occluders, &meshes.media});
+    };
+    const vxf::RenderedImage image = rendered(scene);
+    const std::size_t centre = 10 * 21 + 10, behind = 10 * 21 + 14; // x = 0.57: the wall beside the sphere
+    CHECK(image.combined[centre] == openvdb::Vec3f(3, 2, 1));
+    CHECK(image.surface[centre] == openvdb::Vec3f(3, 2, 1));
+    CHECK(image.alpha[centre] == 1.0f);
+    CHECK(image.depth[centre] == Approx(5.0 - 1.3).epsilon(0.01));
+
+    // The wall behind sees the light as if the sphere were not there.
+    vxf::Scene bare = scene;
+    bare.objects.pop_back();
+    const vxf::RenderedImage without = rendered(bare);
+    CHECK(image.combined[behind][0] > 0.0f);
+    CHECK(image.combined[behind] == without.combined[behind]);
+    // The same sphere as an occluder shadows the wall and shows its emission.
+    vxf::Scene shut = scene;
+    shut.objects.back().role = vxf::SceneObject::Role::Occluder;
+    const vxf::RenderedImage shadowed = rendered(shut);
+    CHECK(shadowed.combined[behind] == openvdb::Vec3f(0.0f));
+    CHECK(shadowed.combined[centre] == openvdb::Vec3f(3, 2, 1));
 }
 
 TEST_CASE("direct from the lights: a thick sphere lit along the view gives sigma_s E / (8 pi sigma_t)", "[render]")

@@ -131,6 +131,11 @@ TEST_CASE("bad scenes are refused with the field at fault", "[pipeline][scene]")
           "/scenes/test.json: /camera/up: must not point along the view direction");
     CHECK(errorOf(edited(R"({"mesh": "builtin:box", "role": "occluder"})", R"({"mesh": "builtin:box"})")) ==
           "/scenes/test.json: /objects/1: a medium object needs a material (or set \"role\": \"occluder\")");
+    CHECK(errorOf(edited(R"({"mesh": "builtin:box", "role": "occluder"})", R"({"mesh": "builtin:flame", "role": "emitter"})")) ==
+          "/scenes/test.json: /objects/1/surface/emission: an emitter needs a non-zero emission");
+    CHECK(errorOf(edited(R"({"mesh": "builtin:box", "role": "occluder"})",
+              R"({"mesh": "builtin:box", "material": {"albedo": 0.5, "mean_free_path": 1}, "surface": {"emission": 2}})")) ==
+          "/scenes/test.json: /objects/1/surface/emission: only an occluder or an emitter emits (a medium's glow is a volume light)");
     CHECK(errorOf(edited(R"("cone_softness": 5)", R"("cone_softness": 25)")) ==
           "/scenes/test.json: /lights/1/cone_softness: the soft edge (25 degrees) must fit inside half the cone (20 degrees)");
     CHECK_THROWS_WITH(vxf::loadScene("/nonexistent/scene.json"), "/nonexistent/scene.json: cannot open scene file");

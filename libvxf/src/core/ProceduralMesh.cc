@@ -119,15 +119,32 @@ TriangleMesh makeCandle(int segments)
     return makeRevolution(profile, segments);
 }
 
+TriangleMesh makeFlame(int segments)
+{
+    // r(u) = k·√u·(1 − u)^1.2 for height u: round at the base, widest (0.22) at u = 0.29,
+    // drawn out to a point at the tip.
+    const int rings = 24;
+    const double k = 0.22 / (std::sqrt(0.5 / 1.7) * std::pow(1.2 / 1.7, 1.2));
+    std::vector<openvdb::Vec2d> profile;
+    for (int i = 0; i <= rings; ++i) {
+        const double u = double(i) / rings;
+        const double s = u * u * (3.0 - 2.0 * u); // rings closer at both ends, where r turns fastest
+        profile.emplace_back(k * std::sqrt(s) * std::pow(1.0 - s, 1.2), s);
+    }
+    profile.front()[0] = profile.back()[0] = 0.0;
+    return makeRevolution(profile, segments);
+}
+
 const std::vector<std::string>& builtinMeshNames()
 {
-    static const std::vector<std::string> names = {"builtin:candle", "builtin:sphere", "builtin:box"};
+    static const std::vector<std::string> names = {"builtin:candle", "builtin:flame", "builtin:sphere", "builtin:box"};
     return names;
 }
 
 std::optional<TriangleMesh> builtinMesh(const std::string& name)
 {
     if (name == "builtin:candle") return makeCandle();
+    if (name == "builtin:flame") return makeFlame();
     if (name == "builtin:sphere") return makeSphere(openvdb::Vec3d(0.0), 1.0);
     if (name == "builtin:box") return makeBox(openvdb::Vec3d(-1.0), openvdb::Vec3d(1.0));
     return std::nullopt;

@@ -183,7 +183,10 @@ Scene parseScene(const std::string& text, const std::string& path)
         object.name = o.value("name", fmt::format("object{}", i));
         object.mesh = reader.resolvePath(o["mesh"].get<std::string>());
         object.objectToWorld = o.contains("transform") ? reader.transform(o["transform"]) : openvdb::Mat4d::identity();
-        object.role = o.value("role", std::string("medium")) == "occluder" ? SceneObject::Role::Occluder : SceneObject::Role::Medium;
+        const std::string role = o.value("role", std::string("medium"));
+        object.role = role == "occluder" ? SceneObject::Role::Occluder
+            : role == "emitter"          ? SceneObject::Role::Emitter
+                                         : SceneObject::Role::Medium;
         if (o.contains("material")) object.material = reader.material(o["material"], where + "/material");
         if (object.role == SceneObject::Role::Medium && !object.material) {
             reader.fail(where, "a medium object needs a material (or set \"role\": \"occluder\")");
@@ -194,6 +197,13 @@ Scene parseScene(const std::string& text, const std::string& path)
             if (f.contains("diffuse")) object.surface.diffuse = reader.rgb(f["diffuse"]);
             if (f.contains("specular")) object.surface.specular = reader.rgb(f["specular"]);
             object.surface.shininess = f.value("shininess", object.surface.shininess);
+            if (f.contains("emission")) object.surface.emission = reader.rgb(f["emission"]);
+        }
+        if (object.role == SceneObject::Role::Medium && object.surface.emission != openvdb::Vec3d(0.0)) {
+            reader.fail(where + "/surface/emission", "only an occluder or an emitter emits (a medium's glow is a volume light)");
+        }
+        if (object.role == SceneObject::Role::Emitter && object.surface.emission == openvdb::Vec3d(0.0)) {
+            reader.fail(where + "/surface/emission", "an emitter needs a non-zero emission");
         }
         scene.objects.push_back(std::move(object));
     }

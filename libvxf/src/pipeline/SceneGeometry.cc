@@ -43,7 +43,8 @@ SceneRayScenes sceneRayScenes(const Scene& scene)
         const SceneObject& object = scene.objects[i];
         const TriangleMesh mesh = objectMesh(object);
         g.visible.add(mesh, int(i));
-        (object.role == SceneObject::Role::Occluder ? g.occluders : g.media).add(mesh, int(i));
+        if (object.role == SceneObject::Role::Occluder) g.occluders.add(mesh, int(i));
+        if (object.role == SceneObject::Role::Medium) g.media.add(mesh, int(i)); // (emitters: seen, casting no shadows)
     }
     g.visible.commit();
     g.occluders.commit();

@@ -483,7 +483,7 @@ public:
         c.normal = hit->normal;
         c.surface = surfaceTerm(hit->object, hit->point, hit->normal, dir, key);
         c.combined = c.surface;
-        if (hit->object && hit->object->role == SceneObject::Role::Occluder) return c; // opaque
+        if (hit->object && hit->object->role != SceneObject::Role::Medium) return c; // opaque
         const VolumeTerm g = mOptions.gather ? gatherInward(*hit, key) : marchOn(*hit, dir, key);
         c.direct = g.direct;
         c.scatter = g.scatter;
@@ -532,8 +532,9 @@ private:
     openvdb::Vec3d surfaceTerm(const SceneObject* object, const openvdb::Vec3d& x, const openvdb::Vec3d& normal,
         const openvdb::Vec3d& dir, std::uint64_t key)
     {
-        if (mContext.surfaceLights.empty() || !object || !object->surface.reflects()) return openvdb::Vec3d(0.0);
-        return mShader.shade(object->surface, x, normal, -dir, key);
+        if (!object) return openvdb::Vec3d(0.0);
+        if (mContext.surfaceLights.empty() || !object->surface.reflects()) return object->surface.emission;
+        return object->surface.emission + mShader.shade(object->surface, x, normal, -dir, key);
     }
 
     /// View mode: the ray marches on through the medium, up to the first occluder behind.
@@ -546,7 +547,7 @@ private:
             double t = mEpsilon;
             while (auto h = mContext.meshes.visible->intersect(hit.point, dir, t)) {
                 const SceneObject& o = mContext.scene.objects[std::size_t(h->id)];
-                if (o.role == SceneObject::Role::Occluder) {
+                if (o.role != SceneObject::Role::Medium) { // opaque: an occluder or an emitter
                     behindDistance = h->distance;
                     out.behind = surfaceTerm(&o, hit.point + dir * h->distance, h->normal, dir, key);
                     break;

@@ -19,11 +19,15 @@ TriangleMesh makeBox(const openvdb::Vec3d& min, const openvdb::Vec3d& max);
 /// melt pool around the wick on top (world units); closed and outward-oriented.
 TriangleMesh makeCandle(int segments = 128);
 
+/// A candle flame: a teardrop about the z axis, base at the origin, tip at z = 1, 0.44 wide;
+/// closed and outward-oriented.
+TriangleMesh makeFlame(int segments = 64);
+
 /// Surface of revolution about the z axis of a profile of (radius, z) points that starts
 /// and ends on the axis (radius 0), in order from bottom to top. Closed and outward-oriented.
 TriangleMesh makeRevolution(const std::vector<openvdb::Vec2d>& profile, int segments);
 
-/// Names accepted where a mesh path is expected: "builtin:candle", "builtin:sphere"
+/// Names accepted where a mesh path is expected: "builtin:candle", "builtin:flame", "builtin:sphere"
 /// (radius 1 at the origin), "builtin:box" (the cube [-1,1]^3).
 const std::vector<std::string>& builtinMeshNames();
 

@@ -30,18 +30,22 @@ struct SurfaceShading
     openvdb::Vec3d diffuse{0.0};  ///< Lambert albedo
     openvdb::Vec3d specular{0.0}; ///< normalized Blinn-Phong: specular·(e+8)/(8π)·(n·h)^e
     double shininess = 64.0;      ///< e
+    openvdb::Vec3d emission{0.0}; ///< radiance emitted toward the camera (occluders and emitters)
     bool reflects() const { return diffuse != openvdb::Vec3d(0.0) || specular != openvdb::Vec3d(0.0); }
 };
 
 struct SceneObject
 {
-    enum class Role { Medium, Occluder };
+    /// Medium: its interior is the participating medium. Occluder: opaque, casts shadows.
+    /// Emitter: opaque to camera rays and seen by its emission, but casts no shadows (a light
+    /// of the scene stands for what it emits: a flame around a point light, a bulb).
+    enum class Role { Medium, Occluder, Emitter };
     std::string name;
     std::string mesh;              ///< resolved path (relative to the scene file) or builtin:NAME
     openvdb::Mat4d objectToWorld;  ///< scale, then rotate x, y, z (degrees), then translate
     Role role = Role::Medium;
     std::optional<Material> material; ///< present for media
-    SurfaceShading surface;           ///< diffuse 0.5 by default for occluders, 0 for media
+    SurfaceShading surface;           ///< diffuse 0.5 by default for occluders, 0 for media and emitters
 };
 
 struct Light

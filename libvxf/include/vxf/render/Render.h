@@ -77,10 +77,12 @@ struct RenderMeshes
 ///   their sum. σt constant over each step and J quadratic through its start, middle and end,
 ///   integrated exactly (emissionWeights); with a `surface` level set the medium ends sharply
 ///   at it (Medium::Sampler::interiorScale). L_behind is the first
-///   occluder behind (its surface term) or the background, and the march stops there. Gather
-///   mode: the average of such marches over a cosine-weighted hemisphere of directions into
-///   the volume, dropping those that leave it at once.
-/// Occluders show their surface term only. Missing rays see the background with alpha 0.
+///   occluder or emitter behind (its surface term) or the background, and the march stops
+///   there. Gather mode: the average of such marches over a cosine-weighted hemisphere of
+///   directions into the volume, dropping those that leave it at once.
+/// Occluders and emitters show their surface term only: their SurfaceShading::emission plus,
+/// where the surface reflects, the lit term above (the `surface` layer holds both; emission
+/// shows without options.surface too). Missing rays see the background with alpha 0.
 /// Parallel over rows; every pixel computed alone, so deterministic for any thread count.
 RenderedImage render(const VoxelSet& set, const Medium& medium, const Scene& scene, const RenderOptions& options,
     const RenderMeshes& meshes = {}, Interrupter* interrupter = nullptr);
