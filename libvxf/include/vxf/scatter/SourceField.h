@@ -48,7 +48,7 @@ namespace vxf {
 /// 1, 0.5 and 0.25 sees them, +1.5%, +2.9%, +4.6% at 0.78 mean free paths per voxel and +4.5%,
 /// +6.8%, +8.8% at 1.56 (the lattice alone: −4.8%, −7.1%, −8.7% and −14%, −17%, −17%). On the
 /// thick bunny the layers pay through the camera; in the passes they gained nothing at dim 96
-/// and lost at 48 and 64 against the lattice alone (docs/accuracy.md (h)), which the passes
+/// and lost at 48 and 64 against the lattice alone (docs/accuracy-notes.md (h)), which the passes
 /// read (Near::Lattice).
 ///
 /// Not for the lights' source J0: near a lit surface and at the terminator J0 varies within a
@@ -67,7 +67,7 @@ public:
         Layers,
         /// The lattice alone (its skin and outside voxels filled from the layers as above): the
         /// passes' gathers. On the thick bunny against the layers: dim 48 7.00% → 6.52%, dim 64
-        /// 4.02% → 3.73%, dim 96 1.83% → 1.81% (docs/accuracy.md (h), (i)), and no distance
+        /// 4.02% → 3.73%, dim 96 1.83% → 1.81% (docs/accuracy-notes.md (h), (i)), and no distance
         /// read per sample. On a flat face the second pass's skin then comes out up to 2.8% off a
         /// 1-D quadrature (0.25% with the layers), the next voxel 0.7%, deeper 0.5% (ScatterTest).
         Lattice
