@@ -1,5 +1,8 @@
 #include "TestSupport.h"
 
+#include <vxf/core/Error.h>
+#include <vxf/io/JsonDocument.h>
+
 #include <fmt/format.h>
 #include <openvdb/tools/Morphology.h>
 
@@ -31,6 +34,17 @@ std::string slurp(const std::string& path)
     std::stringstream buffer;
     buffer << in.rdbuf();
     return buffer.str();
+}
+
+std::string schemaErrors(const nlohmann::json& document, const std::string& schemaFile)
+{
+    const JsonSchema schema(nlohmann::json::parse(slurp(source(schemaFile))), schemaFile);
+    try {
+        schema.check(document, "document");
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return {};
 }
 
 void spit(const std::string& path, const std::string& text)

@@ -5,6 +5,7 @@
 #include <vxf/core/VoxelSet.h>
 #include <vxf/pipeline/Scene.h>
 
+#include <nlohmann/json.hpp>
 #include <openvdb/openvdb.h>
 
 #include <filesystem>
@@ -43,6 +44,10 @@ std::string source(const std::string& relative);
 
 /// Read a whole file.
 std::string slurp(const std::string& path);
+
+/// Why @a document fails the JSON Schema in the source tree's @a schemaFile (libvxf's
+/// JsonSchema message), or empty when it passes.
+std::string schemaErrors(const nlohmann::json& document, const std::string& schemaFile);
 
 /// Write a whole file.
 void spit(const std::string& path, const std::string& text);

@@ -6,10 +6,6 @@
 
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
-#include <valijson/adapters/nlohmann_json_adapter.hpp>
-#include <valijson/schema.hpp>
-#include <valijson/schema_parser.hpp>
-#include <valijson/validator.hpp>
 
 using vxf::test::TempDir;
 
@@ -51,25 +47,6 @@ nlohmann::json metadataAsJson(const openvdb::MetaMap& meta)
     return j;
 }
 
-bool validates(const nlohmann::json& document, const std::string& schemaFile, std::string& errors)
-{
-    const nlohmann::json schemaJson = nlohmann::json::parse(vxf::test::slurp(vxf::test::source(schemaFile)));
-    valijson::Schema schema;
-    valijson::SchemaParser parser;
-    valijson::adapters::NlohmannJsonAdapter schemaAdapter(schemaJson);
-    parser.populateSchema(schemaAdapter, schema);
-    valijson::Validator validator;
-    valijson::ValidationResults results;
-    valijson::adapters::NlohmannJsonAdapter target(document);
-    const bool ok = validator.validate(schema, target, &results);
-    valijson::ValidationResults::Error error;
-    while (results.popError(error)) {
-        for (const auto& part : error.context) errors += part;
-        errors += ": " + error.description + "\n";
-    }
-    return ok;
-}
-
 } // namespace
 
 TEST_CASE("voxel sets round-trip through .vdb files exactly", "[io][vdb]")
@@ -98,21 +75,18 @@ TEST_CASE("voxel sets round-trip through .vdb files exactly", "[io][vdb]")
     // The caller's grids were not touched by writing.
     CHECK_FALSE(set.find("density")->getMetadata<openvdb::StringMetadata>(vxf::kUnitsMetaKey));
 
-    std::string errors;
-    CHECK(validates(metadataAsJson(back.metadata()), "schemas/vxf-metadata.schema.json", errors));
-    INFO(errors);
+    CHECK(vxf::test::schemaErrors(metadataAsJson(back.metadata()), "schemas/vxf-metadata.schema.json") == "");
 }
 
 TEST_CASE("the metadata schema rejects what it should", "[io][vdb][schema]")
 {
-    std::string errors;
-    CHECK(validates({{"vxf:version", "0.1.0"}, {"vxf:stage", "voxelize"}, {"vxf:params", {{"command", "voxelize"}}}},
-        "schemas/vxf-metadata.schema.json", errors));
-    CHECK_FALSE(validates({{"vxf:version", "one"}, {"vxf:stage", "voxelize"}, {"vxf:params", nlohmann::json::object()}},
-        "schemas/vxf-metadata.schema.json", errors));
-    CHECK_FALSE(validates({{"vxf:version", "0.1.0"}, {"vxf:stage", "bake"}, {"vxf:params", nlohmann::json::object()}},
-        "schemas/vxf-metadata.schema.json", errors));
-    CHECK_FALSE(validates({{"vxf:version", "0.1.0"}}, "schemas/vxf-metadata.schema.json", errors));
+    const std::string schema = "schemas/vxf-metadata.schema.json";
+    CHECK(vxf::test::schemaErrors({{"vxf:version", "0.1.0"}, {"vxf:stage", "voxelize"}, {"vxf:params", {{"command", "voxelize"}}}}, schema) == "");
+    CHECK_THAT(vxf::test::schemaErrors({{"vxf:version", "one"}, {"vxf:stage", "voxelize"}, {"vxf:params", nlohmann::json::object()}}, schema),
+        Catch::StartsWith("document: /vxf:version: "));
+    CHECK_THAT(vxf::test::schemaErrors({{"vxf:version", "0.1.0"}, {"vxf:stage", "bake"}, {"vxf:params", nlohmann::json::object()}}, schema),
+        Catch::StartsWith("document: /vxf:stage: "));
+    CHECK_THAT(vxf::test::schemaErrors({{"vxf:version", "0.1.0"}}, schema), Catch::StartsWith("document: "));
 }
 
 TEST_CASE("grids vxf does not know pass through untouched", "[io][vdb]")

@@ -3,6 +3,7 @@
 #include <vxf/ops/Fill.h>
 
 #include "Dispatch.h"
+#include "Topology.h"
 
 #include <openvdb/tools/Morphology.h>
 #include <openvdb/tools/Prune.h>
@@ -89,13 +90,13 @@ void applyDifferenceSmoothed(openvdb::GridBase& a, const openvdb::GridBase& d, i
     if (radius < 1) return;
     auto edge = openvdb::BoolGrid::create(false);
     edge->setTransform(a.transform().copy());
-    d.apply<detail::TopologyGridTypes>([&](const auto& g) { edge->tree().topologyUnion(g.tree()); });
+    edge->tree().topologyUnion(*detail::activeTopology(d));
     openvdb::MaskTree edit;
     edit.topologyUnion(edge->tree());
     openvdb::tools::dilateActiveValues(edge->tree(), radius, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::EXPAND_TILES);
     edge->tree().topologyDifference(edit);
     // Recompute only the ring around the edit that A already has values for.
-    a.apply<detail::TopologyGridTypes>([&](const auto& g) { edge->tree().topologyIntersection(g.tree()); });
+    edge->tree().topologyIntersection(*detail::activeTopology(a));
     FillOptions options;
     options.region = edge.get();
     options.selection = edge.get();

@@ -12,9 +12,6 @@
 
 namespace vxf::ops::detail {
 
-/// Every grid type whose topology operators may read (not point grids).
-using TopologyGridTypes = openvdb::NumericGridTypes::Append<openvdb::Vec3GridTypes>::Append<openvdb::BoolGrid, openvdb::MaskGrid>;
-
 /// Call @a f with @a grid as FloatGrid& or Vec3SGrid&; vxf::UsageError for other types.
 template<typename GridBaseT, typename F>
 decltype(auto) dispatch(GridBaseT& grid, const char* op, F&& f)

@@ -1,6 +1,7 @@
 #include <vxf/ops/Fill.h>
 
 #include "Dispatch.h"
+#include "Topology.h"
 
 
 #include <vector>
@@ -21,8 +22,8 @@ openvdb::Index64 fill(openvdb::GridBase& grid, const FillOptions& options, Inter
         openvdb::MaskTree fixed;
         fixed.topologyUnion(g.tree());
         if (options.selection) fixed.topologyDifference(options.selection->tree());
-        openvdb::MaskTree free;
-        options.region->apply<detail::TopologyGridTypes>([&](const auto& r) { free.topologyUnion(r.tree()); });
+        const openvdb::MaskTree::Ptr regionTopology = detail::activeTopology(*options.region);
+        openvdb::MaskTree& free = *regionTopology;
         free.topologyDifference(fixed);
         free.voxelizeActiveTiles();
 

@@ -1,6 +1,7 @@
 #include <vxf/ops/Gradient.h>
 
 #include "Dispatch.h"
+#include "Topology.h"
 
 #include <openvdb/tools/Interpolation.h>
 
@@ -36,7 +37,7 @@ openvdb::Vec3SGrid::Ptr gradient(const openvdb::GridBase& topology, const openvd
     auto out = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
     out->setTransform(topology.transform().copy());
     out->setName("gradient");
-    topology.apply<detail::TopologyGridTypes>([&](const auto& g) { out->tree().topologyUnion(g.tree()); });
+    out->tree().topologyUnion(*detail::activeTopology(topology));
     const openvdb::math::Transform& xform = out->transform();
     // Thread-safe lookups: the surface is sampled through its tree (no shared accessor).
     const auto at = [&](const openvdb::Vec3d& world) {

@@ -1,6 +1,7 @@
 #include <vxf/ops/Select.h>
 
 #include "Dispatch.h"
+#include "Topology.h"
 
 #include <functional>
 
@@ -14,10 +15,9 @@ openvdb::BoolGrid::Ptr selectWhere(const openvdb::GridBase& grid, const std::fun
     auto mask = openvdb::BoolGrid::create(false);
     mask->setName("mask");
     mask->setTransform(grid.transform().copy());
-    openvdb::MaskTree topology;
-    grid.apply<detail::TopologyGridTypes>([&](const auto& g) { topology.topologyUnion(g.tree()); });
+    const openvdb::MaskTree::Ptr topology = detail::activeTopology(grid);
     auto out = mask->getAccessor();
-    for (auto it = topology.cbeginValueOn(); it; ++it) {
+    for (auto it = topology->cbeginValueOn(); it; ++it) {
         openvdb::CoordBBox box;
         it.getBoundingBox(box);
         for (auto c = box.begin(); c; ++c) {
@@ -59,16 +59,12 @@ openvdb::BoolGrid::Ptr selectRange(const openvdb::GridBase& grid, double lo, dou
 
 void removeActive(openvdb::GridBase& a, const openvdb::GridBase& b)
 {
-    openvdb::MaskTree other;
-    b.apply<detail::TopologyGridTypes>([&](const auto& g) { other.topologyUnion(g.tree()); });
-    a.apply<detail::TopologyGridTypes>([&](auto& g) { g.tree().topologyDifference(other); });
+    detail::subtractTopology(a, *detail::activeTopology(b));
 }
 
 void includeActive(openvdb::GridBase& a, const openvdb::GridBase& b)
 {
-    openvdb::MaskTree other;
-    b.apply<detail::TopologyGridTypes>([&](const auto& g) { other.topologyUnion(g.tree()); });
-    a.apply<detail::TopologyGridTypes>([&](auto& g) { g.tree().topologyUnion(other); });
+    detail::unionTopology(a, *detail::activeTopology(b));
 }
 
 } // namespace vxf::ops
