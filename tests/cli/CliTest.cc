@@ -279,6 +279,28 @@ TEST_CASE("vxf2vdb and vdb2vxf round-trip real files", "[cli][convert]")
     CHECK_FALSE(fs::exists(dir.path("n.vxf")));
 }
 
+TEST_CASE("vdb2vol writes one grid as Mitsuba's dense volume", "[cli][convert][mitsuba]")
+{
+    TempDir dir;
+    REQUIRE(run(fmt::format("{} voxelize builtin:box -o {} --dim 8 -q", binary("vxf"), dir.path("box.vdb"))).status == 0);
+    const auto result = run(fmt::format("{} {} {} --grid density --pad 0", binary("vdb2vol"), dir.path("box.vdb"), dir.path("box.vol")));
+    INFO(result.err);
+    REQUIRE(result.status == 0);
+    // The density's active bounding box: the box's 8 voxels across and the ones its surface cuts.
+    const auto set = vxf::readVoxelSet(dir.path("box.vdb"));
+    const openvdb::CoordBBox box = set.find("density")->evalActiveVoxelBoundingBox();
+    const openvdb::Coord size = box.dim();
+    CHECK(result.out.find(fmt::format("-> {}: {}x{}x{}, 1 channel(s)", dir.path("box.vol"), size.x(), size.y(), size.z())) != std::string::npos);
+    const std::string bytes = slurp(dir.path("box.vol"));
+    CHECK(bytes.substr(0, 3) == "VOL");
+    CHECK(bytes.size() == 48 + std::size_t(size.x()) * std::size_t(size.y()) * std::size_t(size.z()) * 4);
+
+    const auto badGrid = run(fmt::format("{} {} {} --grid nothing", binary("vdb2vol"), dir.path("box.vdb"), dir.path("n.vol")));
+    CHECK(badGrid.status == 2); // a usage error: the argument names no grid of the file
+    CHECK(badGrid.err == fmt::format("vdb2vol: {}: no grid named 'nothing'\n", dir.path("box.vdb")));
+    CHECK_FALSE(fs::exists(dir.path("n.vol")));
+}
+
 TEST_CASE("vxf demo runs the main job on the embedded scene", "[cli][demo]")
 {
     TempDir dir;
