@@ -279,6 +279,31 @@ TEST_CASE("vxf2vdb and vdb2vxf round-trip real files", "[cli][convert]")
     CHECK_FALSE(fs::exists(dir.path("n.vxf")));
 }
 
+TEST_CASE("SIGINT stops a long scatter: exit 130, the previous output intact, no temporary file left", "[cli][interrupt]")
+{
+    TempDir dir;
+    REQUIRE(run(fmt::format("{} voxelize builtin:sphere -o {} --dim 32 -q", binary("vxf"), dir.path("s.vdb"))).status == 0);
+    vxf::test::spit(dir.path("scene.json"), R"({
+  "objects": [{"mesh": "builtin:sphere", "material": {"albedo": 0.999, "mean_free_path": 0.05}}],
+  "lights": [{"type": "point", "position": [0, 0, 2], "intensity": 4}],
+  "camera": {"position": [0, -4, 0], "look_at": [0, 0, 0]}
+})");
+    REQUIRE(run(fmt::format("{} light {} --scene {} -o {} -q", binary("vxf"), dir.path("s.vdb"), dir.path("scene.json"), dir.path("l.vdb"))).status == 0);
+    fs::copy_file(dir.path("l.vdb"), dir.path("out.vdb")); // a previous result the interrupted run must not touch
+    const std::string before = slurp(dir.path("out.vdb"));
+    // Thousands of plain gather passes at albedo 0.999 (minutes), interrupted after a second.
+    const auto result = run(fmt::format("({} scatter {} -o {} --passes 5000 --tolerance 0 --directions 64 & pid=$!; sleep 1; "
+                                        "kill -INT $pid; wait $pid)",
+        binary("vxf"), dir.path("l.vdb"), dir.path("out.vdb")));
+    CHECK(result.status == 130);
+    CHECK(result.err.find("vxf: scatter: interrupted; no output written") != std::string::npos);
+    CHECK(slurp(dir.path("out.vdb")) == before);
+    std::vector<std::string> left;
+    for (const auto& entry : fs::directory_iterator(dir.root())) left.push_back(entry.path().filename().string());
+    std::sort(left.begin(), left.end());
+    CHECK(left == std::vector<std::string>{"l.vdb", "out.vdb", "s.vdb", "scene.json"});
+}
+
 TEST_CASE("vdb2vol writes one grid as Mitsuba's dense volume", "[cli][convert][mitsuba]")
 {
     TempDir dir;
