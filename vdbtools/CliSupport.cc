@@ -65,6 +65,9 @@ int runMain(CLI::App& app, int argc, char** argv, const std::function<void()>& r
     gTool = app.get_name();
     gCommand = gTool;
     std::signal(SIGINT, onSigint);
+    // Past a file size limit (ulimit -f) a write fails with EFBIG, reported as an error with
+    // the previous output intact, instead of killing the process beside a half-written file.
+    std::signal(SIGXFSZ, SIG_IGN);
     try {
         try {
             app.parse(argc, argv);

@@ -304,6 +304,17 @@ TEST_CASE("SIGINT stops a long scatter: exit 130, the previous output intact, no
     CHECK(left == std::vector<std::string>{"l.vdb", "out.vdb", "s.vdb", "scene.json"});
 }
 
+TEST_CASE("a write past the file size limit is an error that keeps the previous output", "[cli][interrupt]")
+{
+    TempDir dir;
+    vxf::test::spit(dir.path("out.vdb"), "the previous output");
+    const auto result = run(fmt::format("(ulimit -f 64; {} voxelize builtin:sphere -o {} --dim 64 -q)", binary("vxf"), dir.path("out.vdb")));
+    CHECK(result.status == 1);
+    CHECK(result.err == fmt::format("vxf: voxelize: {}: cannot write: File too large\n", dir.path("out.vdb")));
+    CHECK(slurp(dir.path("out.vdb")) == "the previous output");
+    CHECK(std::distance(fs::directory_iterator(dir.root()), fs::directory_iterator()) == 1); // no temporary file left
+}
+
 TEST_CASE("vdb2vol writes one grid as Mitsuba's dense volume", "[cli][convert][mitsuba]")
 {
     TempDir dir;

@@ -7,7 +7,10 @@
 
 #include <fmt/format.h>
 
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <mutex>
 
 namespace vxf {
@@ -60,6 +63,32 @@ VoxelSet readVoxelSet(const std::string& path)
     return set;
 }
 
+namespace {
+
+/// What io::File::write does (a seekable archive into a new file), with the stream's state
+/// checked: io::File ignores a failed write, so a full disk or a file size limit left a
+/// truncated file that read as written (`ulimit -f 64` gave a 64 KiB "voxel set" and exit 0).
+class CheckedArchive : public openvdb::io::Archive
+{
+public:
+    void writeFile(const std::string& file, const openvdb::GridCPtrVec& grids, const openvdb::MetaMap& metadata,
+        const std::string& target) const
+    {
+        std::ofstream out(file, std::ios::binary | std::ios::trunc);
+        if (!out) throw Error(fmt::format("{}: cannot write: {}", target, std::strerror(errno)));
+        errno = 0;
+        Archive::write(out, grids, /*seekable=*/true, metadata);
+        out.flush();
+        const int failure = errno;
+        out.close();
+        if (out.fail()) {
+            throw Error(fmt::format("{}: cannot write: {}", target, failure ? std::strerror(failure) : "the stream failed"));
+        }
+    }
+};
+
+} // namespace
+
 void writeVoxelSet(const std::string& path, const VoxelSet& set, const VoxelSetWriteOptions& options)
 {
     initializeOpenVDB();
@@ -80,15 +109,14 @@ void writeVoxelSet(const std::string& path, const VoxelSet& set, const VoxelSetW
 
     writeAtomically(path, [&](const std::string& tmpPath) {
         try {
-            openvdb::io::File file(tmpPath);
+            CheckedArchive archive;
             uint32_t compression = openvdb::io::COMPRESS_ACTIVE_MASK;
             if (options.compress) {
                 compression |= openvdb::io::Archive::hasBloscCompression() ? openvdb::io::COMPRESS_BLOSC
                                                                            : openvdb::io::COMPRESS_ZIP;
             }
-            file.setCompression(compression);
-            file.write(grids, metadata);
-            file.close();
+            archive.setCompression(compression);
+            archive.writeFile(tmpPath, grids, metadata, path);
         } catch (const openvdb::Exception& e) {
             throw Error(fmt::format("{}: cannot write: {}", path, e.what()));
         }
