@@ -313,6 +313,17 @@ TEST_CASE("a write past the file size limit is an error that keeps the previous 
     CHECK(result.err == fmt::format("vxf: voxelize: {}: cannot write: File too large\n", dir.path("out.vdb")));
     CHECK(slurp(dir.path("out.vdb")) == "the previous output");
     CHECK(std::distance(fs::directory_iterator(dir.root()), fs::directory_iterator()) == 1); // no temporary file left
+    // The converters' own writers (text VXF, Mitsuba's volume) too.
+    REQUIRE(run(fmt::format("{} voxelize builtin:sphere -o {} --dim 64 -q", binary("vxf"), dir.path("big.vdb"))).status == 0);
+    for (const auto& [tool, out] : {std::pair<std::string, std::string>{"vdb2vxf", "out.vxf"}, {"vdb2vol", "out.vol"}}) {
+        vxf::test::spit(dir.path(out), "the previous output");
+        const auto converted = run(fmt::format("(ulimit -f 16; {} {} {} --grid density)", binary(tool), dir.path("big.vdb"), dir.path(out)));
+        INFO(converted.err);
+        CHECK(converted.status == 1);
+        CHECK(converted.err.find(dir.path(out) + ": ") != std::string::npos);
+        CHECK(slurp(dir.path(out)) == "the previous output");
+    }
+    CHECK(std::distance(fs::directory_iterator(dir.root()), fs::directory_iterator()) == 4);
 }
 
 TEST_CASE("vdb2vol writes one grid as Mitsuba's dense volume", "[cli][convert][mitsuba]")

@@ -6,9 +6,11 @@
 
 #include <fmt/format.h>
 
+#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -544,13 +546,14 @@ VoxelSet readVxfText(const std::string& path, Interrupter* interrupter)
 
 namespace {
 
-/// Buffered output with shortest round-trip number formatting.
+/// Buffered output with shortest round-trip number formatting into @a file; errors name
+/// @a target, the file the user asked for (@a file is its temporary sibling).
 class TextSink
 {
 public:
-    explicit TextSink(const std::string& path) : mFile(std::fopen(path.c_str(), "wb")), mPath(path)
+    TextSink(const std::string& file, const std::string& target) : mFile(std::fopen(file.c_str(), "wb")), mPath(target)
     {
-        if (!mFile) throw Error(fmt::format("{}: cannot create", path));
+        if (!mFile) throw Error(fmt::format("{}: cannot write: {}", target, std::strerror(errno)));
         mBuffer.reserve(1 << 20);
     }
     ~TextSink()
@@ -573,7 +576,7 @@ public:
     void flush()
     {
         if (!mBuffer.empty() && std::fwrite(mBuffer.data(), 1, mBuffer.size(), mFile) != mBuffer.size()) {
-            throw Error(fmt::format("{}: write failed (disk full?)", mPath));
+            throw Error(fmt::format("{}: cannot write: {}", mPath, std::strerror(errno)));
         }
         mBuffer.clear();
     }
@@ -582,7 +585,7 @@ public:
         flush();
         const int rc = std::fclose(mFile);
         mFile = nullptr;
-        if (rc != 0) throw Error(fmt::format("{}: write failed (disk full?)", mPath));
+        if (rc != 0) throw Error(fmt::format("{}: cannot write: {}", mPath, std::strerror(errno)));
     }
 
 private:
@@ -753,7 +756,7 @@ std::vector<std::string> writeVxfText(const std::string& path, const VoxelSet& s
     }
 
     writeAtomically(path, [&](const std::string& tmpPath) {
-        TextSink out(tmpPath);
+        TextSink out(tmpPath, path);
         out.text(fmt::format("# text VXF voxel file written by vxf {} (spec: schemas/vxf-text.md)\nvxf 1\n", versionString()));
         out.text("size ");
         for (int a = 0; a < 3; ++a) {
