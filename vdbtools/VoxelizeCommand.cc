@@ -6,6 +6,7 @@
 #include <vxf/core/ProceduralMesh.h>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <tbb/task_group.h>
 #include <nlohmann/json.hpp>
 
@@ -106,7 +107,7 @@ public:
     {
         mApp = parent.add_subcommand("voxelize", "Voxelize a mesh into `surface` (level set) and `density` (fog volume).");
         mApp->add_option("mesh", mRequest.mesh,
-               "Mesh file (.obj .ply .off .stl) or a built-in mesh: builtin:candle, builtin:flame, builtin:sphere, builtin:box")
+               fmt::format("Mesh file (.obj .ply .off .stl) or a built-in mesh: {}", fmt::join(builtinMeshNames(), ", ")))
             ->required();
         mApp->add_option("-o,--output", mRequest.output, "Output .vdb file")->required();
         auto* size = mApp->add_option("--voxel-size", mRequest.voxelize.voxelSize, "Voxel size in world units")

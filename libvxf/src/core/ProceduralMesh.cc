@@ -131,8 +131,7 @@ TriangleMesh makeFlame(int segments)
         const double s = u * u * (3.0 - 2.0 * u); // rings closer at both ends, where r turns fastest
         profile.emplace_back(k * std::sqrt(s) * std::pow(1.0 - s, 1.2), s);
     }
-    profile.front()[0] = profile.back()[0] = 0.0;
-    return makeRevolution(profile, segments);
+    return makeRevolution(profile, segments); // r is exactly 0 at u = 0 and 1: on the axis
 }
 
 const std::vector<std::string>& builtinMeshNames()

@@ -537,7 +537,7 @@ private:
         return object->surface.emission + mShader.shade(object->surface, x, normal, -dir, key);
     }
 
-    /// View mode: the ray marches on through the medium, up to the first occluder behind.
+    /// View mode: the ray marches on through the medium, up to the first occluder or emitter behind.
     VolumeTerm marchOn(const Hit& hit, const openvdb::Vec3d& dir, std::uint64_t key)
     {
         VolumeTerm out;
