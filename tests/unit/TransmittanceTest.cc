@@ -1,5 +1,7 @@
 #include <vxf/light/Transmittance.h>
 
+#include <vxf/light/UniformBricks.h>
+
 #include <vxf/core/ProceduralMesh.h>
 #include <vxf/core/RayScene.h>
 #include <vxf/io/VoxelSetFile.h>
@@ -247,6 +249,56 @@ TEST_CASE("thin sheets keep their optical depth", "[light][transmittance]")
                     CHECK(tau >= 0.95 * exact);
                     CHECK(tau <= exact + 0.5 * sigmaT * dx / c + 1e-6);
                 }
+            }
+        }
+    }
+}
+
+TEST_CASE("marches cross uniform regions in one go with the same optical depth", "[light][transmittance]")
+{
+    // A sphere 20 voxels in radius: inside its surface band the density is 1 in tiles, outside
+    // nothing. The same medium given as per-voxel sigma grids has no UniformBricks table, so its
+    // marches take every step: the two must agree to rounding along any ray.
+    const double radius = 1.0, dx = 0.05, sigmaA = 1.0, sigmaS = 3.0;
+    vxf::VoxelizeOptions options;
+    options.voxelSize = dx;
+    vxf::VoxelSet set = vxf::voxelize(vxf::makeSphere(openvdb::Vec3d(0.0), radius, 96, 192), options);
+    const vxf::Medium medium(set, vxf::test::greyMaterial(sigmaA, sigmaS));
+    const vxf::UniformBricks* uniform = medium.uniformBricks();
+    REQUIRE(uniform != nullptr);
+    CHECK(uniform->uniformBrickCount() > 0);
+    openvdb::Vec3d lo, hi;
+    float density = -1.0f;
+    CHECK(uniform->find(openvdb::Vec3d(0.3), lo, hi, density)); // the centre: inside
+    CHECK(density == 1.0f);
+    CHECK(uniform->find(openvdb::Vec3d(0.8 * radius / dx), lo, hi, density)); // the bounds' corner, beyond the surface: outside
+    CHECK(density == 0.0f);
+    CHECK_FALSE(uniform->find(openvdb::Vec3d(radius / dx, 0.2, 0.1), lo, hi, density)); // on it: neither
+
+    vxf::VoxelSet grids = set;
+    const auto& d = *set.get<openvdb::FloatGrid>("density");
+    for (const auto& [name, sigma] : {std::pair<const char*, double>{"sigma_a", sigmaA}, {"sigma_s", sigmaS}}) {
+        auto grid = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
+        grid->setName(name);
+        grid->setTransform(d.transformPtr()->copy());
+        grid->tree().topologyUnion(d.tree());
+        for (auto it = grid->tree().beginValueOn(); it; ++it) it.setValue(openvdb::Vec3f(float(sigma * d.tree().getValue(it.getCoord()))));
+        grids.put(grid);
+    }
+    const vxf::Medium stepped(grids, vxf::test::greyMaterial(0.0, 0.0));
+    REQUIRE(stepped.uniformBricks() == nullptr);
+    vxf::Medium::Sampler a(medium), b(stepped);
+    for (double step : {0.5, 1.0, 3.0}) {
+        for (const openvdb::Vec3d& direction : {openvdb::Vec3d(1, 0, 0), openvdb::Vec3d(1, 0.7, 0.4).unit(), openvdb::Vec3d(-0.2, 1, -0.9).unit()}) {
+            for (const auto& [from, to] : {std::pair{openvdb::Vec3d(0.013), direction * 2.0},           // centre to outside
+                                          std::pair{-direction * 2.0 + openvdb::Vec3d(0.1), direction * 2.0}, // a chord
+                                          std::pair{direction * 0.97, -direction * 0.5}}) {             // from under the surface inwards
+                const vxf::MarchOptions march{step, 0.0};
+                const double one = -std::log(vxf::transmittance(a, medium, from / dx, to / dx, march).x());
+                const double other = -std::log(vxf::transmittance(b, stepped, from / dx, to / dx, march).x());
+                INFO("step " << step << ", from " << from << " to " << to);
+                CHECK(one > 0.0);
+                CHECK(one == Approx(other).epsilon(1e-6));
             }
         }
     }

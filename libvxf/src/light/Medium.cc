@@ -1,5 +1,7 @@
 #include <vxf/light/Medium.h>
 
+#include <vxf/light/UniformBricks.h>
+
 #include <vxf/core/RayScene.h>
 
 #include <fmt/format.h>
@@ -90,6 +92,9 @@ Medium::Medium(const VoxelSet& set, const Material& material)
     // Trilinear lookups reach a voxel beyond the active voxels (marchBounds).
     mDensityDense = DenseCopy<openvdb::FloatGrid>::create(*mDensity, 2, kDenseCopyBytes);
     if (mSurface) mSurfaceDense = DenseCopy<openvdb::FloatGrid>::create(*mSurface, 2, kDenseCopyBytes);
+    if (!mSigmaA && !mSigmaS && mDensityDense) {
+        mUniform = std::make_shared<const UniformBricks>(mDensityDense.get(), mBounds, mSurfaceDense.get(), voxelSize(), bool(mSurface));
+    }
 }
 
 Medium::Sampler::Sampler(const Medium& medium)

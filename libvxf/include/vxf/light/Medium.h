@@ -10,6 +10,7 @@
 namespace vxf {
 
 class RayScene;
+class UniformBricks;
 
 /// The medium's coefficients (1/world unit, RGB) at any point, per DESIGN.md:
 /// σa(x) = density(x)·σa, σs(x) = density(x)·σs from the material, unless the voxel set
@@ -36,6 +37,9 @@ public:
     /// medium, and inside within a voxel of features too thin for it (about a voxel or less),
     /// whose voxels' volume fractions then carry the medium as without a surface.
     const openvdb::FloatGrid* surface() const { return mSurface.get(); }
+    /// Where the medium is uniform and wholly inside (marches cross those regions in one step),
+    /// or null: with per-voxel `sigma_a`/`sigma_s` grids, or no dense copy of the density.
+    const UniformBricks* uniformBricks() const { return mUniform.get(); }
 
     /// Per-thread trilinear lookups.
     class Sampler
@@ -138,6 +142,7 @@ private:
     openvdb::FloatGrid::ConstPtr mSurface;
     /// Dense copies of density and surface for the marches' lookups (null: too large, read the trees).
     std::shared_ptr<const DenseCopy<openvdb::FloatGrid>> mDensityDense, mSurfaceDense;
+    std::shared_ptr<const UniformBricks> mUniform;
     Material mMaterial;
     openvdb::CoordBBox mBounds;
 };

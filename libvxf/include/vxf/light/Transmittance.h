@@ -131,6 +131,18 @@ public:
         return true;
     }
 
+    /// Where the next step starts (the ray's parameter).
+    double t() const { return mT; }
+
+    /// Advance @a count whole steps without looking at them: for a caller that knows them all
+    /// inside the medium and alike (UniformBricks), and has counted them itself.
+    void skip(int count)
+    {
+        mT += count * mH;
+        mDistance = distanceAt(mT);
+        mReachedEnd = true;
+    }
+
 private:
     double distanceAt(double t) { return mSampler.signedDistance(mOrigin + mDirection * t); }
 

@@ -1,0 +1,67 @@
+// vxf — where a medium is uniform and wholly inside its surface, for marches to cross in one step.
+#pragma once
+
+#include <vxf/core/GridLookup.h>
+
+#include <openvdb/openvdb.h>
+
+#include <cstdint>
+#include <vector>
+
+namespace vxf {
+
+/// The bricks of 4³ voxels (and the blocks of 16³) over which a march's steps are all alike,
+/// so that a march crosses them in one go instead of a step at a time: the same sum to
+/// rounding, a fraction of the lookups. Two kinds:
+/// - inside: every voxel a step's lookups can read holds the same density and lies a voxel or
+///   more inside the surface, so that InsideSteps takes each step whole, finds no crossing to
+///   snap, and Medium::Sampler::interiorScale is 1 (all eight voxels whole). A voxelized mesh's
+///   interior is this (density 1, in tiles); without a surface, any run of equal density.
+/// - outside: every voxel lies a voxel or more outside the surface, so no step there has a part
+///   inside (InsideSteps counts nothing, whatever the density holds): density 0 for the march.
+///   The empty space around a medium, which light arriving from outside crosses to reach it.
+/// An edited or simulated density is uniform almost nowhere and costs nothing but the table.
+///
+/// A brick's voxels and the one-voxel shell around them (6³: all that trilinear and
+/// interiorScale reads at points whose floor lies in the brick touch) are tested: one density
+/// ≥ 0 and, with a surface, signed distances ≤ −kDepth voxels; or signed distances ≥ kDepth. A
+/// block is uniform when its 64 bricks are, with one density. The tables are dense over the
+/// medium's bounds, one float per brick and one per block (NaN: not uniform), and are built only
+/// from dense copies (GridLookup's, themselves bounded by kDenseCopyBytes): a table is at most
+/// a 64th of one.
+class UniformBricks
+{
+public:
+    static constexpr int kBrick = 4, kBlock = 16;
+    /// Voxels inside (or outside) the surface every voxel of a uniform brick lies: beyond
+    /// Medium::kSnapWindow and a whole voxel's ½; outside, two ends sa + sb ≥ 2 voxels apart
+    /// from the surface rule out a dip inside for any step up to 2 voxels, and a longer step
+    /// does not fit in a brick.
+    static constexpr double kDepth = 1.0;
+
+    /// The table of a medium's @a density (its dense copy) over its active @a bounds, with
+    /// @a surface the march surface's dense copy (world distances, voxel size @a dx) when
+    /// @a hasSurface. Empty (find always false) without a density copy, or without a surface
+    /// copy where there is a surface.
+    UniformBricks(const DenseCopy<openvdb::FloatGrid>* density, const openvdb::CoordBBox& bounds,
+        const DenseCopy<openvdb::FloatGrid>* surface, double dx, bool hasSurface);
+
+    /// The uniform region holding index-space point @a p (a block where there is one, else a
+    /// brick) as its closed-open box [lo, hi) of points whose floor lies in it, and its density
+    /// @a value (0 outside the surface); false where @a p lies in no uniform brick.
+    bool find(const openvdb::Vec3d& p, openvdb::Vec3d& lo, openvdb::Vec3d& hi, float& value) const;
+
+    /// Bricks found uniform (for reports and tests).
+    std::size_t uniformBrickCount() const { return mUniformBricks; }
+
+private:
+    /// The index in a table of cells of 2^@a shift voxels (first cell @a origin, @a dims cells
+    /// per axis) of the cell holding voxel @a ijk, or −1 outside it.
+    static std::int64_t indexOf(const openvdb::Coord& ijk, int shift, const openvdb::Coord& origin, const openvdb::Coord& dims);
+
+    openvdb::Coord mBrickOrigin, mBrickDims, mBlockOrigin, mBlockDims; ///< in bricks, in blocks
+    std::vector<float> mBricks, mBlocks;
+    std::size_t mUniformBricks = 0;
+};
+
+} // namespace vxf
