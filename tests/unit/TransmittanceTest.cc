@@ -269,11 +269,11 @@ TEST_CASE("marches cross uniform regions in one go with the same optical depth",
     CHECK(uniform->uniformBrickCount() > 0);
     openvdb::Vec3d lo, hi;
     float density = -1.0f;
-    CHECK(uniform->find(openvdb::Vec3d(0.3), lo, hi, density)); // the centre: inside
+    CHECK(uniform->find(openvdb::Vec3d(0.3), 0.5, lo, hi, density)); // the centre: inside
     CHECK(density == 1.0f);
-    CHECK(uniform->find(openvdb::Vec3d(0.8 * radius / dx), lo, hi, density)); // the bounds' corner, beyond the surface: outside
+    CHECK(uniform->find(openvdb::Vec3d(0.8 * radius / dx), 0.5, lo, hi, density)); // the bounds' corner, beyond the surface: outside
     CHECK(density == 0.0f);
-    CHECK_FALSE(uniform->find(openvdb::Vec3d(radius / dx, 0.2, 0.1), lo, hi, density)); // on it: neither
+    CHECK_FALSE(uniform->find(openvdb::Vec3d(radius / dx, 0.2, 0.1), 0.5, lo, hi, density)); // on it: neither
 
     vxf::VoxelSet grids = set;
     const auto& d = *set.get<openvdb::FloatGrid>("density");

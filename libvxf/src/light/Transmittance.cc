@@ -41,7 +41,7 @@ int uniformSteps(const UniformBricks& uniform, const openvdb::Vec3d& p, const op
 {
     openvdb::Vec3d lo, hi;
     float density;
-    if (most < 2 || !uniform.find(p, lo, hi, density)) return 0;
+    if (most < 2 || !uniform.find(p, h, lo, hi, density)) return 0;
     double leave = std::numeric_limits<double>::max();
     for (int a = 0; a < 3; ++a) {
         if (unit[a] > 0.0) leave = std::min(leave, (hi[a] - p[a]) / unit[a]);

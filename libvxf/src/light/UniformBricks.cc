@@ -54,8 +54,9 @@ UniformBricks::UniformBricks(const DenseCopy<openvdb::FloatGrid>* density, const
     mBrickDims = shifted(hi, kBrickShift) - mBrickOrigin + openvdb::Coord(1);
     mBlockOrigin = shifted(lo, kBlockShift);
     mBlockDims = shifted(hi, kBlockShift) - mBlockOrigin + openvdb::Coord(1);
-    const float inside = float(-kDepth * dx), outside = float(kDepth * dx);
+    const float inside = float(-kInside * dx), outside = float(kOutside * dx);
 
+    // Per brick: a density ≥ 0 (inside), −(least distance to the surface, voxels) (outside), NaN.
     mBricks.assign(std::size_t(mBrickDims[0]) * mBrickDims[1] * mBrickDims[2], kNotUniform);
     mUniformBricks = tbb::parallel_reduce(
         tbb::blocked_range<std::size_t>(0, mBricks.size()), std::size_t(0),
@@ -63,19 +64,21 @@ UniformBricks::UniformBricks(const DenseCopy<openvdb::FloatGrid>* density, const
             float values[kBrick + 2][kBrick + 2][kBrick + 2], distances[kBrick + 2][kBrick + 2][kBrick + 2];
             for (std::size_t n = r.begin(); n != r.end(); ++n) {
                 const openvdb::Coord first = scaled(cellAt(n, mBrickOrigin, mBrickDims), kBrick) - openvdb::Coord(1);
-                if (!density->getBlock(first, values)) continue; // reaches beyond the copy: read nowhere uniform
-                // Wholly outside the surface: no step there has a part inside, whatever the density.
-                if (hasSurface && surface->getBlock(first, distances) && all(distances, [&](float d) { return d >= outside; })) {
-                    mBricks[n] = 0.0f;
-                    ++found;
-                    continue;
+                const bool distancesRead = hasSurface && surface->getBlock(first, distances);
+                if (hasSurface && !distancesRead) continue; // reaches beyond the copy: read nowhere uniform
+                if (hasSurface) {
+                    const float least = *std::min_element(&distances[0][0][0], &distances[0][0][0] + sizeof(distances) / sizeof(float));
+                    // Wholly outside the surface: no step there has a part inside, whatever the density.
+                    if (least >= outside) {
+                        mBricks[n] = -float(least / dx);
+                        ++found;
+                        continue;
+                    }
+                    if (!all(distances, [&](float d) { return d <= inside; })) continue;
                 }
+                if (!density->getBlock(first, values)) continue;
                 const float v = values[0][0][0];
-                bool uniform = v >= 0.0f && std::isfinite(v) && all(values, [&](float x) { return x == v; });
-                if (uniform && hasSurface) {
-                    uniform = surface->getBlock(first, distances) && all(distances, [&](float d) { return d <= inside; });
-                }
-                if (!uniform) continue;
+                if (!(v >= 0.0f && std::isfinite(v) && all(values, [&](float x) { return x == v; }))) continue;
                 mBricks[n] = v;
                 ++found;
             }
@@ -94,22 +97,34 @@ UniformBricks::UniformBricks(const DenseCopy<openvdb::FloatGrid>* density, const
                 const openvdb::Coord voxel = first.offsetBy(kBrick * (i / (perAxis * perAxis)), kBrick * ((i / perAxis) % perAxis), kBrick * (i % perAxis));
                 const std::int64_t b = indexOf(voxel, kBrickShift, mBrickOrigin, mBrickDims);
                 const float brick = b < 0 ? kNotUniform : mBricks[std::size_t(b)];
-                uniform = brick == brick && (i == 0 || brick == v); // NaN: not uniform
-                v = brick;
+                if (std::isnan(brick)) {
+                    uniform = false;
+                } else if (i == 0) {
+                    v = brick;
+                } else if (v < 0.0f && brick < 0.0f) {
+                    v = std::max(v, brick); // outside: the least distance of all
+                } else {
+                    uniform = brick == v; // inside: one density
+                }
             }
             if (uniform) mBlocks[n] = v;
         }
     });
 }
 
-bool UniformBricks::find(const openvdb::Vec3d& p, openvdb::Vec3d& lo, openvdb::Vec3d& hi, float& value) const
+bool UniformBricks::find(const openvdb::Vec3d& p, double step, openvdb::Vec3d& lo, openvdb::Vec3d& hi, float& density) const
 {
     if (mBricks.empty()) return false;
     const openvdb::Coord voxel = openvdb::Coord::floor(p);
     const auto in = [&](const std::vector<float>& table, int shift, const openvdb::Coord& origin, const openvdb::Coord& dims) {
         const std::int64_t n = indexOf(voxel, shift, origin, dims);
-        if (n < 0 || std::isnan(table[std::size_t(n)])) return false;
-        value = table[std::size_t(n)];
+        if (n < 0) return false;
+        const float value = table[std::size_t(n)];
+        if (std::isnan(value)) return false;
+        // Outside, a step's two ends lie at least 2·least from the surface together: no dip inside
+        // for a step up to that long (InsideSteps), with a margin for rounding.
+        if (value < 0.0f && !(-2.0 * value >= 1.001 * step)) return false;
+        density = std::max(value, 0.0f);
         lo = scaled(shifted(voxel, shift), 1 << shift).asVec3d();
         hi = lo + openvdb::Vec3d(double(1 << shift));
         return true;

@@ -13,19 +13,19 @@ namespace vxf {
 /// The bricks of 4³ voxels (and the blocks of 16³) over which a march's steps are all alike,
 /// so that a march crosses them in one go instead of a step at a time: the same sum to
 /// rounding, a fraction of the lookups. Two kinds:
-/// - inside: every voxel a step's lookups can read holds the same density and lies a voxel or
-///   more inside the surface, so that InsideSteps takes each step whole, finds no crossing to
+/// - inside: every voxel a step's lookups can read holds the same density and lies half a voxel
+///   or more inside the surface, so that InsideSteps takes each step whole, finds no crossing to
 ///   snap, and Medium::Sampler::interiorScale is 1 (all eight voxels whole). A voxelized mesh's
 ///   interior is this (density 1, in tiles); without a surface, any run of equal density.
-/// - outside: every voxel lies a voxel or more outside the surface, so no step there has a part
-///   inside (InsideSteps counts nothing, whatever the density holds): density 0 for the march.
+/// - outside: every voxel lies outside the surface by kOutside or more, so no step (up to twice
+///   that long) there has a part inside (InsideSteps counts nothing, whatever the density holds): density 0 for the march.
 ///   The empty space around a medium, which light arriving from outside crosses to reach it.
 /// An edited or simulated density is uniform almost nowhere and costs nothing but the table.
 ///
 /// A brick's voxels and the one-voxel shell around them (6³: all that trilinear and
 /// interiorScale reads at points whose floor lies in the brick touch) are tested: one density
-/// ≥ 0 and, with a surface, signed distances ≤ −kDepth voxels; or signed distances ≥ kDepth. A
-/// block is uniform when its 64 bricks are, with one density. The tables are dense over the
+/// ≥ 0 and, with a surface, signed distances ≤ −kInside voxels; or signed distances ≥ kOutside.
+/// A block is uniform when its 64 bricks are, inside with one density or all outside. The tables are dense over the
 /// medium's bounds, one float per brick and one per block (NaN: not uniform), and are built only
 /// from dense copies (GridLookup's, themselves bounded by kDenseCopyBytes): a table is at most
 /// a 64th of one.
@@ -33,11 +33,15 @@ class UniformBricks
 {
 public:
     static constexpr int kBrick = 4, kBlock = 16;
-    /// Voxels inside (or outside) the surface every voxel of a uniform brick lies: beyond
-    /// Medium::kSnapWindow and a whole voxel's ½; outside, two ends sa + sb ≥ 2 voxels apart
-    /// from the surface rule out a dip inside for any step up to 2 voxels, and a longer step
-    /// does not fit in a brick.
-    static constexpr double kDepth = 1.0;
+    /// Voxels: how far inside the surface every voxel of an inside brick lies. From −½ a voxel
+    /// is whole (interiorScale's fractions are 1) and a step's ends lie beyond
+    /// Medium::kSnapWindow, where InsideSteps looks for no crossing; a hundredth more for rounding.
+    static constexpr double kInside = 0.51;
+    /// Voxels: how far outside the surface every voxel of an outside brick lies at least: beyond
+    /// Medium::kQuadraticBand (signedDistance reads them trilinearly, never below the least
+    /// voxel). A step whose ends lie sa + sb ≥ its length outside cannot dip inside, so a brick
+    /// whose voxels lie d or more outside serves steps up to 2d (find).
+    static constexpr double kOutside = 0.26;
 
     /// The table of a medium's @a density (its dense copy) over its active @a bounds, with
     /// @a surface the march surface's dense copy (world distances, voxel size @a dx) when
@@ -46,10 +50,11 @@ public:
     UniformBricks(const DenseCopy<openvdb::FloatGrid>* density, const openvdb::CoordBBox& bounds,
         const DenseCopy<openvdb::FloatGrid>* surface, double dx, bool hasSurface);
 
-    /// The uniform region holding index-space point @a p (a block where there is one, else a
-    /// brick) as its closed-open box [lo, hi) of points whose floor lies in it, and its density
-    /// @a value (0 outside the surface); false where @a p lies in no uniform brick.
-    bool find(const openvdb::Vec3d& p, openvdb::Vec3d& lo, openvdb::Vec3d& hi, float& value) const;
+    /// The uniform region holding index-space point @a p for march steps of @a step voxels (a
+    /// block where there is one, else a brick) as its closed-open box [lo, hi) of points whose
+    /// floor lies in it, and its @a density (0 outside the surface); false where @a p lies in no
+    /// such region.
+    bool find(const openvdb::Vec3d& p, double step, openvdb::Vec3d& lo, openvdb::Vec3d& hi, float& density) const;
 
     /// Bricks found uniform (for reports and tests).
     std::size_t uniformBrickCount() const { return mUniformBricks; }
