@@ -114,6 +114,8 @@ TEST_CASE("bad scenes are refused with the field at fault", "[pipeline][scene]")
 {
     CHECK(errorOf("{\n  \"objects\": [\n    {\"mesh\": \"a.obj\",}\n  ]\n}") ==
           std::string("/scenes/test.json:3:22: invalid JSON: syntax error while parsing object key - unexpected '}'; expected string literal"));
+    // A number beyond a double is an error at the number, not nlohmann's out_of_range (found by fuzzing).
+    CHECK(errorOf("{\n  \"objects\": [1e999]\n}") == std::string("/scenes/test.json:2:15: invalid JSON: number overflow parsing '1e999'"));
     CHECK_THAT(errorOf(edited(R"("intensity": 4)", R"("intensity": -4)")), Catch::StartsWith("/scenes/test.json: /lights/0/intensity: "));
     CHECK_THAT(errorOf(edited(R"("cone_angle": 40, )", "")), Catch::Contains("/lights/1"));
     CHECK_THAT(errorOf(edited(R"("fov": 30)", R"("fov": 30, "zoom": 2)")), Catch::Contains("/camera"));

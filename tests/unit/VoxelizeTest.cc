@@ -147,3 +147,22 @@ TEST_CASE("voxelize rejects bad options with their names", "[voxelize]")
     CHECK_THROWS_WITH(vxf::voxelize(mesh, tiny), Catch::Contains("more than 2^20"));
     CHECK_THROWS_WITH(vxf::voxelize(vxf::TriangleMesh{}, withDim(10)), Catch::Contains("no triangles"));
 }
+
+TEST_CASE("voxelize refuses, before allocating, what would exceed its bounds", "[voxelize][stability]")
+{
+    // A unit box at dim 20000: 6 / (5e-5)² = 2.4e9 surface voxels × a band 6 wide, 1.4e10 voxels.
+    const auto box = vxf::makeBox(openvdb::Vec3d(0), openvdb::Vec3d(1));
+    CHECK_THROWS_WITH(vxf::voxelize(box, withDim(20000)),
+        Catch::Contains("would make about 1.4e+10 narrow-band voxels") && Catch::Contains("more than the 1e+09 vxf allows"));
+    vxf::VoxelizeOptions wide = withDim(64);
+    wide.bandWidth = 1e6f; // a band as wide as this fills everything around the mesh
+    CHECK_THROWS_WITH(vxf::voxelize(box, wide), Catch::Contains("narrow-band voxels"));
+    // Voxels too small for OpenVDB's transforms: a clear error, not its ArithmeticError.
+    const auto small = vxf::makeBox(openvdb::Vec3d(0), openvdb::Vec3d(1e-3));
+    CHECK_THROWS_WITH(vxf::voxelize(small, withDim(1000)), Catch::Contains("dim 1000 makes voxels of 1e-06, below 1.5e-05"));
+    vxf::VoxelizeOptions tiny;
+    tiny.voxelSize = 1e-6;
+    CHECK_THROWS_WITH(vxf::voxelize(small, tiny), Catch::Contains("voxel_size 1e-06 is below 1.5e-05"));
+    // Within the bounds: dim 64 runs.
+    CHECK(vxf::voxelize(box, withDim(64)).find("density") != nullptr);
+}

@@ -12,25 +12,46 @@ namespace vxf {
 
 using nlohmann::json;
 
+namespace {
+
+/// The 1-based line and column of byte @a offset (0-based) of @a text.
+std::pair<std::size_t, std::size_t> lineAndColumn(const std::string& text, std::size_t offset)
+{
+    std::size_t line = 1, column = 1;
+    for (std::size_t i = 0; i < offset && i < text.size(); ++i) {
+        if (text[i] == '\n') {
+            ++line;
+            column = 1;
+        } else {
+            ++column;
+        }
+    }
+    return {line, column};
+}
+
+} // namespace
+
 json parseJsonText(const std::string& text, const std::string& path)
 {
     try {
         return json::parse(text);
     } catch (const json::parse_error& e) {
-        // Locate e.byte (1-based offset just past the error) as line:column.
-        std::size_t line = 1, column = 1;
-        for (std::size_t i = 0; i + 1 < e.byte && i < text.size(); ++i) {
-            if (text[i] == '\n') {
-                ++line;
-                column = 1;
-            } else {
-                ++column;
-            }
-        }
+        // e.byte: the 1-based offset just past the error.
+        const auto [line, column] = lineAndColumn(text, e.byte > 0 ? e.byte - 1 : 0);
         std::string what = e.what();
         const auto colon = what.find(": ", what.find("parse error"));
         if (colon != std::string::npos) what = what.substr(colon + 2);
         throw InputError(path, line, column, "invalid JSON: " + what);
+    } catch (const json::out_of_range& e) {
+        // A number beyond a double ("number overflow parsing '1e999'", found by fuzzing): placed at
+        // the number the message quotes.
+        std::string what = e.what();
+        const auto bracket = what.find("] ");
+        if (bracket != std::string::npos) what = what.substr(bracket + 2);
+        const auto quote = what.find('\''), end = what.rfind('\'');
+        const std::size_t at = quote != std::string::npos && end > quote ? text.find(what.substr(quote + 1, end - quote - 1)) : std::string::npos;
+        const auto [line, column] = lineAndColumn(text, at == std::string::npos ? 0 : at);
+        throw InputError(path, at == std::string::npos ? 0 : line, at == std::string::npos ? 0 : column, "invalid JSON: " + what);
     }
 }
 

@@ -2,6 +2,7 @@
 
 #include <vxf/core/Error.h>
 
+#include <CGAL/exceptions.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/IO/polygon_soup_io.h>
 #include <CGAL/Polygon_mesh_processing/border.h>
@@ -320,12 +321,21 @@ TriangleMesh readMesh(const std::string& path, const MeshReadOptions& options, M
     timer.lap("self-intersections");
 
     if (CGAL::is_closed(mesh)) {
-        if (!report.selfIntersecting && report.splitPoints == 0) {
-            PMP::orient_to_bound_a_volume(mesh);
-        } else if (!PMP::is_outward_oriented(mesh)) {
-            PMP::reverse_face_orientations(mesh);
+        // CGAL's orientation tests assume faces that are not flat around the extreme vertex; where
+        // they are (a self-intersecting or degenerate mesh) its checked builds stop on a failed
+        // assertion (found by fuzzing, tests/regress/fuzz/mesh). The orientation is then left as
+        // the file gives it: the voxelization decides inside by flood fill, not by orientation.
+        try {
+            if (!report.selfIntersecting && report.splitPoints == 0) {
+                PMP::orient_to_bound_a_volume(mesh);
+            } else if (!PMP::is_outward_oriented(mesh)) {
+                PMP::reverse_face_orientations(mesh);
+            }
+            report.outwardOriented = true;
+        } catch (const CGAL::Failure_exception&) {
+            report.warnings.push_back("the mesh's orientation could not be determined (flat faces around its extreme "
+                                      "vertex); its faces are left as the file orients them");
         }
-        report.outwardOriented = true;
     }
 
     TriangleMesh result;

@@ -657,7 +657,8 @@ std::vector<std::string> writeVxfText(const std::string& path, const VoxelSet& s
     } else {
         for (const auto& name : options.grids) {
             auto g = set.find(name);
-            if (!g) throw Error(fmt::format("no grid named '{}' to write", name));
+            // A usage error, as vdb2vol's: the argument names no grid of the input.
+            if (!g) throw UsageError(fmt::format("{}no grid named '{}' to write", set.path().empty() ? "" : set.path() + ": ", name));
             if (!supported(*g)) throw Error(fmt::format("grid '{}' holds {} values; text VXF columns are bool, float or vec3", name, g->valueType()));
             for (const auto& other : chosen) {
                 if (other->getName() == name) throw Error(fmt::format("grid '{}' requested twice", name));

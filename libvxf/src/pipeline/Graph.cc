@@ -196,6 +196,8 @@ GraphReport runGraph(const std::string& path, const std::string& cacheDir, Inter
     return GraphRunner(path, cacheDir, interrupter).run();
 }
 
+void checkGraph(const std::string& path) { GraphRunner(path, "", nullptr); }
+
 void recordStep(const std::string& graphPath, const std::string& op, const json& params, const std::string& input,
     const std::string& output)
 {

@@ -31,12 +31,21 @@ double resolveVoxelSize(const openvdb::BBoxd& bounds, const VoxelizeOptions& opt
                                          "(more than 2^20); use a larger voxel size",
                 options.voxelSize, extent / options.voxelSize));
         }
+        if (options.voxelSize < kMinVoxelSize) {
+            throw UsageError(fmt::format("voxel_size {} is below {}, the smallest OpenVDB's transforms take; scale the mesh up",
+                options.voxelSize, kMinVoxelSize));
+        }
         return options.voxelSize;
     }
     if (options.dim <= 0) throw UsageError("give voxel_size or dim (a positive voxel count)");
     if (options.dim > (1 << 20)) throw UsageError(fmt::format("dim {} is above the limit 2^20", options.dim));
     if (!(extent > 0.0)) throw Error("the mesh is flat in every direction (zero extent); give voxel_size");
-    return extent / double(options.dim);
+    const double voxelSize = extent / double(options.dim);
+    if (voxelSize < kMinVoxelSize) {
+        throw UsageError(fmt::format("dim {} makes voxels of {:.3g}, below {}, the smallest OpenVDB's transforms take; "
+                                     "use a smaller dim or scale the mesh up", options.dim, voxelSize, kMinVoxelSize));
+    }
+    return voxelSize;
 }
 
 openvdb::math::Transform::Ptr voxelLattice(const openvdb::BBoxd& bounds, double voxelSize)
@@ -71,10 +80,20 @@ VoxelSet voxelize(const TriangleMesh& mesh, const VoxelizeOptions& options, Inte
     }
     const double voxelSize = xform->voxelSize()[0];
     const openvdb::Vec3d shift = xform->indexToWorld(openvdb::Vec3d(0.0));
+    double area = 0.0;
     for (const auto& t : mesh.triangles) {
         for (int c = 0; c < 3; ++c) {
             if (t[c] >= mesh.points.size()) throw Error(fmt::format("triangle refers to point {} of {}", t[c], mesh.points.size()));
         }
+        area += 0.5 * (mesh.points[t[1]] - mesh.points[t[0]]).cross(mesh.points[t[2]] - mesh.points[t[0]]).length();
+    }
+    // What meshToVolume will allocate, before it does: the surface in voxels times the band's width.
+    const double bandVoxels = area / (voxelSize * voxelSize) * 2.0 * double(options.bandWidth);
+    if (!(bandVoxels <= kMaxBandVoxels)) {
+        throw UsageError(fmt::format("voxel size {:.4g} with a band of {} voxels would make about {:.2g} narrow-band voxels "
+                                     "(the mesh's area {:.4g} is {:.3g} voxels), more than the {:.0e} vxf allows (about 12 GB); "
+                                     "use a smaller dim or a larger voxel size",
+            voxelSize, options.bandWidth, bandVoxels, area, area / (voxelSize * voxelSize), kMaxBandVoxels));
     }
 
     // Points relative to the shifted origin, rounded to float and mapped to index space as

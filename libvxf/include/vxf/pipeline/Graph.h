@@ -39,6 +39,10 @@ const nlohmann::json& pipelineSchemaJson();
 /// parameters are vxf::InputError / vxf::UsageError naming the file and the node.
 GraphReport runGraph(const std::string& path, const std::string& cacheDir, Interrupter* interrupter = nullptr);
 
+/// Check the pipeline at @a path as runGraph does before any work (syntax, schema, operators,
+/// inputs, parameters, outputs), reading and writing nothing else; the same errors.
+void checkGraph(const std::string& path);
+
 /// Append one operator step to the pipeline at @a graphPath (created when missing): a node
 /// running @a op with @a params on @a input — the node that last wrote @a input, or a new
 /// source node for it — and @a output as its output file. So a sequence of one-off

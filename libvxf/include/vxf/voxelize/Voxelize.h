@@ -17,6 +17,13 @@ struct VoxelizeOptions
     openvdb::math::Transform::ConstPtr lattice;
 };
 
+/// The most narrow-band voxels voxelize makes (estimated before anything is allocated, see
+/// voxelize): meshToVolume holds about 12 bytes per band voxel at its peak, so about 12 GB.
+inline constexpr double kMaxBandVoxels = 1e9;
+/// The smallest voxel size (world units): OpenVDB's transforms refuse a scale whose cube is
+/// below 3e-15.
+inline constexpr double kMinVoxelSize = 1.5e-5;
+
 /// The index space vxf voxelizes @a bounds into: voxel centres on voxelSize·ℤ³, the index
 /// origin shifted by whole voxels to the bounds' centre when they lie over 2^16 voxels from
 /// the world origin (so float index coordinates keep sub-voxel precision).
@@ -34,6 +41,9 @@ double resolveVoxelSize(const openvdb::BBoxd& bounds, const VoxelizeOptions& opt
 /// voxel's volume fraction clamp(½ − φ/dx, 0, 1) (so the medium ends at the mesh surface:
 /// trilinear lookups cross ½ there), inactive 0 outside. The index space is voxelLattice() of the
 /// mesh's bounds, or options.lattice.
+/// Before allocating, the band's voxels are estimated as the surface's area in voxels times the
+/// band's full width (2·bandWidth; the interior is tiles): above kMaxBandVoxels, or a voxel size
+/// below kMinVoxelSize, is a vxf::UsageError naming the numbers, not an allocation that fails.
 /// Results do not depend on the number of threads. Throws vxf::UsageError for bad options,
 /// vxf::Error for an empty mesh, vxf::Interrupted when cancelled.
 VoxelSet voxelize(const TriangleMesh& mesh, const VoxelizeOptions& options, Interrupter* interrupter = nullptr);
