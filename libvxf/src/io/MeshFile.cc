@@ -22,10 +22,29 @@
 #include <cctype>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 namespace vxf {
 
 namespace {
+
+/// CGAL 5.5's PLY reader adds each `property` to the last `element` declared without checking
+/// there is one: a header with a property first read past an empty vector (found by fuzzing,
+/// tests/regress/fuzz/mesh). Checked here before CGAL reads the file.
+void checkPlyHeader(const std::string& path)
+{
+    std::ifstream in(path, std::ios::binary);
+    std::string line;
+    bool element = false;
+    for (std::size_t number = 1; std::getline(in, line); ++number) {
+        std::istringstream words(line);
+        std::string keyword;
+        words >> keyword;
+        if (keyword == "end_header") return;
+        if (keyword == "element") element = true;
+        if (keyword == "property" && !element) throw InputError(path, number, 1, "PLY header: 'property' before any 'element'");
+    }
+}
 
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Point = Kernel::Point_3;
@@ -173,6 +192,7 @@ TriangleMesh readMesh(const std::string& path, const MeshReadOptions& options, M
     std::vector<std::vector<std::size_t>> polygons;
     {
         InterruptStep step(interrupter, "reading mesh");
+        if (ext == ".ply") checkPlyHeader(path);
         bool ok = false;
         try {
             ok = CGAL::IO::read_polygon_soup(path, points, polygons, CGAL::parameters::verbose(false));
