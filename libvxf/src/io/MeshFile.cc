@@ -21,6 +21,7 @@
 #include <chrono>
 #include <cctype>
 #include <filesystem>
+#include <iterator>
 #include <fstream>
 #include <sstream>
 
@@ -143,6 +144,54 @@ void reportSelfIntersections(const Mesh& mesh, MeshReport& report)
     }
 }
 
+/// CGAL 5.5's OFF reader sizes each face by the count its line starts with before reading the
+/// indices: "30000000000 0 1 2" asked for 240 GB, written as zeros (found by fuzzing,
+/// tests/regress/fuzz/mesh). A text OFF's counts are checked here against what the file can
+/// hold (an index takes two bytes at least), before CGAL reads it. Binary OFF ("OFF BINARY") is
+/// left to CGAL.
+void checkOffCounts(const std::string& path)
+{
+    std::ifstream in(path, std::ios::binary);
+    const auto bytes = std::uintmax_t(std::filesystem::file_size(path));
+    std::string line;
+    std::size_t number = 0, vertices = 0, faces = 0, seen = 0;
+    bool header = false, counts = false;
+    while (std::getline(in, line)) {
+        ++number;
+        const std::string content = line.substr(0, line.find('#'));
+        std::istringstream words(content);
+        std::string first;
+        if (!(words >> first)) continue; // blank or comment
+        if (!header) {
+            header = true;
+            if (first.find("OFF") != std::string::npos) {
+                if (content.find("BINARY") != std::string::npos) return;
+                std::string next;
+                if (!(words >> next)) continue; // the counts on the next line
+                words = std::istringstream(content.substr(content.find(next)));
+                words >> first;
+            }
+        }
+        if (!counts) {
+            counts = true;
+            std::istringstream numbers(first + " " + std::string(std::istreambuf_iterator<char>(words), {}));
+            if (!(numbers >> vertices >> faces)) return; // CGAL reports the malformed header
+            if (vertices > bytes || faces > bytes) {
+                throw InputError(path, number, 1, fmt::format("OFF header: {} vertices and {} faces, more than a file of {} bytes holds", vertices, faces, bytes));
+            }
+            continue;
+        }
+        if (seen++ < vertices) continue;
+        std::istringstream face(content);
+        std::uintmax_t count = 0;
+        if (!(face >> count)) return;
+        if (count > bytes / 2) {
+            throw InputError(path, number, 1, fmt::format("OFF face lists {} vertices, more than a file of {} bytes holds", count, bytes));
+        }
+        if (seen >= vertices + faces) return;
+    }
+}
+
 } // namespace
 
 void checkSelfIntersections(const TriangleMesh& triangles, MeshReport& report)
@@ -193,6 +242,7 @@ TriangleMesh readMesh(const std::string& path, const MeshReadOptions& options, M
     {
         InterruptStep step(interrupter, "reading mesh");
         if (ext == ".ply") checkPlyHeader(path);
+        if (ext == ".off") checkOffCounts(path);
         bool ok = false;
         try {
             ok = CGAL::IO::read_polygon_soup(path, points, polygons, CGAL::parameters::verbose(false));
