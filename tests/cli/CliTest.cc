@@ -45,14 +45,15 @@ TEST_CASE("every bad input in tests/regress gives its error and no output", "[cl
         const std::string expected = trimmed(slurp(expectFile.string()));
         TempDir dir;
         const std::string output = dir.path("out.vdb");
-        const std::string command = input.extension() == ".vxf"
-            ? fmt::format("{} {} {}", binary("vxf2vdb"), quoted(input.string()), quoted(output))
-            : fmt::format("{} voxelize {} -o {} --dim 16", binary("vxf"), quoted(input.string()), quoted(output));
+        const std::string ext = input.extension().string();
+        const std::string command = ext == ".vxf" ? fmt::format("{} {} {}", binary("vxf2vdb"), quoted(input.string()), quoted(output))
+            : ext == ".vdb"                       ? fmt::format("{} info {}", binary("vxf"), quoted(input.string()))
+                                                  : fmt::format("{} voxelize {} -o {} --dim 16", binary("vxf"), quoted(input.string()), quoted(output));
         const auto result = run(command);
         INFO(input.filename().string() << "\nstderr: " << result.err);
         CHECK(result.status == 1);
         CHECK(result.err.find(expected) != std::string::npos);
-        CHECK(result.err.find(input.extension() == ".vxf" ? "vxf2vdb: " : "vxf: voxelize: ") == 0);
+        CHECK(result.err.find(ext == ".vxf" ? "vxf2vdb: " : ext == ".vdb" ? "vxf: info: " : "vxf: voxelize: ") == 0);
         CHECK_FALSE(fs::exists(output));
         CHECK(fs::is_empty(dir.root())); // no temporary left behind either
         ++cases;

@@ -7,11 +7,16 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
+
+#include <sys/resource.h>
+#include <unistd.h>
 
 namespace vxf {
 
@@ -21,6 +26,46 @@ void initializeOpenVDB()
     static std::once_flag once;
     std::call_once(once, [] { openvdb::initialize(); });
 }
+
+/// While a .vdb is read, the process may map at most kReadBudgetBase plus kReadBudgetRatio × the
+/// file's size beyond what it has mapped already (RLIMIT_AS, restored afterwards). OpenVDB's
+/// reader allocates sizes the file declares (metadata strings, compressed chunks) before it
+/// reads them, and a string is zero-filled as it is sized: a 5.7 KB file took 17 GB and 53 s
+/// before failing (found by fuzzing, tests/regress/fuzz/vdb_info). Past the budget the
+/// allocation fails at once (std::bad_alloc, reported naming the file). Real files stay far
+/// inside it: compression rarely passes 100:1 (a leaf of one value, zipped), and tiles cost nothing.
+class ReadBudget
+{
+public:
+    static constexpr std::uintmax_t kReadBudgetBase = std::uintmax_t(1) << 30, kReadBudgetRatio = 1000;
+
+    explicit ReadBudget(std::uintmax_t fileBytes)
+    {
+        if (::getrlimit(RLIMIT_AS, &mPrevious) != 0) return;
+        std::ifstream statm("/proc/self/statm");
+        std::uintmax_t pages = 0;
+        if (!(statm >> pages) || pages == 0) return;
+        const std::uintmax_t mapped = pages * std::uintmax_t(::sysconf(_SC_PAGESIZE));
+        const std::uintmax_t budget = fileBytes > (UINTMAX_MAX - kReadBudgetBase) / kReadBudgetRatio
+            ? UINTMAX_MAX / 2 : kReadBudgetBase + kReadBudgetRatio * fileBytes;
+        const std::uintmax_t limit = mapped + std::min(budget, UINTMAX_MAX / 2 - mapped);
+        if (mPrevious.rlim_cur != RLIM_INFINITY && mPrevious.rlim_cur <= limit) return; // already tighter
+        rlimit tighter = mPrevious;
+        tighter.rlim_cur = rlim_t(limit);
+        mSet = ::setrlimit(RLIMIT_AS, &tighter) == 0;
+    }
+    ~ReadBudget()
+    {
+        if (mSet) ::setrlimit(RLIMIT_AS, &mPrevious);
+    }
+    ReadBudget(const ReadBudget&) = delete;
+    ReadBudget& operator=(const ReadBudget&) = delete;
+
+private:
+    rlimit mPrevious{};
+    bool mSet = false;
+};
+
 } // namespace
 
 VoxelSet readVoxelSet(const std::string& path)
@@ -32,7 +77,9 @@ VoxelSet readVoxelSet(const std::string& path)
     }
     openvdb::GridPtrVecPtr grids;
     openvdb::MetaMap::Ptr metadata;
+    const std::uintmax_t bytes = std::filesystem::file_size(path, ec);
     try {
+        const ReadBudget budget(bytes);
         openvdb::io::File file(path);
         file.open(/*delayLoad=*/false);
         grids = file.getGrids();
@@ -40,6 +87,10 @@ VoxelSet readVoxelSet(const std::string& path)
         file.close();
     } catch (const openvdb::Exception& e) {
         throw Error(fmt::format("{}: not a readable OpenVDB file ({})", path, e.what()));
+    } catch (const std::bad_alloc&) {
+        throw Error(fmt::format("{}: not a readable OpenVDB file (it declares more data than a file of {} bytes can hold: "
+                                "over {} GiB + {} times its size)",
+            path, bytes, ReadBudget::kReadBudgetBase >> 30, ReadBudget::kReadBudgetRatio));
     } catch (const std::exception& e) {
         throw Error(fmt::format("{}: cannot read: {}", path, e.what()));
     }
