@@ -24,6 +24,7 @@
 #include <iterator>
 #include <fstream>
 #include <sstream>
+#include <vector>
 
 namespace vxf {
 
@@ -177,36 +178,32 @@ void checkOffCounts(const std::string& path)
     while (std::getline(in, line)) {
         ++number;
         const std::string content = line.substr(0, line.find('#'));
-        std::istringstream words(content);
-        std::string first;
-        if (!(words >> first)) continue; // blank or comment
-        if (!header) {
-            header = true;
-            if (first.find("OFF") != std::string::npos) {
-                if (content.find("BINARY") != std::string::npos) return;
-                std::string next;
-                if (!(words >> next)) continue; // the counts on the next line
-                words = std::istringstream(content.substr(content.find(next)));
-                words >> first;
+        if (counts) { // vertices, then faces: the count a face line starts with
+            if (content.find_first_not_of(" \t\r") == std::string::npos || seen++ < vertices) continue;
+            std::istringstream face(content);
+            std::uintmax_t count = 0;
+            if (!(face >> count)) return;
+            if (count > bytes / 2) {
+                throw InputError(path, number, 1, fmt::format("OFF face lists {} vertices, more than a file of {} bytes holds", count, bytes));
             }
-        }
-        if (!counts) {
-            counts = true;
-            std::istringstream numbers(first + " " + std::string(std::istreambuf_iterator<char>(words), {}));
-            if (!(numbers >> vertices >> faces)) return; // CGAL reports the malformed header
-            if (vertices > bytes || faces > bytes) {
-                throw InputError(path, number, 1, fmt::format("OFF header: {} vertices and {} faces, more than a file of {} bytes holds", vertices, faces, bytes));
-            }
+            if (seen >= vertices + faces) return;
             continue;
         }
-        if (seen++ < vertices) continue;
-        std::istringstream face(content);
-        std::uintmax_t count = 0;
-        if (!(face >> count)) return;
-        if (count > bytes / 2) {
-            throw InputError(path, number, 1, fmt::format("OFF face lists {} vertices, more than a file of {} bytes holds", count, bytes));
+        std::istringstream words(content);
+        std::vector<std::string> tokens{std::istream_iterator<std::string>(words), std::istream_iterator<std::string>()};
+        if (!header && !tokens.empty() && tokens[0].find("OFF") != std::string::npos) { // "OFF", "COFF", "NOFF", ...
+            header = true;
+            if (std::find(tokens.begin(), tokens.end(), "BINARY") != tokens.end()) return;
+            tokens.erase(tokens.begin()); // the counts may follow on the same line
         }
-        if (seen >= vertices + faces) return;
+        if (tokens.empty()) continue; // blank or comment
+        header = true;
+        counts = true;
+        std::istringstream numbers(tokens[0] + " " + (tokens.size() > 1 ? tokens[1] : ""));
+        if (!(numbers >> vertices >> faces)) return; // CGAL reports the malformed header
+        if (vertices > bytes || faces > bytes) {
+            throw InputError(path, number, 1, fmt::format("OFF header: {} vertices and {} faces, more than a file of {} bytes holds", vertices, faces, bytes));
+        }
     }
 }
 

@@ -79,6 +79,10 @@ VoxelSet readVoxelSet(const std::string& path)
     openvdb::MetaMap::Ptr metadata;
     const std::uintmax_t bytes = std::filesystem::file_size(path, ec);
     try {
+        // One budgeted read at a time: the limit is the process's, and two readers restoring it
+        // out of order would leave one's limit in place.
+        static std::mutex budgetMutex;
+        const std::lock_guard<std::mutex> lock(budgetMutex);
         const ReadBudget budget(bytes);
         openvdb::io::File file(path);
         file.open(/*delayLoad=*/false);

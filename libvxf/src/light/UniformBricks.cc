@@ -64,9 +64,8 @@ UniformBricks::UniformBricks(const DenseCopy<openvdb::FloatGrid>* density, const
             float values[kBrick + 2][kBrick + 2][kBrick + 2], distances[kBrick + 2][kBrick + 2][kBrick + 2];
             for (std::size_t n = r.begin(); n != r.end(); ++n) {
                 const openvdb::Coord first = scaled(cellAt(n, mBrickOrigin, mBrickDims), kBrick) - openvdb::Coord(1);
-                const bool distancesRead = hasSurface && surface->getBlock(first, distances);
-                if (hasSurface && !distancesRead) continue; // reaches beyond the copy: read nowhere uniform
                 if (hasSurface) {
+                    if (!surface->getBlock(first, distances)) continue; // reaches beyond the copy: not uniform
                     const float least = *std::min_element(&distances[0][0][0], &distances[0][0][0] + sizeof(distances) / sizeof(float));
                     // Wholly outside the surface: no step there has a part inside, whatever the density.
                     if (least >= outside) {

@@ -37,8 +37,9 @@ public:
     /// medium, and inside within a voxel of features too thin for it (about a voxel or less),
     /// whose voxels' volume fractions then carry the medium as without a surface.
     const openvdb::FloatGrid* surface() const { return mSurface.get(); }
-    /// Where the medium is uniform and wholly inside (marches cross those regions in one step),
-    /// or null: with per-voxel `sigma_a`/`sigma_s` grids, or no dense copy of the density.
+    /// Where every march step is alike, uniform inside the surface or wholly outside it (marches
+    /// cross those regions in one go), or null: with per-voxel `sigma_a`/`sigma_s` grids, or no
+    /// dense copy of the density.
     const UniformBricks* uniformBricks() const { return mUniform.get(); }
 
     /// Per-thread trilinear lookups.

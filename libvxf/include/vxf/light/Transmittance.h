@@ -135,7 +135,7 @@ public:
     double t() const { return mT; }
 
     /// Advance @a count whole steps without looking at them: for a caller that knows them all
-    /// inside the medium and alike (UniformBricks), and has counted them itself.
+    /// alike (UniformBricks: uniform inside the surface, or wholly outside) and has counted them.
     void skip(int count)
     {
         mT += count * mH;

@@ -1,4 +1,4 @@
-// vxf — where a medium is uniform and wholly inside its surface, for marches to cross in one step.
+// vxf — where every march step is alike (uniform inside the surface, or wholly outside it), to cross in one go.
 #pragma once
 
 #include <vxf/core/GridLookup.h>
@@ -18,17 +18,17 @@ namespace vxf {
 ///   snap, and Medium::Sampler::interiorScale is 1 (all eight voxels whole). A voxelized mesh's
 ///   interior is this (density 1, in tiles); without a surface, any run of equal density.
 /// - outside: every voxel lies outside the surface by kOutside or more, so no step (up to twice
-///   that long) there has a part inside (InsideSteps counts nothing, whatever the density holds): density 0 for the march.
-///   The empty space around a medium, which light arriving from outside crosses to reach it.
+///   that long) there has a part inside (InsideSteps counts nothing, whatever the density
+///   holds): density 0 for the march. The empty space light from outside crosses to the medium.
 /// An edited or simulated density is uniform almost nowhere and costs nothing but the table.
 ///
 /// A brick's voxels and the one-voxel shell around them (6³: all that trilinear and
 /// interiorScale reads at points whose floor lies in the brick touch) are tested: one density
 /// ≥ 0 and, with a surface, signed distances ≤ −kInside voxels; or signed distances ≥ kOutside.
-/// A block is uniform when its 64 bricks are, inside with one density or all outside. The tables are dense over the
-/// medium's bounds, one float per brick and one per block (NaN: not uniform), and are built only
-/// from dense copies (GridLookup's, themselves bounded by kDenseCopyBytes): a table is at most
-/// a 64th of one.
+/// A block is uniform when its 64 bricks are, inside with one density or all outside. The
+/// tables are dense over the medium's bounds, one float per brick and one per block (NaN: not
+/// uniform), and are built only from dense copies (GridLookup's, themselves bounded by
+/// kDenseCopyBytes): a table is at most a 64th of one.
 class UniformBricks
 {
 public:
