@@ -314,6 +314,30 @@ TEST_CASE("a directional light by sweeps: E exp(-sigma_t depth / cos) in a slab,
     }
 }
 
+TEST_CASE("a directional light by sweeps: shadows cast across vacuum wider than a leaf", "[light][direct][sweep]")
+{
+    // Two slabs 24 voxels apart: no leaf of the lattice lies between them, so the sweep alone
+    // would light the far slab as if the near one were not there (the bunny's head over its
+    // chest). The depth entering from outside the lattice is marched instead.
+    const double dx = 0.05, sigmaT = 2.0;
+    vxf::VoxelSet set = boxMedium(openvdb::CoordBBox(openvdb::Coord(0, -20, -20), openvdb::Coord(7, 20, 20)), dx);
+    set.get<openvdb::FloatGrid>("density")->tree().fill(openvdb::CoordBBox(openvdb::Coord(32, -20, -20), openvdb::Coord(47, 20, 20)), 1.0f, true);
+    set.get<openvdb::FloatGrid>("density")->tree().voxelizeActiveTiles();
+    vxf::Light sun;
+    sun.type = vxf::Light::Type::Directional;
+    sun.direction = openvdb::Vec3d(1.0, 0.0, 0.0); // through the near slab, then the far one
+    sun.intensity = 2.0;
+    const vxf::Material material = vxf::test::greyMaterial(0.5, 1.5);
+    const auto swept = litDirect(set, material, {sun}, true), marched = litDirect(set, material, {sun}, false);
+    for (int i : {32, 35, 47}) {
+        INFO("voxel x = " << i);
+        // 8 voxels of the near slab, then i − 32 + ½ of the far one.
+        const double expected = 2.0 * std::exp(-sigmaT * dx * (8.0 + (i - 32) + 0.5));
+        CHECK(swept->tree().getValue(openvdb::Coord(i, 0, 0)).x() == Approx(expected).epsilon(1e-3));
+        CHECK(marched->tree().getValue(openvdb::Coord(i, 0, 0)).x() == Approx(expected).epsilon(1e-3));
+    }
+}
+
 TEST_CASE("directional and environment lights by sweeps match the march through a sphere's surface", "[light][direct][sweep]")
 {
     // A sphere of radius 1 at 20 voxels per unit, mean free path 0.065 (0.77 voxels per mean

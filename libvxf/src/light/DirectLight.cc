@@ -48,6 +48,76 @@ openvdb::Vec3d lightFluence(const LightSampler& light, Medium::Sampler& sampler,
 
 namespace {
 
+/// The rim's light (voxels whose centre lies outside the surface within half a voxel; their
+/// light is taken on the surface beneath) comes from the sweep along directions that meet the
+/// surface at least this steeply (|cosine| to its normal), and is marched along the others.
+/// Steeply, the centre and the surface point see the light along neighbouring rays that cross
+/// no surface between them: from outside, through vacuum; from inside, leaving the medium at
+/// the surface the step to the centre crosses. Grazing, the two rays part where the surface
+/// curves away (the terminator), and only a march from the surface point is right.
+constexpr double kRimSweptCosine = 0.45;
+
+/// The rim: per lattice voxel, its entry in `normals` (the surface's outward unit normal, index
+/// space) or −1 for a voxel not in the rim.
+struct Rim
+{
+    std::vector<std::int32_t> entry;
+    std::vector<openvdb::Vec3d> normals;
+    bool grazing(std::int32_t e, const openvdb::Vec3d& towardLight) const
+    {
+        return std::abs(normals[std::size_t(e)].dot(towardLight)) < kRimSweptCosine;
+    }
+};
+
+/// The rim of @a lattice's voxels: centres outside the surface within half a voxel, where
+/// Medium::Sampler::mediumPoint is the surface beneath (with its normal there).
+Rim rimOf(const detail::SweepLattice& lattice, const Medium& medium)
+{
+    Rim rim;
+    rim.entry.assign(lattice.voxelCount(), -1);
+    if (!medium.surface()) return rim;
+    // Per leaf in parallel, then numbered in leaf order (the same for any thread count).
+    std::vector<std::vector<std::pair<std::uint32_t, openvdb::Vec3d>>> perLeaf(lattice.leafCount());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lattice.leafCount()), [&](const tbb::blocked_range<std::size_t>& r) {
+        Medium::Sampler sampler(medium);
+        for (std::size_t n = r.begin(); n != r.end(); ++n) {
+            for (int v = 0; v < detail::SweepLattice::kLeafVoxels; ++v) {
+                const openvdb::Coord ijk = lattice.origin(n).offsetBy(v >> 6, (v >> 3) & 7, v & 7);
+                const openvdb::Vec3d point = sampler.mediumPoint(ijk);
+                if (point == ijk.asVec3d()) continue;
+                openvdb::Vec3d normal;
+                if (sampler.surfaceNormal(ijk.asVec3d(), normal)) perLeaf[n].emplace_back(std::uint32_t(v), normal);
+            }
+        }
+    });
+    for (std::size_t n = 0; n < perLeaf.size(); ++n) {
+        for (const auto& [v, normal] : perLeaf[n]) {
+            rim.entry[n * detail::SweepLattice::kLeafVoxels + v] = std::int32_t(rim.normals.size());
+            rim.normals.push_back(normal);
+        }
+    }
+    return rim;
+}
+
+/// Fluence at rim voxel @a voxel from the samples of @a light that graze the surface there
+/// (Rim::grazing; the others come from sweepLight), marched from its medium point as
+/// lightFluence marches.
+openvdb::Vec3d rimGrazing(const LightSampler& light, Medium::Sampler& sampler, const Medium& medium, const openvdb::Coord& voxel,
+    const openvdb::Vec3d& normal, const MarchOptions& options, const RayScene* occluders)
+{
+    static thread_local std::vector<LightSample> samples;
+    const openvdb::math::Transform& xform = medium.transform();
+    const openvdb::Vec3d xIjk = sampler.mediumPoint(voxel), xWorld = xform.indexToWorld(xIjk);
+    light.sample(xWorld, coordKey(voxel), 0.5 * medium.voxelSize(), samples);
+    openvdb::Vec3d phi(0.0);
+    for (const LightSample& s : samples) {
+        const openvdb::Vec3d toward = (xform.worldToIndex(xWorld + s.direction) - xIjk).unit();
+        if (std::abs(normal.dot(toward)) >= kRimSweptCosine) continue;
+        phi += s.fluence * sampleTransmittance(s, sampler, medium, xWorld, options, occluders);
+    }
+    return phi;
+}
+
 /// Whether sweepLight handles @a light (the others are marched voxel by voxel).
 bool sweepable(const Light& light)
 {
@@ -56,15 +126,17 @@ bool sweepable(const Light& light)
 
 /// The fluence of a directional or environment light at the centre of every voxel of @a lattice
 /// (per voxel), its transmittance by one optical-depth sweep per direction
-/// (SweepLattice::opticalDepthAlong). Where every channel's transmittance is below
-/// options.march.cutoff the light counts as blocked, as a march stops there; occluder meshes
-/// are still asked per voxel and sample.
+/// (SweepLattice::opticalDepthAlong); at @a rim voxels only the directions not grazing the
+/// surface there (the others are marched, rimGrazing). Where every channel's transmittance is
+/// below options.march.cutoff the light counts as blocked, as a march stops there; occluder
+/// meshes are still asked per voxel and sample.
 std::vector<openvdb::Vec3f> sweepLight(const LightSampler& light, const detail::SweepLattice& lattice, const Medium& medium,
-    const DirectLightOptions& options)
+    const Rim& rim, const DirectLightOptions& options)
 {
     const openvdb::math::Transform& xform = medium.transform();
     const std::size_t count = lattice.voxelCount();
     const double tauCutoff = -std::log(std::max(options.march.cutoff, std::numeric_limits<double>::min()));
+    const float kBlocked = float(std::max(2.0 * tauCutoff, 50.0)); // a march stopped at the cutoff: beyond it
     const double minDistance = 0.5 * medium.voxelSize();
     std::vector<openvdb::Vec3f> phi(count, openvdb::Vec3f(0.0f)), tau;
     const auto worldOf = [&](std::size_t i) {
@@ -88,9 +160,29 @@ std::vector<openvdb::Vec3f> sweepLight(const LightSampler& light, const detail::
         const LightSample s = samples.front();
         // The light travels along −s.direction; in index space (the transform may scale).
         const openvdb::Vec3d travel = (xform.worldToIndex(anywhere - s.direction) - xform.worldToIndex(anywhere)).unit();
-        lattice.opticalDepthAlong(travel, tau);
+        // Light arriving at the lattice from a voxel of no leaf: the depth on its way there,
+        // marched toward the light (other parts of the medium, across vacuum, shadow it).
+        // With the medium's meshes at hand, a ray that meets none crosses no medium, and one
+        // that does is marched from two voxels before the first hit.
+        lattice.opticalDepthAlong(travel, tau, [&](const openvdb::Coord& ijk) {
+            openvdb::Vec3d from = ijk.asVec3d();
+            if (options.boundary) {
+                const auto hit = options.boundary->intersect(xform.indexToWorld(from), s.direction);
+                if (!hit) return openvdb::Vec3f(0.0f);
+                const openvdb::Vec3d at = xform.worldToIndex(xform.indexToWorld(from) + s.direction * hit->distance);
+                const double ahead = (at - from).length() - 2.0;
+                if (ahead > 0.0) from += -travel * ahead;
+            }
+            Medium::Sampler sampler(medium);
+            sampler.snapCrossingsTo(options.boundary);
+            const openvdb::Vec3d t = transmittanceToBoundary(sampler, medium, from, -travel, options.march);
+            openvdb::Vec3f depth;
+            for (int c = 0; c < 3; ++c) depth[c] = t[c] > 0.0 ? float(-std::log(t[c])) : kBlocked;
+            return depth;
+        });
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
             for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                if (rim.entry[i] >= 0 && rim.grazing(rim.entry[i], -travel)) continue;
                 const openvdb::Vec3d t = transmittanceOf(tau[i]);
                 if (t != openvdb::Vec3d(0.0) && visible(worldOf(i), s)) phi[i] += openvdb::Vec3f(s.fluence * t);
             }
@@ -175,11 +267,15 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
     // Lights by sweeps: their fluence at every voxel centre, read below except at the rim.
     std::optional<detail::SweepLattice> lattice;
     std::vector<std::vector<openvdb::Vec3f>> swept(active.size());
+    Rim rim;
     if (options.sweep) {
         for (std::size_t l = 0; l < active.size(); ++l) {
             if (!sweepable(active[l].light())) continue;
-            if (!lattice) lattice.emplace(medium, *direct);
-            swept[l] = sweepLight(active[l], *lattice, medium, options);
+            if (!lattice) {
+                lattice.emplace(medium, *direct);
+                rim = rimOf(*lattice, medium);
+            }
+            swept[l] = sweepLight(active[l], *lattice, medium, rim, options);
             checkInterrupt(interrupter);
         }
     }
@@ -188,12 +284,20 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
                               std::vector<openvdb::Vec3d>& sums, openvdb::Vec3f& outDirect, openvdb::Vec3f& outSource,
                               double weight) {
         openvdb::Vec3d phi(0.0);
-        // A rim voxel's light is marched from its medium point (lightFluence), for every light.
-        const std::int64_t index = lattice && sampler.mediumPoint(ijk) == ijk.asVec3d() ? lattice->indexOf(ijk) : -1;
+        // Swept lights from their sweep, plus at the rim their directions grazing the surface
+        // marched from its medium point (rimGrazing); the others marched (lightFluence).
+        const std::int64_t index = lattice ? lattice->indexOf(ijk) : -1;
+        const std::int32_t rimEntry = index >= 0 ? rim.entry[std::size_t(index)] : -1;
         for (std::size_t l = 0; l < active.size(); ++l) {
-            const openvdb::Vec3d f = index >= 0 && !swept[l].empty()
-                ? openvdb::Vec3d(swept[l][std::size_t(index)])
-                : lightFluence(active[l], sampler, medium, ijk, options.march, options.occluders);
+            openvdb::Vec3d f;
+            if (index < 0 || swept[l].empty()) {
+                f = lightFluence(active[l], sampler, medium, ijk, options.march, options.occluders);
+            } else {
+                f = openvdb::Vec3d(swept[l][std::size_t(index)]);
+                if (rimEntry >= 0) {
+                    f += rimGrazing(active[l], sampler, medium, ijk, rim.normals[std::size_t(rimEntry)], options.march, options.occluders);
+                }
+            }
             phi += f;
             sums[l] += f * weight;
         }

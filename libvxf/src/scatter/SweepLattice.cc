@@ -348,7 +348,8 @@ openvdb::Vec3SGrid::Ptr SweepLattice::write(const std::vector<openvdb::Vec3f>& v
 }
 
 template <typename Visit>
-void SweepLattice::inUpwindOrder(const openvdb::Vec3d& omega, const std::vector<openvdb::Vec3f>& values, const Visit& visit) const
+void SweepLattice::inUpwindOrder(const openvdb::Vec3d& omega, const std::vector<openvdb::Vec3f>& values, const Visit& visit,
+    const EnteringDepth& outside) const
 {
     const int octant = octantOf(omega);
     int sign[3];
@@ -357,7 +358,13 @@ void SweepLattice::inUpwindOrder(const openvdb::Vec3d& omega, const std::vector<
     const auto sweepLeaf = [&](std::size_t n, openvdb::Vec3f* buffer) {
         for (const Ghost& g : upwind) {
             const int leaf = mNeighbours[n * 27 + g.slot];
-            buffer[g.padded] = leaf < 0 ? openvdb::Vec3f(0.0f) : values[std::size_t(leaf) * kLeafVoxels + g.local];
+            if (leaf >= 0) {
+                buffer[g.padded] = values[std::size_t(leaf) * kLeafVoxels + g.local];
+            } else if (outside) {
+                buffer[g.padded] = outside(mOrigins[n].offsetBy(g.padded / 100 - 1, g.padded / 10 % 10 - 1, g.padded % 10 - 1));
+            } else {
+                buffer[g.padded] = openvdb::Vec3f(0.0f);
+            }
         }
         for (int qx = 0; qx < 8; ++qx) {
             const int x = sign[0] > 0 ? qx : 7 - qx;
@@ -489,7 +496,7 @@ void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::v
     }
 }
 
-void SweepLattice::opticalDepthAlong(const openvdb::Vec3d& omega, std::vector<openvdb::Vec3f>& tau) const
+void SweepLattice::opticalDepthAlong(const openvdb::Vec3d& omega, std::vector<openvdb::Vec3f>& tau, const EnteringDepth& entering) const
 {
     tau.assign(voxelCount(), openvdb::Vec3f(0.0f));
     const Characteristic c = characteristic(omega);
@@ -541,7 +548,7 @@ void SweepLattice::opticalDepthAlong(const openvdb::Vec3d& omega, std::vector<op
         }
         buffer[p] = result;
         tau[i] = result;
-    });
+    }, entering);
 }
 
 } // namespace vxf::detail

@@ -98,7 +98,14 @@ public:
     /// continued through it (see the implementation). O(voxels), not a march per voxel; results
     /// do not depend on the thread count. Parallel light travelling along @a direction (unit,
     /// index space):
-    void opticalDepthAlong(const openvdb::Vec3d& direction, std::vector<openvdb::Vec3f>& tau) const;
+    ///
+    /// Light reaching the lattice's upwind side from a voxel of no leaf may have crossed medium
+    /// before, beyond a gap of vacuum (the bunny's head shadowing its chest): @a entering(ijk)
+    /// gives the optical depth already on the path at such a voxel (e.g. a march from it toward
+    /// the light). Null: none, the lattice alone casts shadows.
+    using EnteringDepth = std::function<openvdb::Vec3f(const openvdb::Coord&)>;
+    void opticalDepthAlong(const openvdb::Vec3d& direction, std::vector<openvdb::Vec3f>& tau,
+        const EnteringDepth& entering = {}) const;
     /// The per-voxel index of voxel @a ijk, or −1 when no leaf of the lattice holds it.
     std::int64_t indexOf(const openvdb::Coord& ijk) const
     {
@@ -131,11 +138,12 @@ public:
 private:
     /// The leaves in upwind order along @a omega's octant (a wavefront's leaves in parallel),
     /// each with a padded buffer (kPaddedVoxels, one per thread) whose upwind ghost cells hold
-    /// @a values (per voxel; 0 where no leaf is): visit(leaf, buffer, x, y, z) for each of
-    /// its voxels in upwind order, which writes the voxel's own value to the buffer and to
-    /// @a values.
+    /// @a values (per voxel; where no leaf is, @a outside(ijk) if given, else 0): visit(leaf,
+    /// buffer, x, y, z) for each of its voxels in upwind order, which writes the voxel's own
+    /// value to the buffer and to @a values.
     template <typename Visit>
-    void inUpwindOrder(const openvdb::Vec3d& omega, const std::vector<openvdb::Vec3f>& values, const Visit& visit) const;
+    void inUpwindOrder(const openvdb::Vec3d& omega, const std::vector<openvdb::Vec3f>& values, const Visit& visit,
+        const EnteringDepth& outside = {}) const;
 
     double mVoxelSize = 1.0;
     std::vector<openvdb::Coord> mOrigins;
