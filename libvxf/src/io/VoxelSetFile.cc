@@ -4,6 +4,7 @@
 #include <vxf/io/AtomicFile.h>
 
 #include <openvdb/io/File.h>
+#include <openvdb/io/Stream.h>
 
 #include <fmt/format.h>
 
@@ -84,11 +85,20 @@ VoxelSet readVoxelSet(const std::string& path)
         static std::mutex budgetMutex;
         const std::lock_guard<std::mutex> lock(budgetMutex);
         const ReadBudget budget(bytes);
-        openvdb::io::File file(path);
-        file.open(/*delayLoad=*/false);
-        grids = file.getGrids();
-        metadata = file.getMetadata();
-        file.close();
+        // Through a stream that throws at the first read past its end: OpenVDB's reader loops
+        // over the counts a file declares, and from a stream that has failed each read does
+        // nothing, so a 5.9 KB file declaring 2^32 root tiles ran 36 s (found by fuzzing,
+        // tests/regress/fuzz/vdb_info).
+        std::ifstream in(path, std::ios::binary);
+        if (!in) throw Error(fmt::format("{}: cannot open: {}", path, std::strerror(errno)));
+        in.exceptions(std::ios::failbit | std::ios::badbit);
+        openvdb::io::Stream stream(in, /*delayLoad=*/false);
+        grids = stream.getGrids();
+        metadata = stream.getMetadata();
+    } catch (const Error&) {
+        throw;
+    } catch (const std::ios_base::failure&) {
+        throw Error(fmt::format("{}: not a readable OpenVDB file (it ends before the data it declares)", path));
     } catch (const openvdb::Exception& e) {
         throw Error(fmt::format("{}: not a readable OpenVDB file ({})", path, e.what()));
     } catch (const std::bad_alloc&) {
