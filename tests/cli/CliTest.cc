@@ -578,6 +578,20 @@ TEST_CASE("scatter with a band, render through Embree or the level set, occluder
             CHECK(exr.header().channels().findChannel(channel));
         }
     }
+    // The image writers past the file size limit: an error naming the file, the previous images
+    // intact, no temporary file beside them.
+    const std::string exrBefore = slurp(dir.path("i.exr")), pngBefore = slurp(dir.path("i.png"));
+    const auto entries = [&] { return std::distance(fs::directory_iterator(dir.root()), fs::directory_iterator()); };
+    const auto files = entries();
+    const auto limited = run(fmt::format("(ulimit -f 4; {} render {} --volume {} -o {} --png {})", binary("vxf"), dir.path("scene.json"),
+        dir.path("s.vdb"), dir.path("i.exr"), dir.path("i.png")));
+    INFO(limited.err);
+    CHECK(limited.status == 1);
+    CHECK(limited.err.find(dir.path("i.exr") + ": ") != std::string::npos);
+    CHECK(limited.err.find("File too large") != std::string::npos);
+    CHECK(slurp(dir.path("i.exr")) == exrBefore);
+    CHECK(slurp(dir.path("i.png")) == pngBefore);
+    CHECK(entries() == files);
 }
 
 TEST_CASE("vxf op runs operators on real files, records them, and vxf graph replays them", "[cli][ops]")
