@@ -264,7 +264,8 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
     std::atomic<std::size_t> done{0};
     std::atomic<bool> cancelled{false};
 
-    // Lights by sweeps: their fluence at every voxel centre, read below except at the rim.
+    // Lights by sweeps: their fluence at every voxel centre (at the rim, along the directions
+    // that do not graze the surface; rimGrazing adds the others below).
     std::optional<detail::SweepLattice> lattice;
     std::vector<std::vector<openvdb::Vec3f>> swept(active.size());
     Rim rim;
