@@ -3,7 +3,6 @@
 #include <vxf/core/GridRoles.h>
 #include <vxf/io/AtomicFile.h>
 
-#include <openvdb/io/File.h>
 #include <openvdb/io/Stream.h>
 
 #include <fmt/format.h>

@@ -9,6 +9,7 @@
 #include <openvdb/tree/LeafManager.h>
 
 #include <fmt/format.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <atomic>
@@ -136,7 +137,13 @@ std::vector<openvdb::Vec3f> sweepLight(const LightSampler& light, const detail::
     const openvdb::math::Transform& xform = medium.transform();
     const std::size_t count = lattice.voxelCount();
     const double tauCutoff = -std::log(std::max(options.march.cutoff, std::numeric_limits<double>::min()));
-    const float kBlocked = float(std::max(2.0 * tauCutoff, 50.0)); // a march stopped at the cutoff: beyond it
+    const float blocked = float(std::max(2.0 * tauCutoff, 50.0)); // a march stopped at the cutoff: beyond it
+    // One sampler per thread for the entering depths' marches (a sampler registers accessors).
+    tbb::enumerable_thread_specific<Medium::Sampler> samplers([&] {
+        Medium::Sampler sampler(medium);
+        sampler.snapCrossingsTo(options.boundary);
+        return sampler;
+    });
     const double minDistance = 0.5 * medium.voxelSize();
     std::vector<openvdb::Vec3f> phi(count, openvdb::Vec3f(0.0f)), tau;
     const auto worldOf = [&](std::size_t i) {
@@ -167,17 +174,15 @@ std::vector<openvdb::Vec3f> sweepLight(const LightSampler& light, const detail::
         lattice.opticalDepthAlong(travel, tau, [&](const openvdb::Coord& ijk) {
             openvdb::Vec3d from = ijk.asVec3d();
             if (options.boundary) {
-                const auto hit = options.boundary->intersect(xform.indexToWorld(from), s.direction);
+                const openvdb::Vec3d world = xform.indexToWorld(from);
+                const auto hit = options.boundary->intersect(world, s.direction);
                 if (!hit) return openvdb::Vec3f(0.0f);
-                const openvdb::Vec3d at = xform.worldToIndex(xform.indexToWorld(from) + s.direction * hit->distance);
-                const double ahead = (at - from).length() - 2.0;
-                if (ahead > 0.0) from += -travel * ahead;
+                const double ahead = (xform.worldToIndex(world + s.direction * hit->distance) - from).length() - 2.0;
+                if (ahead > 0.0) from -= travel * ahead;
             }
-            Medium::Sampler sampler(medium);
-            sampler.snapCrossingsTo(options.boundary);
-            const openvdb::Vec3d t = transmittanceToBoundary(sampler, medium, from, -travel, options.march);
+            const openvdb::Vec3d t = transmittanceToBoundary(samplers.local(), medium, from, -travel, options.march);
             openvdb::Vec3f depth;
-            for (int c = 0; c < 3; ++c) depth[c] = t[c] > 0.0 ? float(-std::log(t[c])) : kBlocked;
+            for (int c = 0; c < 3; ++c) depth[c] = t[c] > 0.0 ? float(-std::log(t[c])) : blocked;
             return depth;
         });
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {

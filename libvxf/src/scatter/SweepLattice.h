@@ -93,16 +93,15 @@ public:
     /// previous layer of centres (as in sweep), plus the step's own from there (its part inside
     /// the surface, σt the mean of the step's ends). Along a planar front in a uniform medium τ is
     /// linear, so the blend is exact there; blending the transmittance instead (convex in depth)
-    /// brightens every step. Light enters from outside the lattice with τ = 0 (vacuum).
-    /// Where light enters between upwind voxels on either side of the surface, their depth is
-    /// continued through it (see the implementation). O(voxels), not a march per voxel; results
-    /// do not depend on the thread count. Parallel light travelling along @a direction (unit,
-    /// index space):
+    /// brightens every step. Where light enters between upwind voxels on either side of the
+    /// surface, their depth is continued through it (see the implementation). O(voxels), not a
+    /// march per voxel; results do not depend on the thread count.
     ///
     /// Light reaching the lattice's upwind side from a voxel of no leaf may have crossed medium
     /// before, beyond a gap of vacuum (the bunny's head shadowing its chest): @a entering(ijk)
     /// gives the optical depth already on the path at such a voxel (e.g. a march from it toward
-    /// the light). Null: none, the lattice alone casts shadows.
+    /// the light); null: τ = 0 there, the lattice alone casts shadows. Parallel light
+    /// travelling along @a direction (unit, index space).
     using EnteringDepth = std::function<openvdb::Vec3f(const openvdb::Coord&)>;
     void opticalDepthAlong(const openvdb::Vec3d& direction, std::vector<openvdb::Vec3f>& tau,
         const EnteringDepth& entering = {}) const;
