@@ -52,6 +52,42 @@ TEST_CASE("slab transmittance is exp(-sigma_t d)", "[light][transmittance]")
     }
 }
 
+TEST_CASE("a march hands the rest of its way to whoever holds its depth", "[light][transmittance]")
+{
+    // Through the slab (x in [0, 20) voxels, its density ramping to 0 over the last half voxel)
+    // toward +x from x = 2: the hand-off at x = 10 takes the depth from there on (here the
+    // exact one, σt·9.5 dx, plus a marker), and the march's own part stops there.
+    const double dx = 0.05, sigmaT = 2.0;
+    const vxf::VoxelSet set = slab(20, dx);
+    const vxf::Medium medium(set, vxf::test::greyMaterial(0.5 * sigmaT, 0.5 * sigmaT));
+    vxf::Medium::Sampler sampler(medium);
+    const vxf::MarchOptions march{0.5, 1e-12};
+    const openvdb::Vec3d from(2.0, 0.0, 0.0), along(1.0, 0.0, 0.0);
+    const double whole = vxf::transmittanceToBoundary(sampler, medium, from, along, march).x();
+    CHECK(whole == Approx(std::exp(-sigmaT * dx * 17.5)).epsilon(1e-3)); // the density ramps over the last half voxel
+    std::vector<double> asked;
+    const double marker = 0.25;
+    const double handed = vxf::transmittanceToBoundary(sampler, medium, from, along, march,
+        [&](const openvdb::Vec3d& at, double, openvdb::Vec3f& depth) {
+            asked.push_back(at.x());
+            if (at.x() < 10.0 - 1e-9) return false;
+            depth = openvdb::Vec3f(float(sigmaT * dx * (19.5 - at.x()) + marker));
+            return true;
+        }).x();
+    // Asked a voxel or more apart (further after a uniform stretch crossed at once), first a
+    // voxel along, and taken inside the slab.
+    REQUIRE(asked.size() >= 2);
+    CHECK(asked.front() == Approx(3.0));
+    for (std::size_t i = 1; i < asked.size(); ++i) CHECK(asked[i] - asked[i - 1] >= 1.0 - 1e-9);
+    CHECK(asked.back() >= 10.0);
+    CHECK(asked.back() < 19.5);
+    CHECK(handed == Approx(whole * std::exp(-marker)).epsilon(1e-4));
+    // Never taken: the march itself, to the bit.
+    const double declined = vxf::transmittanceToBoundary(sampler, medium, from, along, march,
+        [](const openvdb::Vec3d&, double, openvdb::Vec3f&) { return false; }).x();
+    CHECK(declined == whole);
+}
+
 TEST_CASE("transmittance stays finite and in [0,1] at extreme coefficients", "[light][transmittance][stability]")
 {
     const vxf::VoxelSet set = slab(20, 0.05);

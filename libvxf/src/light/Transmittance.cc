@@ -57,7 +57,7 @@ int uniformSteps(const UniformBricks& uniform, const openvdb::Vec3d& p, const op
 }
 
 openvdb::Vec3d march(Medium::Sampler& sampler, const Medium& medium, const openvdb::Vec3d& origin,
-    const openvdb::Vec3d& unit, double t0, double t1, const MarchOptions& options)
+    const openvdb::Vec3d& unit, double t0, double t1, const MarchOptions& options, const MarchHandOff* handOff = nullptr)
 {
     if (medium.activeBounds().empty() || !clipRay(marchBounds(medium), origin, unit, t0, t1)) return openvdb::Vec3d(1.0);
     const double length = t1 - t0;
@@ -70,7 +70,16 @@ openvdb::Vec3d march(Medium::Sampler& sampler, const Medium& medium, const openv
     InsideSteps inside(sampler, origin, unit, t0, h);
     InsideStep step;
     const UniformBricks* uniform = medium.uniformBricks();
+    double nextHandOff = t0 + 1.0;
     for (int i = 0; i < steps; ++i) {
+        if (handOff && inside.t() >= nextHandOff) {
+            nextHandOff = inside.t() + 1.0;
+            openvdb::Vec3f depth;
+            if ((*handOff)(origin + unit * inside.t(), inside.distance(), depth)) {
+                for (int c = 0; c < 3; ++c) tau[c] += std::max(0.0, double(depth[c]));
+                break;
+            }
+        }
         // Through a uniform region all the steps that lie in it at once (the same sum).
         const int alike = uniform ? uniformSteps(*uniform, origin + unit * inside.t(), unit, h, steps - i, tau, medium) : 0;
         if (alike > 0) {
@@ -105,6 +114,15 @@ openvdb::Vec3d transmittanceToBoundary(Medium::Sampler& sampler, const Medium& m
     const double length = direction.length();
     if (!(length > 0.0)) return openvdb::Vec3d(1.0);
     return march(sampler, medium, fromIjk, direction / length, 0.0, std::numeric_limits<double>::max(), options);
+}
+
+openvdb::Vec3d transmittanceToBoundary(Medium::Sampler& sampler, const Medium& medium, const openvdb::Vec3d& fromIjk,
+    const openvdb::Vec3d& direction, const MarchOptions& options, const MarchHandOff& handOff)
+{
+    const double length = direction.length();
+    if (!(length > 0.0)) return openvdb::Vec3d(1.0);
+    return march(sampler, medium, fromIjk, direction / length, 0.0, std::numeric_limits<double>::max(), options,
+        handOff ? &handOff : nullptr);
 }
 
 } // namespace vxf

@@ -170,11 +170,7 @@ SweepLattice::SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topol
     // upwind neighbours (face, edge, corner) lie 1 to 3 wavefronts before it.
     for (int octant = 0; octant < 8; ++octant) {
         std::vector<long long> key(mOrigins.size());
-        for (std::size_t n = 0; n < mOrigins.size(); ++n) {
-            long long k = 0;
-            for (int a = 0; a < 3; ++a) k += ((octant >> a) & 1 ? -1 : 1) * (long long)(mOrigins[n][a] >> 3);
-            key[n] = k;
-        }
+        for (std::size_t n = 0; n < mOrigins.size(); ++n) key[n] = frontKey(n, octant);
         std::vector<std::int32_t>& order = mOrder[octant];
         order.resize(mOrigins.size());
         std::iota(order.begin(), order.end(), 0);
@@ -356,12 +352,13 @@ void SweepLattice::inUpwindOrder(const openvdb::Vec3d& omega, const std::vector<
     for (int a = 0; a < 3; ++a) sign[a] = (octant >> a) & 1 ? -1 : 1;
     const std::vector<Ghost> upwind = upwindGhosts(octant);
     const auto sweepLeaf = [&](std::size_t n, openvdb::Vec3f* buffer) {
+        const SweptSoFar swept(*this, values, octant, frontKey(n, octant));
         for (const Ghost& g : upwind) {
             const int leaf = mNeighbours[n * 27 + g.slot];
             if (leaf >= 0) {
                 buffer[g.padded] = values[std::size_t(leaf) * kLeafVoxels + g.local];
             } else if (outside) {
-                buffer[g.padded] = outside(mOrigins[n].offsetBy(g.padded / 100 - 1, g.padded / 10 % 10 - 1, g.padded % 10 - 1));
+                buffer[g.padded] = outside(mOrigins[n].offsetBy(g.padded / 100 - 1, g.padded / 10 % 10 - 1, g.padded % 10 - 1), swept);
             } else {
                 buffer[g.padded] = openvdb::Vec3f(0.0f);
             }

@@ -10,6 +10,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <unordered_map>
 #include <vector>
 
@@ -98,11 +99,13 @@ public:
     /// march per voxel; results do not depend on the thread count.
     ///
     /// Light reaching the lattice's upwind side from a voxel of no leaf may have crossed medium
-    /// before, beyond a gap of vacuum (the bunny's head shadowing its chest): @a entering(ijk)
-    /// gives the optical depth already on the path at such a voxel (e.g. a march from it toward
-    /// the light); null: τ = 0 there, the lattice alone casts shadows. Parallel light
-    /// travelling along @a direction (unit, index space).
-    using EnteringDepth = std::function<openvdb::Vec3f(const openvdb::Coord&)>;
+    /// before, beyond a gap of vacuum (the bunny's head shadowing its chest): @a entering(ijk,
+    /// swept) gives the optical depth already on the path at such a voxel (e.g. a march from it
+    /// toward the light, or the depth @a swept holds where the path left the medium upwind);
+    /// null: τ = 0 there, the lattice alone casts shadows. Parallel light travelling along
+    /// @a direction (unit, index space).
+    class SweptSoFar;
+    using EnteringDepth = std::function<openvdb::Vec3f(const openvdb::Coord&, const SweptSoFar&)>;
     void opticalDepthAlong(const openvdb::Vec3d& direction, std::vector<openvdb::Vec3f>& tau,
         const EnteringDepth& entering = {}) const;
     /// The per-voxel index of voxel @a ijk, or −1 when no leaf of the lattice holds it.
@@ -133,6 +136,15 @@ public:
 
     /// The leaf at @a leaf's origin + 8·(dx, dy, dz), dx… ∈ {−1, 0, 1}, or −1 for none.
     int neighbour(std::size_t leaf, int dx, int dy, int dz) const { return mNeighbours[leaf * 27 + (dx + 1) * 9 + (dy + 1) * 3 + (dz + 1)]; }
+
+    /// Wavefront key of leaf @a leaf along @a octant's diagonal: a leaf's upwind neighbours
+    /// have smaller keys, and a wavefront's leaves are swept once every smaller key's are.
+    long long frontKey(std::size_t leaf, int octant) const
+    {
+        long long k = 0;
+        for (int a = 0; a < 3; ++a) k += ((octant >> a) & 1 ? -1 : 1) * (long long)(mOrigins[leaf][a] >> 3);
+        return k;
+    }
 
 private:
     /// The leaves in upwind order along @a omega's octant (a wavefront's leaves in parallel),
@@ -165,6 +177,62 @@ private:
     };
     std::vector<Skin> mSkin;
     std::vector<std::int32_t> mSkinIndex; ///< per voxel, its entry in mSkin or −1
+};
+
+/// What a sweep in progress has finished, as an EnteringDepth sees it while a leaf is swept:
+/// the values of the leaves of earlier wavefronts, final whatever the thread count (later
+/// ones, the current wavefront's included, may be half done and are never read).
+class SweepLattice::SweptSoFar
+{
+public:
+    SweptSoFar(const SweepLattice& lattice, const std::vector<openvdb::Vec3f>& values, int octant, long long key)
+        : mLattice(lattice), mValues(values), mOctant(octant), mKey(key)
+    {
+    }
+    /// A finished sweep's @a values (per voxel): every leaf.
+    SweptSoFar(const SweepLattice& lattice, const std::vector<openvdb::Vec3f>& values)
+        : mLattice(lattice), mValues(values), mOctant(0), mKey(std::numeric_limits<long long>::max())
+    {
+    }
+
+    /// Trilinear interpolation of the swept values at index-space point @a ijk (voxel centres at
+    /// integer coordinates); false (@a value untouched) where one of the eight voxels it reads
+    /// lies in no leaf or in a leaf not yet finished.
+    bool sample(const openvdb::Vec3d& ijk, openvdb::Vec3f& value) const
+    {
+        const openvdb::Coord base = openvdb::Coord::floor(ijk);
+        openvdb::Vec3f corner[2][2][2];
+        for (int i = 0; i < 2; ++i) {
+            for (int j = 0; j < 2; ++j) {
+                for (int k = 0; k < 2; ++k) {
+                    const openvdb::Coord c = base.offsetBy(i, j, k);
+                    const auto found = mLattice.mLeafIndex.find(c & ~7);
+                    if (found == mLattice.mLeafIndex.end()) return false;
+                    const std::size_t leaf = std::size_t(found->second);
+                    if (mLattice.frontKey(leaf, mOctant) >= mKey) return false;
+                    corner[i][j][k] = mValues[leaf * kLeafVoxels + std::size_t(localIndex(c[0] & 7, c[1] & 7, c[2] & 7))];
+                }
+            }
+        }
+        const openvdb::Vec3d u = ijk - base.asVec3d();
+        openvdb::Vec3d v(0.0);
+        for (int i = 0; i < 2; ++i) {
+            for (int j = 0; j < 2; ++j) {
+                for (int k = 0; k < 2; ++k) {
+                    const double w = (i ? u[0] : 1.0 - u[0]) * (j ? u[1] : 1.0 - u[1]) * (k ? u[2] : 1.0 - u[2]);
+                    v += w * openvdb::Vec3d(corner[i][j][k]);
+                }
+            }
+        }
+        value = openvdb::Vec3f(v);
+        return true;
+    }
+
+private:
+    const SweepLattice& mLattice;
+    const std::vector<openvdb::Vec3f>& mValues;
+    int mOctant;
+    long long mKey;
 };
 
 } // namespace vxf::detail

@@ -22,9 +22,11 @@ struct DirectLightOptions
     /// Directional and environment lights by optical-depth sweeps over the medium's leaves (one
     /// per direction, SweepLattice::opticalDepthAlong), their transmittance at each voxel centre,
     /// instead of a march per voxel and direction. Light entering the leaves from outside them
-    /// brings the depth of a march from there (other parts of the medium shadow across vacuum);
-    /// the rim (centres outside the surface, whose light is taken at the surface) is marched
-    /// along the directions that graze the surface there (DirectLight.cc: kRimSweptCosine).
+    /// brings the depth it had where it left the medium upwind (other parts of the medium
+    /// shadow across vacuum: the sweep's own depth there, or a march); the rim (centres outside
+    /// the surface, whose light is taken at the surface) is marched along the directions that
+    /// graze the surface there (DirectLight.cc: kRimSweptCosine) until clear of the surface,
+    /// and takes the sweep's depth beyond (kRimHandOff).
     /// Point, spot and area lights are marched either way (one march per voxel and sample: a
     /// point light swept from its position came out 6.1% off the reference on the thick bunny
     /// at dim 64 against 3.9% marched, the surface's curvature under a light that close).

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
 
 namespace vxf {
 
@@ -133,6 +134,8 @@ public:
 
     /// Where the next step starts (the ray's parameter).
     double t() const { return mT; }
+    /// The signed distance there (voxels; without a surface, as Medium::Sampler gives it).
+    double distance() const { return mDistance; }
 
     /// Advance @a count whole steps without looking at them: for a caller that knows them all
     /// alike (UniformBricks: uniform inside the surface, or wholly outside) and has counted them.
@@ -240,5 +243,15 @@ openvdb::Vec3d transmittance(Medium::Sampler& sampler, const Medium& medium, con
 /// ray leaves the medium's bounds (light arriving from outside, e.g. directional or sky).
 openvdb::Vec3d transmittanceToBoundary(Medium::Sampler& sampler, const Medium& medium, const openvdb::Vec3d& fromIjk,
     const openvdb::Vec3d& direction, const MarchOptions& options);
+
+/// Where a march may stop and take the optical depth of the rest of its way from elsewhere (a
+/// sweep's, say): asked with the point reached (index space) and the signed distance there
+/// (voxels) a voxel along the march and then at least a voxel apart (once after a uniform
+/// region crossed at once); true with @a depth, the optical depth from there on.
+using MarchHandOff = std::function<bool(const openvdb::Vec3d& pointIjk, double signedDistance, openvdb::Vec3f& depth)>;
+
+/// transmittanceToBoundary, handing the rest of the way to @a handOff where it takes it.
+openvdb::Vec3d transmittanceToBoundary(Medium::Sampler& sampler, const Medium& medium, const openvdb::Vec3d& fromIjk,
+    const openvdb::Vec3d& direction, const MarchOptions& options, const MarchHandOff& handOff);
 
 } // namespace vxf
