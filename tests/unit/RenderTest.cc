@@ -2,6 +2,7 @@
 
 #include <vxf/core/Hash.h>
 #include <vxf/core/ProceduralMesh.h>
+#include <vxf/core/RayScene.h>
 #include <vxf/io/ImageFile.h>
 #include <vxf/pipeline/SceneGeometry.h>
 #include <vxf/voxelize/Voxelize.h>
@@ -88,6 +89,54 @@ TEST_CASE("view mode through a thin sphere: J (1 - e^{-tau}) / sigma_t plus the 
     const double j = 0.4 / (4.0 * M_PI);
     const double expected = j * (1.0 - std::exp(-tau)) / 0.5 + std::exp(-tau) * 1.0;
     CHECK(image.combined[15 * 31 + 15].x() == Approx(expected).epsilon(0.01));
+}
+
+TEST_CASE("a camera inside the medium sees J (1 - e^{-sigma_t R}) / sigma_t around it, and the background through it", "[render]")
+{
+    // The camera at the centre of the lit sphere (radius R = 1): every ray crosses R of medium
+    // from the camera, whatever its direction. Thick, the infinite medium's σs φ / (4π σt); thin,
+    // plus the background seen through e^{−σt R}. The same with the sphere's mesh (Embree).
+    const double phi = 2.0;
+    const vxf::VoxelSet set = litSphere(phi);
+    const vxf::TriangleMesh mesh = vxf::makeSphere(openvdb::Vec3d(0.0), 1.0);
+    vxf::RayScene meshes;
+    meshes.add(mesh, 0);
+    meshes.commit();
+    vxf::Scene scene;
+    scene.camera.position = openvdb::Vec3d(0.0);
+    scene.camera.lookAt = openvdb::Vec3d(0.3, 1.0, 0.2);
+    scene.camera.up = openvdb::Vec3d(0, 0, 1);
+    scene.camera.fovDegrees = 90.0;
+    vxf::RenderOptions options;
+    options.width = 9;
+    options.height = 9;
+    options.samples = 1;
+    options.step = 0.5;
+    options.background = openvdb::Vec3d(0.5);
+    for (double sigmaT : {20.0, 0.7}) {
+        vxf::Material m;
+        m.sigmaA = openvdb::Vec3d(0.25 * sigmaT);
+        m.sigmaS = openvdb::Vec3d(0.75 * sigmaT);
+        const vxf::Medium medium(set, m);
+        vxf::SceneObject sphere;
+        sphere.name = "sphere";
+        sphere.mesh = "builtin:sphere";
+        sphere.material = m;
+        scene.objects = {sphere};
+        const double transmitted = std::exp(-sigmaT * 1.0);
+        const double expected = 0.75 * phi / (4.0 * M_PI) * (1.0 - transmitted) + 0.5 * transmitted;
+        for (bool withMeshes : {false, true}) {
+            vxf::RenderMeshes rayMeshes;
+            if (withMeshes) rayMeshes.visible = rayMeshes.media = &meshes;
+            const vxf::RenderedImage image = vxf::render(set, medium, scene, options, rayMeshes);
+            INFO("sigma_t " << sigmaT << (withMeshes ? ", meshes" : ", level set"));
+            for (std::size_t p : {std::size_t(0), std::size_t(40), std::size_t(80)}) { // corner, centre, corner
+                INFO("pixel " << p);
+                CHECK(image.combined[p][0] == Approx(expected).epsilon(0.02));
+                CHECK(image.alpha[p] == 1.0f);
+            }
+        }
+    }
 }
 
 TEST_CASE("view mode with the media's meshes: rays enter and leave where the mesh does, to the silhouette", "[render][rayscene]")

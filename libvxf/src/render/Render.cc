@@ -62,6 +62,17 @@ public:
         mTauCutoff = -std::log(std::max(options.cutoff, std::numeric_limits<double>::min()));
     }
 
+    /// Whether world point @a x lies in the medium: inside its surface where it has one, else
+    /// where σt is above 0 (a camera there sees the medium around it, no surface first).
+    bool contains(const openvdb::Vec3d& x)
+    {
+        const openvdb::Vec3d p = mMedium.transform().worldToIndex(x);
+        if (mMedium.activeBounds().empty() || !mBounds.isInside(p)) return false;
+        if (mMedium.surface()) return mSampler.signedDistance(p) < 0.0;
+        const openvdb::Vec3d sigmaT = mSampler.sigmaT(p);
+        return std::max({sigmaT[0], sigmaT[1], sigmaT[2]}) > 0.0;
+    }
+
     /// March from world point @a start along unit world direction @a dir, at most @a maxDistance (world).
     Gathered march(const openvdb::Vec3d& start, const openvdb::Vec3d& dir,
         double maxDistance = std::numeric_limits<double>::infinity(), std::uint64_t key = 0)
@@ -472,6 +483,7 @@ public:
         openvdb::Vec3d origin, dir;
         mContext.cameraRay(x + u, y + v, origin, dir);
         CameraSample c;
+        if (mMarcher.contains(origin)) return fromInside(origin, dir, key);
         const std::optional<Hit> hit = firstSurface(origin, dir);
         if (!hit) {
             c.combined = mOptions.background;
@@ -484,7 +496,7 @@ public:
         c.surface = surfaceTerm(hit->object, hit->point, hit->normal, dir, key);
         c.combined = c.surface;
         if (hit->object && hit->object->role != SceneObject::Role::Medium) return c; // opaque
-        const VolumeTerm g = mOptions.gather ? gatherInward(*hit, key) : marchOn(*hit, dir, key);
+        const VolumeTerm g = mOptions.gather ? gatherInward(*hit, key) : marchOn(hit->point, hit->distance, dir, key);
         c.direct = g.direct;
         c.scatter = g.scatter;
         for (int ch = 0; ch < 3; ++ch) c.combined[ch] += g.direct[ch] + g.scatter[ch] + g.transmittance[ch] * g.behind[ch];
@@ -537,19 +549,37 @@ private:
         return object->surface.emission + mShader.shade(object->surface, x, normal, -dir, key);
     }
 
-    /// View mode: the ray marches on through the medium, up to the first occluder or emitter behind.
-    VolumeTerm marchOn(const Hit& hit, const openvdb::Vec3d& dir, std::uint64_t key)
+    /// A camera inside the medium (fog, a cloud around the viewer): no surface first; the ray
+    /// marches from the camera on (marchOn), in view and gather mode alike, and what lies
+    /// behind shows through the medium's transmittance. Alpha 1, depth and normal 0: the
+    /// medium fills the view.
+    CameraSample fromInside(const openvdb::Vec3d& origin, const openvdb::Vec3d& dir, std::uint64_t key)
+    {
+        CameraSample c;
+        c.object = 0; // every ray from the camera starts in the medium alike
+        c.alpha = 1.0;
+        const VolumeTerm g = marchOn(origin, 0.0, dir, key);
+        c.direct = g.direct;
+        c.scatter = g.scatter;
+        for (int ch = 0; ch < 3; ++ch) c.combined[ch] = g.direct[ch] + g.scatter[ch] + g.transmittance[ch] * g.behind[ch];
+        return c;
+    }
+
+    /// View mode: the ray marches on through the medium from @a from (where it met the medium,
+    /// @a distance along the camera ray, or the camera inside it), up to the first occluder or
+    /// emitter behind.
+    VolumeTerm marchOn(const openvdb::Vec3d& from, double distance, const openvdb::Vec3d& dir, std::uint64_t key)
     {
         VolumeTerm out;
         double behindDistance = std::numeric_limits<double>::infinity();
         out.behind = mOptions.background;
         if (mContext.useMeshes) {
             double t = mEpsilon;
-            while (auto h = mContext.meshes.visible->intersect(hit.point, dir, t)) {
+            while (auto h = mContext.meshes.visible->intersect(from, dir, t)) {
                 const SceneObject& o = mContext.scene.objects[std::size_t(h->id)];
                 if (o.role != SceneObject::Role::Medium) { // opaque: an occluder or an emitter
                     behindDistance = h->distance;
-                    out.behind = surfaceTerm(&o, hit.point + dir * h->distance, h->normal, dir, key);
+                    out.behind = surfaceTerm(&o, from + dir * h->distance, h->normal, dir, key);
                     break;
                 }
                 t = h->distance + mEpsilon; // the medium's own surfaces: the march covers them
@@ -558,8 +588,8 @@ private:
         // From half a voxel before the hit: without a `surface` level set the voxels the
         // surface cuts hold medium on its outer side too (their volume fraction); with one,
         // the march skips what lies outside it.
-        const double back = std::min(0.5 * mContext.medium.voxelSize(), hit.distance);
-        const auto g = mMarcher.march(hit.point - dir * back, dir, behindDistance + back, key);
+        const double back = std::min(0.5 * mContext.medium.voxelSize(), distance);
+        const auto g = mMarcher.march(from - dir * back, dir, behindDistance + back, key);
         out.direct = g.direct;
         out.scatter = g.scatter;
         out.transmittance = g.transmittance;

@@ -80,6 +80,8 @@ struct RenderMeshes
 ///   occluder or emitter behind (its surface term) or the background, and the march stops
 ///   there. Gather mode: the average of such marches over a cosine-weighted hemisphere of
 ///   directions into the volume, dropping those that leave it at once.
+/// A camera inside the medium (inside its `surface`, or where σt > 0 without one) meets no
+/// surface first: every ray marches from the camera as above (gather mode too), alpha 1.
 /// Occluders and emitters show their surface term only: their SurfaceShading::emission plus,
 /// where the surface reflects, the lit term above (the `surface` layer holds both; emission
 /// shows without options.surface too). Missing rays see the background with alpha 0.
