@@ -6,6 +6,7 @@
 #include <vxf/light/Medium.h>
 
 #include <openvdb/openvdb.h>
+#include <openvdb/tools/Interpolation.h>
 
 #include <array>
 #include <cstdint>
@@ -205,26 +206,13 @@ public:
         for (int i = 0; i < 2; ++i) {
             for (int j = 0; j < 2; ++j) {
                 for (int k = 0; k < 2; ++k) {
-                    const openvdb::Coord c = base.offsetBy(i, j, k);
-                    const auto found = mLattice.mLeafIndex.find(c & ~7);
-                    if (found == mLattice.mLeafIndex.end()) return false;
-                    const std::size_t leaf = std::size_t(found->second);
-                    if (mLattice.frontKey(leaf, mOctant) >= mKey) return false;
-                    corner[i][j][k] = mValues[leaf * kLeafVoxels + std::size_t(localIndex(c[0] & 7, c[1] & 7, c[2] & 7))];
+                    const std::int64_t at = mLattice.indexOf(base.offsetBy(i, j, k));
+                    if (at < 0 || mLattice.frontKey(std::size_t(at) / kLeafVoxels, mOctant) >= mKey) return false;
+                    corner[i][j][k] = mValues[std::size_t(at)];
                 }
             }
         }
-        const openvdb::Vec3d u = ijk - base.asVec3d();
-        openvdb::Vec3d v(0.0);
-        for (int i = 0; i < 2; ++i) {
-            for (int j = 0; j < 2; ++j) {
-                for (int k = 0; k < 2; ++k) {
-                    const double w = (i ? u[0] : 1.0 - u[0]) * (j ? u[1] : 1.0 - u[1]) * (k ? u[2] : 1.0 - u[2]);
-                    v += w * openvdb::Vec3d(corner[i][j][k]);
-                }
-            }
-        }
-        value = openvdb::Vec3f(v);
+        value = openvdb::tools::BoxSampler::trilinearInterpolation(corner, ijk - base.asVec3d());
         return true;
     }
 
