@@ -339,7 +339,9 @@ TriangleMesh readMesh(const std::string& path, const MeshReadOptions& options, M
         }
         report.outwardOriented = true;
         timer.lap("export");
-        if (options.checkSelfIntersections) {
+        // Here the check only reports: with nobody to read the report it would change nothing
+        // (the slow path below needs it to choose how to orient).
+        if (options.checkSelfIntersections && reportOut) {
             InterruptStep step(interrupter, "checking self-intersections");
             checkSelfIntersections(result, report);
             timer.lap("self-intersections");

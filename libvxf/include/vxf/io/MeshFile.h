@@ -15,7 +15,8 @@ struct MeshReadOptions
 {
     /// Close each hole (border loop) with a flat triangulation so the interior is defined.
     bool fillHoles = true;
-    /// Look for intersecting faces (reported, never changed).
+    /// Look for intersecting faces (reported, never changed). A clean closed mesh read without
+    /// a report skips it: there the check would only report.
     bool checkSelfIntersections = true;
 };
 
