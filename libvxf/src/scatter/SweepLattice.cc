@@ -228,6 +228,14 @@ SweepLattice::SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topol
             mDeep[n] = std::all_of(d, d + kPaddedVoxels, [](float v) { return v < -0.5f; }) ? 1 : 0;
         }
     });
+    // Deep leaves of one σt (a voxelized mesh's interior): every step of a sweep there is alike.
+    mUniform.assign(mOrigins.size(), 0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mOrigins.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t n = r.begin(); n != r.end(); ++n) {
+            const openvdb::Vec3f* st = &mSigmaT[n * kPaddedVoxels];
+            mUniform[n] = mDeep[n] && std::all_of(st, st + kPaddedVoxels, [&](const openvdb::Vec3f& v) { return v == st[0]; }) ? 1 : 0;
+        }
+    });
     mSkinIndex.assign(surface ? voxelCount() : 0, -1);
     for (std::size_t i = 0; i < skin.size(); ++i) {
         if (!skin[i]) continue;
@@ -405,6 +413,40 @@ void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::v
             openvdb::Vec3f* out = &psi[n * kLeafVoxels];
             openvdb::Vec3f* phi = &fluence[n * kLeafVoxels];
             const int p = paddedIndex(x, y, z);
+            if (mUniform[n]) {
+                // The short path of a deep leaf of one σt: what the general path below computes
+                // there (every step whole, σt the same at both ends, no skin), to the bit, without
+                // its tests; the step's weights per channel kept while σt·h repeats. The thick
+                // bunny at dim 256 (about half its leaves so): 27 → 24 ns per voxel and direction
+                // (means of four interleaved runs each; 23.6 → 21.7 the fastest).
+                static thread_local StepWeights fast[3] = {{0.0, 0.0, 1.0}, {0.0, 0.0, 1.0}, {0.0, 0.0, 1.0}};
+                static thread_local double fastTau[3] = {-1.0, -1.0, -1.0};
+                openvdb::Vec3f psiIn(0.0f), jIn(0.0f);
+                for (int i = 0; i < 4; ++i) {
+                    psiIn += wt[i] * buffer[p + off[i]];
+                    jIn += wt[i] * j[p + off[i]];
+                }
+                openvdb::Vec3f result;
+                const openvdb::Vec3f sigmaT = st[0]; // the leaf's one σt: its padded block is not streamed
+                for (int ch = 0; ch < 3; ++ch) {
+                    const double sigma = sigmaT[ch];
+                    if (sigma <= 0.0) {
+                        result[ch] = float(psiIn[ch] + 0.5 * len * (double(jIn[ch]) + double(j[p][ch])));
+                        continue;
+                    }
+                    const double tau = sigma * len;
+                    if (tau != fastTau[ch]) {
+                        fast[ch] = stepWeights(tau);
+                        fastTau[ch] = tau;
+                    }
+                    result[ch] = float(fast[ch].transmittance * psiIn[ch] + len * (fast[ch].in * jIn[ch] + fast[ch].own * j[p][ch]));
+                }
+                buffer[p] = result;
+                const int v = localIndex(x, y, z);
+                out[v] = result;
+                phi[v] += w * result;
+                return;
+            }
             const bool deep = mDeep[n] != 0; // no surface within reach: every step whole, no skin
             openvdb::Vec3f psiIn(0.0f), jIn(0.0f), stIn(0.0f);
             float dIn = -1.0f;

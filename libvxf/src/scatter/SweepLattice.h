@@ -168,6 +168,7 @@ private:
     std::vector<openvdb::Vec3f> mSigmaT;      ///< padded, inside the surface (σt/f)
     std::vector<float> mDistance;             ///< padded, signed distance to the surface (voxels; −1 without one)
     std::vector<std::uint8_t> mDeep;          ///< per leaf: its padded block more than half a voxel inside the surface
+    std::vector<std::uint8_t> mUniform;       ///< per leaf: deep, and one σt over its padded block (sweep's short path)
     std::vector<float> mInterior;             ///< per voxel, 1/f
     std::vector<openvdb::Vec3f> mSigmaTVoxel, mSigmaS;
     struct Skin
