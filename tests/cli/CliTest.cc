@@ -5,6 +5,7 @@
 #include <vxf/io/VoxelSetFile.h>
 
 #include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfFrameBuffer.h>
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfInputFile.h>
 #include <catch2/catch.hpp>
@@ -12,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 
 #include <unistd.h>
@@ -669,4 +671,51 @@ TEST_CASE("the README operator table and the pipeline schema are what the regist
     const auto help = run(fmt::format("{} op blend --help", binary("vxf")));
     CHECK(help.out.find("--normalize_b") != std::string::npos);
     CHECK(help.out.find("one of add|subtract|multiply|darker|lighter|mix") != std::string::npos);
+}
+
+TEST_CASE("vxf run lights and renders a fog volume made by vdb_tool (a volume object, no mesh)", "[cli][run][volume]")
+{
+    TempDir dir;
+    const auto made = run(fmt::format("vdb_tool -sphere d=32 r=1 -ls2fog -write {}", dir.path("fog.vdb")));
+    INFO(made.out << made.err);
+    REQUIRE(made.status == 0);
+    vxf::test::spit(dir.path("fog.json"), R"({
+  "objects": [{"name": "fog", "volume": "fog.vdb", "grid": "ls2fog_sphere", "material": {"albedo": 0.9, "mean_free_path": 0.5}}],
+  "lights": [{"type": "directional", "direction": [0, 0, -1], "intensity": 3}],
+  "camera": {"position": [0, -4, 0], "look_at": [0, 0, 0], "fov": 40},
+  "scatter": {"passes": 8, "directions": 8, "kernel": "sweep"},
+  "render": {"width": 32, "height": 24, "samples": 1}
+})");
+    const auto result = run(fmt::format("{} run {} --out {}", binary("vxf"), dir.path("fog.json"), dir.path("out")));
+    INFO(result.out << result.err);
+    REQUIRE(result.status == 0);
+    CHECK(result.out.find("scatter   ran") != std::string::npos);
+    // The voxel set is the grid itself: its density, no surface.
+    std::string voxelFile;
+    for (const auto& e : fs::directory_iterator(dir.path("out/cache"))) {
+        if (e.path().filename().string().rfind("voxelize-", 0) == 0) voxelFile = e.path().string();
+    }
+    REQUIRE_FALSE(voxelFile.empty());
+    const vxf::VoxelSet voxels = vxf::readVoxelSet(voxelFile);
+    CHECK_FALSE(voxels.find("surface"));
+    CHECK(voxels.get<openvdb::FloatGrid>("density")->activeVoxelCount() > 0);
+
+    // The image (readExr refuses NaN and negative values): the fog lit where the camera ray
+    // meets it, nearly opaque through its middle (a chord of 2 = 4 mean free paths: alpha
+    // 1 − e^{−4} = 0.98); the corners miss it: black, alpha 0.
+    const vxf::RgbImage image = vxf::readExr(dir.path("out/fog.exr"));
+    REQUIRE(image.width == 32);
+    const openvdb::Vec3f centre = image.pixels[12 * 32 + 16], corner = image.pixels[0];
+    CHECK(centre[0] > 0.01f);
+    CHECK(corner == openvdb::Vec3f(0.0f));
+    Imf::InputFile exr(dir.path("out/fog.exr").c_str());
+    std::vector<float> alpha(std::size_t(32 * 24));
+    Imf::FrameBuffer frame;
+    frame.insert("A", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(alpha.data()), sizeof(float), sizeof(float) * 32));
+    exr.setFrameBuffer(frame);
+    const Imath::Box2i window = exr.header().dataWindow();
+    REQUIRE((window.min.x == 0 && window.min.y == 0));
+    exr.readPixels(window.min.y, window.max.y);
+    CHECK(alpha[12 * 32 + 16] == Approx(1.0 - std::exp(-4.0)).epsilon(0.05));
+    CHECK(alpha[0] == 0.0f);
 }

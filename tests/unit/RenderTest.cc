@@ -543,3 +543,51 @@ TEST_CASE("direct from an environment: the samples along a ray are spread over i
     // Independent picks at each point gave 0.37; the golden-ratio sequence along the ray 0.26.
     CHECK(noise < 0.30);
 }
+
+TEST_CASE("a volume object's grid: camera rays march it from the camera, alpha 1 - T, the background through it", "[render][volume]")
+{
+    // A fog box of density 1, 2 units across (40 voxels of 0.05, trilinear: ∫ρ ds = 2 along an
+    // axis), no surface and no meshes, lit by a constant `direct` φ: the centre's radiance is
+    // J (1 − e^{−τ}) / σt + e^{−τ}·background with J = σs φ / 4π, τ = 2 σt; its alpha 1 − e^{−τ}.
+    const double dx = 0.05, phi = 2.0;
+    vxf::VoxelSet set(openvdb::math::Transform::createLinearTransform(dx));
+    auto density = openvdb::FloatGrid::create(0.0f);
+    density->setName("density");
+    density->setGridClass(openvdb::GRID_FOG_VOLUME);
+    density->setTransform(set.transformPtr());
+    density->tree().denseFill(openvdb::CoordBBox(openvdb::Coord(-20), openvdb::Coord(19)), 1.0f, true);
+    set.put(density);
+    vxf::test::putConstantFluence(set, "direct", phi);
+    vxf::Material m;
+    m.sigmaA = openvdb::Vec3d(0.1, 0.2, 0.3);
+    m.sigmaS = openvdb::Vec3d(0.4, 0.3, 0.2);
+    const vxf::Medium medium(set, m);
+    vxf::Scene scene = frontView();
+    vxf::SceneObject cloud;
+    cloud.name = "cloud";
+    cloud.volume = "cloud.vdb"; // (the render reads the set it is given)
+    cloud.material = m;
+    scene.objects = {cloud};
+    vxf::RenderOptions options;
+    options.width = options.height = 31;
+    options.samples = 1;
+    options.background = openvdb::Vec3d(0.5, 1.0, 2.0);
+    for (bool gather : {false, true}) {
+        INFO((gather ? "gather" : "view") << " mode");
+        options.gather = gather;
+        const vxf::RenderedImage image = vxf::render(set, medium, scene, options);
+        const std::size_t centre = 15 * 31 + 15;
+        double meanT = 0.0;
+        for (int c = 0; c < 3; ++c) {
+            const double sigmaT = m.sigmaA[c] + m.sigmaS[c], t = std::exp(-2.0 * sigmaT);
+            const double j = m.sigmaS[c] * phi / (4.0 * M_PI);
+            CHECK(image.direct[centre][c] == Approx(j * (1.0 - t) / sigmaT).epsilon(0.01));
+            CHECK(image.combined[centre][c] == Approx(j * (1.0 - t) / sigmaT + t * options.background[c]).epsilon(0.01));
+            meanT += t / 3.0;
+        }
+        CHECK(image.alpha[centre] == Approx(1.0 - meanT).epsilon(0.01));
+        // A corner misses the box: the background, alpha 0.
+        CHECK(image.alpha[0] == 0.0f);
+        CHECK(image.combined[0] == openvdb::Vec3f(options.background));
+    }
+}

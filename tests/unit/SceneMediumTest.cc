@@ -1,10 +1,14 @@
 #include <vxf/pipeline/SceneMedium.h>
 
+#include <vxf/core/Error.h>
 #include <vxf/io/VoxelSetFile.h>
 
 #include "TestSupport.h"
 
 #include <catch2/catch.hpp>
+#include <openvdb/tools/Interpolation.h>
+#include <openvdb/tools/LevelSetSphere.h>
+#include <openvdb/tools/LevelSetUtil.h>
 
 namespace {
 
@@ -102,4 +106,68 @@ TEST_CASE("a material's per-voxel coefficient grids are read and resampled onto 
     CHECK_THROWS_WITH(vxf::voxelizeMedia(scene("missing"), options),
         Catch::Contains("coefficients.vdb") && Catch::Contains("no grid named 'missing'"));
     CHECK_THROWS_WITH(vxf::voxelizeMedia(scene("not_a_vector"), options), Catch::Contains("needs vec3s"));
+}
+
+TEST_CASE("a volume object's grid is the medium, on its own voxels; level sets and missing grids are refused", "[scene][voxelize][volume]")
+{
+    // A fog sphere (OpenVDB's level set sphere made a fog volume) as a simulation would write
+    // it, beside a temperature grid; the same sphere as a level set in another file.
+    vxf::test::TempDir dir;
+    auto sdf = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(1.0f, openvdb::Vec3f(0.0f), 0.1f);
+    auto fog = sdf->deepCopy();
+    openvdb::tools::sdfToFogVolume(*fog);
+    fog->setName("density");
+    auto temperature = fog->deepCopy();
+    temperature->setName("temperature");
+    openvdb::io::File(dir.path("smoke.vdb")).write({fog, temperature});
+    sdf->setName("density");
+    openvdb::io::File(dir.path("sphere.vdb")).write({sdf});
+
+    const auto scene = [&](const std::string& object) {
+        return vxf::parseScene(R"({"objects": [)" + object + R"(], "lights": [],
+          "camera": {"position": [0, -5, 0], "look_at": [0, 0, 0]}})", dir.path("scene.json"));
+    };
+    const std::string material = R"("material": {"sigma_a": [1, 1, 1], "sigma_s": [2, 2, 2]})";
+    vxf::VoxelizeOptions options;
+    options.dim = 16; // (does not apply: the grid's own voxels)
+
+    const vxf::VoxelSet set = vxf::voxelizeMedia(scene(R"({"volume": "smoke.vdb", )" + material + "}"), options);
+    CHECK_FALSE(set.find("surface"));
+    const auto density = set.get<openvdb::FloatGrid>("density");
+    CHECK(density->getGridClass() == openvdb::GRID_FOG_VOLUME);
+    CHECK(density->voxelSize()[0] == Approx(0.1));
+    CHECK(density->activeVoxelCount() == fog->activeVoxelCount());
+    const auto world = [](const openvdb::FloatGrid& g, const openvdb::Vec3d& x) {
+        return openvdb::tools::BoxSampler::sample(g.tree(), g.transform().worldToIndex(x));
+    };
+    CHECK(world(*density, {0.0, 0.0, 0.0}) == Approx(1.0f));
+    CHECK(world(*density, {0.0, 0.0, 1.2}) == 0.0f);
+
+    // Moved by the object's transform: translated as it is, turned by resampling.
+    const vxf::VoxelSet moved = vxf::voxelizeMedia(scene(R"({"volume": "smoke.vdb", "transform": {"translate": [3, 0, 0]}, )" + material + "}"), options);
+    CHECK(world(*moved.get<openvdb::FloatGrid>("density"), {3.0, 0.0, 0.0}) == Approx(1.0f));
+    CHECK(world(*moved.get<openvdb::FloatGrid>("density"), {0.0, 0.0, 0.0}) == 0.0f);
+    const vxf::VoxelSet turned = vxf::voxelizeMedia(
+        scene(R"({"volume": "smoke.vdb", "grid": "temperature", "transform": {"rotate": [0, 0, 30], "scale": 2}, )" + material + "}"), options);
+    const auto t = turned.get<openvdb::FloatGrid>("density");
+    CHECK(t->voxelSize()[0] == Approx(0.2));
+    CHECK(world(*t, {0.0, 0.0, 0.0}) == Approx(1.0f));
+    CHECK(world(*t, {0.0, 0.8, 0.0}) == Approx(1.0f)); // inside the sphere, now of radius 2
+    CHECK(world(*t, {0.0, 1.5, 0.0}) == Approx(0.25f / 0.3f).epsilon(0.05)); // in its fog ramp: −φ/(3 voxels of 0.1)
+    CHECK(world(*t, {0.0, 0.0, 2.3}) == 0.0f);
+
+    const auto refused = [&](const std::string& object) {
+        try {
+            vxf::voxelizeMedia(scene(object), options);
+        } catch (const vxf::Error& e) {
+            return std::string(e.what());
+        }
+        return std::string("(accepted)");
+    };
+    const std::string missing = refused(R"({"volume": "smoke.vdb", "grid": "heat", )" + material + "}");
+    CHECK_THAT(missing, Catch::Contains("smoke.vdb") && Catch::Contains("no grid named 'heat'") && Catch::Contains("density, temperature"));
+    CHECK_THAT(refused(R"({"volume": "sphere.vdb", )" + material + "}"), Catch::Contains("sphere.vdb") && Catch::Contains("level set"));
+    CHECK_THAT(refused(R"({"volume": "nothing.vdb", )" + material + "}"), Catch::Contains("nothing.vdb"));
+    CHECK_THAT(refused(R"({"volume": "smoke.vdb", )" + material + R"(}, {"mesh": "builtin:sphere", )" + material + "}"),
+        Catch::Contains("only medium"));
 }

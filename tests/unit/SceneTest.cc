@@ -140,7 +140,37 @@ TEST_CASE("bad scenes are refused with the field at fault", "[pipeline][scene]")
           "/scenes/test.json: /objects/1/surface/emission: only an occluder or an emitter emits (a medium's glow is a volume light)");
     CHECK(errorOf(edited(R"("cone_softness": 5)", R"("cone_softness": 25)")) ==
           "/scenes/test.json: /lights/1/cone_softness: the soft edge (25 degrees) must fit inside half the cone (20 degrees)");
+    // Volume objects (a .vdb's density grid): media only, without a surface; a mesh or a volume, not both.
+    CHECK(errorOf(edited(R"({"mesh": "builtin:box", "role": "occluder"})", R"({"volume": "smoke.vdb", "role": "occluder"})")) ==
+          "/scenes/test.json: /objects/1/role: a volume object is a medium (its grid is the medium's density); an opaque object needs a mesh");
+    CHECK(errorOf(edited(R"({"mesh": "builtin:box", "role": "occluder"})",
+              R"({"volume": "smoke.vdb", "material": {"albedo": 0.5, "mean_free_path": 1}, "surface": {"diffuse": 0.5}})")) ==
+          "/scenes/test.json: /objects/1/surface: a volume object has no surface to shade (its look is the volume term)");
+    CHECK(errorOf(edited(R"({"mesh": "builtin:box", "role": "occluder"})", R"({"mesh": "builtin:box", "role": "occluder", "grid": "density"})")) ==
+          "/scenes/test.json: /objects/1/grid: names the grid of a volume object; this object has a mesh");
+    CHECK_THAT(errorOf(edited(R"({"mesh": "builtin:box", "role": "occluder"})", R"({"mesh": "builtin:box", "volume": "smoke.vdb", "role": "occluder"})")),
+        Catch::StartsWith("/scenes/test.json: /objects/1"));
+    CHECK_THAT(errorOf(edited(R"({"mesh": "builtin:box", "role": "occluder"})", R"({"role": "occluder"})")),
+        Catch::StartsWith("/scenes/test.json: /objects/1"));
     CHECK_THROWS_WITH(vxf::loadScene("/nonexistent/scene.json"), "/nonexistent/scene.json: cannot open scene file");
+}
+
+TEST_CASE("a volume object names a .vdb and its density grid, resolved against the scene", "[pipeline][scene][volume]")
+{
+    const vxf::Scene scene = vxf::parseScene(R"({
+      "objects": [{"name": "smoke", "volume": "sim/smoke.vdb", "material": {"albedo": 0.9, "mean_free_path": 0.1}},
+                  {"name": "ground", "mesh": "builtin:box", "role": "occluder"}],
+      "lights": [], "camera": {"position": [0, -5, 0], "look_at": [0, 0, 0]}})", "/scenes/cloud.json");
+    REQUIRE(scene.objects.size() == 2);
+    CHECK(scene.objects[0].isVolume());
+    CHECK(scene.objects[0].volume == "/scenes/sim/smoke.vdb");
+    CHECK(scene.objects[0].grid == "density");
+    CHECK(scene.objects[0].mesh.empty());
+    CHECK_FALSE(scene.objects[1].isVolume());
+    const vxf::Scene flame = vxf::parseScene(R"({
+      "objects": [{"volume": "fire.vdb", "grid": "soot", "material": {"sigma_a": 1, "sigma_s": 1}}],
+      "lights": [], "camera": {"position": [0, -5, 0], "look_at": [0, 0, 0]}})", "/scenes/fire.json");
+    CHECK(flame.objects[0].grid == "soot");
 }
 
 TEST_CASE("every example scene is valid", "[pipeline][scene][examples]")

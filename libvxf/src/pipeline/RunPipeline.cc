@@ -72,7 +72,9 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
     for (const auto& o : scene.objects) {
         if (o.role != SceneObject::Role::Medium) continue;
         const Material& m = *o.material;
-        media.push_back({{"mesh", o.mesh}, {"bytes", fileFingerprint(o.mesh)}, {"transform", matrix(o.objectToWorld)},
+        const std::string& file = o.isVolume() ? o.volume : o.mesh;
+        media.push_back({{o.isVolume() ? "volume" : "mesh", file}, {"grid", o.isVolume() ? json(o.grid) : json()},
+            {"bytes", fileFingerprint(file)}, {"transform", matrix(o.objectToWorld)},
             {"sigma", mediaCount(scene) > 1 ? json{vec(m.sigmaA), vec(m.sigmaS)} : json()},
             {"grids", m.gridsFile.empty() ? json() : json{fileFingerprint(m.gridsFile), m.sigmaAGrid, m.sigmaSGrid}}});
     }

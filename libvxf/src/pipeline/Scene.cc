@@ -181,12 +181,26 @@ Scene parseScene(const std::string& text, const std::string& path)
         const std::string where = fmt::format("/objects/{}", i);
         SceneObject object;
         object.name = o.value("name", fmt::format("object{}", i));
-        object.mesh = reader.resolvePath(o["mesh"].get<std::string>());
+        if (o.contains("mesh")) {
+            object.mesh = reader.resolvePath(o["mesh"].get<std::string>());
+        } else {
+            object.volume = reader.resolvePath(o["volume"].get<std::string>());
+            object.grid = o.value("grid", object.grid);
+        }
         object.objectToWorld = o.contains("transform") ? reader.transform(o["transform"]) : openvdb::Mat4d::identity();
         const std::string role = o.value("role", std::string("medium"));
         object.role = role == "occluder" ? SceneObject::Role::Occluder
             : role == "emitter"          ? SceneObject::Role::Emitter
                                          : SceneObject::Role::Medium;
+        if (object.isVolume() && object.role != SceneObject::Role::Medium) {
+            reader.fail(where + "/role", "a volume object is a medium (its grid is the medium's density); an opaque object needs a mesh");
+        }
+        if (!object.isVolume() && o.contains("grid")) {
+            reader.fail(where + "/grid", "names the grid of a volume object; this object has a mesh");
+        }
+        if (object.isVolume() && o.contains("surface")) {
+            reader.fail(where + "/surface", "a volume object has no surface to shade (its look is the volume term)");
+        }
         if (o.contains("material")) object.material = reader.material(o["material"], where + "/material");
         if (object.role == SceneObject::Role::Medium && !object.material) {
             reader.fail(where, "a medium object needs a material (or set \"role\": \"occluder\")");

@@ -53,6 +53,9 @@ private:
 
 TriangleMesh objectMesh(const SceneObject& object)
 {
+    if (object.isVolume()) {
+        throw UsageError(fmt::format("object '{}' is a volume ({}), not a mesh", object.name, object.volume));
+    }
     TriangleMesh mesh;
     if (object.mesh.rfind("builtin:", 0) == 0) {
         auto builtin = builtinMesh(object.mesh);
@@ -74,7 +77,7 @@ RayScene sceneGeometry(const Scene& scene, SceneObject::Role role)
 {
     RayScene geometry;
     for (std::size_t i = 0; i < scene.objects.size(); ++i) {
-        if (scene.objects[i].role == role) geometry.add(objectMesh(scene.objects[i]), int(i));
+        if (scene.objects[i].role == role && !scene.objects[i].isVolume()) geometry.add(objectMesh(scene.objects[i]), int(i));
     }
     geometry.commit();
     return geometry;
@@ -85,6 +88,7 @@ SceneRayScenes sceneRayScenes(const Scene& scene)
     SceneRayScenes g;
     for (std::size_t i = 0; i < scene.objects.size(); ++i) {
         const SceneObject& object = scene.objects[i];
+        if (object.isVolume()) continue; // no surface: camera rays march it (render)
         const TriangleMesh mesh = objectMesh(object);
         g.visible.add(mesh, int(i));
         if (object.role == SceneObject::Role::Occluder) g.occluders.add(mesh, int(i));

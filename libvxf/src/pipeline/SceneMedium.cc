@@ -8,6 +8,8 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
+
 namespace vxf {
 
 int mediaCount(const Scene& scene)
@@ -60,6 +62,64 @@ void attachMaterialGrids(VoxelSet& set, const Material& material)
     }
 }
 
+namespace {
+
+/// A volume object's medium: its grid as `density`, on its own voxels moved by the object's
+/// transform (resampled trilinearly onto axis-aligned cubic voxels of the same volume when
+/// that turns or stretches them), negative values (simulations leave some after advection)
+/// clamped to 0, without a `surface`. Throws vxf::InputError naming the file and grid.
+VoxelSet volumeMedium(const SceneObject& object)
+{
+    const VoxelSet file = readVoxelSet(object.volume);
+    const auto fail = [&](const std::string& what) { throw InputError(object.volume, 0, 0, what); };
+    const openvdb::GridBase::Ptr found = file.find(object.grid);
+    if (!found) {
+        std::string names;
+        for (const auto& g : file.grids()) names += (names.empty() ? "" : ", ") + g->getName();
+        fail(fmt::format("no grid named '{}' for object '{}' (the file has: {})", object.grid, object.name,
+            names.empty() ? "none" : names));
+    }
+    const auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(found);
+    if (!grid) fail(fmt::format("grid '{}' holds {} values; a density is float", object.grid, found->valueType()));
+    if (grid->getGridClass() == openvdb::GRID_LEVEL_SET) {
+        fail(fmt::format("grid '{}' is a level set (signed distances), not a density; make a fog volume of it "
+                         "(vdb_tool -ls2fog, OpenVDB's sdfToFogVolume) or give the mesh", object.grid));
+    }
+    if (grid->background() != 0.0f) {
+        fail(fmt::format("grid '{}' has background {}; a density's is 0 (the medium would fill all space)", object.grid,
+            grid->background()));
+    }
+    openvdb::FloatGrid::Ptr density = grid->deepCopy();
+    bool finite = true;
+    for (auto it = density->beginValueOn(); it; ++it) {
+        const float v = *it;
+        if (!std::isfinite(v)) finite = false;
+        else if (v < 0.0f) it.setValue(0.0f);
+    }
+    if (!finite) fail(fmt::format("grid '{}' holds a non-finite density", object.grid));
+
+    openvdb::math::Transform::Ptr moved = grid->transform().copy();
+    if (object.objectToWorld != openvdb::Mat4d::identity()) moved->postMult(object.objectToWorld);
+    density->setTransform(moved);
+    // Cubic, axis-aligned voxels, which the marches and sweeps take (one voxel size).
+    const openvdb::Vec3d size = moved->voxelSize();
+    const bool cubic = moved->isLinear() && moved->hasUniformScale() &&
+        openvdb::math::isDiagonal(moved->baseMap()->getAffineMap()->getMat4().getMat3());
+    if (!cubic) {
+        auto target = openvdb::FloatGrid::create(0.0f);
+        target->setTransform(openvdb::math::Transform::createLinearTransform(std::cbrt(size[0] * size[1] * size[2])));
+        openvdb::tools::resampleToMatch<openvdb::tools::BoxSampler>(*density, *target);
+        density = target;
+    }
+    density->setName("density");
+    density->setGridClass(openvdb::GRID_FOG_VOLUME);
+    VoxelSet set(density->transformPtr());
+    set.put(density);
+    return set;
+}
+
+} // namespace
+
 VoxelSet voxelizeMedia(const Scene& scene, const VoxelizeOptions& options, Interrupter* interrupter)
 {
     std::vector<const SceneObject*> media;
@@ -67,6 +127,17 @@ VoxelSet voxelizeMedia(const Scene& scene, const VoxelizeOptions& options, Inter
         if (o.role == SceneObject::Role::Medium) media.push_back(&o);
     }
     if (media.empty()) throw UsageError(fmt::format("{}: no object is a medium", scene.path));
+    for (const SceneObject* o : media) {
+        if (o->isVolume() && media.size() > 1) {
+            throw UsageError(fmt::format("{}: object '{}': a volume object must be the scene's only medium (it has {})",
+                scene.path, o->name, media.size()));
+        }
+    }
+    if (media.size() == 1 && media.front()->isVolume()) {
+        VoxelSet set = volumeMedium(*media.front());
+        attachMaterialGrids(set, *media.front()->material);
+        return set;
+    }
     if (media.size() == 1) {
         VoxelSet set = voxelize(objectMesh(*media.front()), options, interrupter);
         attachMaterialGrids(set, *media.front()->material);

@@ -395,17 +395,18 @@ struct RenderContext
                     rays->largestId(), scene.objects.size()));
             }
         }
-        if (!useMeshes) {
-            levelSet = set.get<openvdb::FloatGrid>("surface");
-            if (levelSet->getGridClass() != openvdb::GRID_LEVEL_SET) throw Error("grid 'surface' must be a level set");
-            levelSetIntersector.emplace(*levelSet);
-        }
         // What the level set stands for: the scene's medium object, if it names one.
         for (const auto& o : scene.objects) {
             if (o.role == SceneObject::Role::Medium) {
                 levelSetObject = &o;
                 break;
             }
+        }
+        volumeMedium = levelSetObject && levelSetObject->isVolume();
+        if (!useMeshes && !volumeMedium) {
+            levelSet = set.get<openvdb::FloatGrid>("surface");
+            if (levelSet->getGridClass() != openvdb::GRID_LEVEL_SET) throw Error("grid 'surface' must be a level set");
+            levelSetIntersector.emplace(*levelSet);
         }
         const auto shining = [&](std::vector<LightSampler>& out) {
             for (const Light& l : scene.lights) {
@@ -453,6 +454,8 @@ struct RenderContext
     openvdb::FloatGrid::ConstPtr levelSet;
     std::optional<openvdb::tools::LevelSetRayIntersector<openvdb::FloatGrid>> levelSetIntersector;
     const SceneObject* levelSetObject = nullptr;
+    /// The medium is a volume object's grid: no surface, every camera ray marches from the camera.
+    bool volumeMedium = false;
     std::vector<LightSampler> surfaceLights; ///< the lights the surface term reflects (none: no surface term)
     std::vector<LightSampler> volumeLights;  ///< the lights single scattering is marched to (directFromLights)
     std::optional<InteriorField> directField; ///< single scattering read from the `direct` grid (not directFromLights)
@@ -483,6 +486,7 @@ public:
         openvdb::Vec3d origin, dir;
         mContext.cameraRay(x + u, y + v, origin, dir);
         CameraSample c;
+        if (mContext.volumeMedium) return throughVolume(origin, dir, key);
         if (mMarcher.contains(origin)) return fromInside(origin, dir, key);
         const std::optional<Hit> hit = firstSurface(origin, dir);
         if (!hit) {
@@ -517,6 +521,8 @@ private:
     struct VolumeTerm
     {
         openvdb::Vec3d direct{0.0}, scatter{0.0}, transmittance{0.0}, behind{0.0};
+        bool touched = false; ///< the march met medium
+        int opaque = -1;      ///< the occluder or emitter behind (its object index), or −1
     };
 
     std::optional<Hit> firstSurface(const openvdb::Vec3d& origin, const openvdb::Vec3d& dir)
@@ -565,6 +571,24 @@ private:
         return c;
     }
 
+    /// A medium without a surface (a volume object's grid: smoke, a cloud): the ray marches from
+    /// the camera through the density, over empty space in the marches' uniform bricks, up to
+    /// the first occluder or emitter, in view and gather mode alike (gather mode has no surface
+    /// to gather under). Alpha is 1 − T (the mean over the channels) where nothing opaque is
+    /// met, so the volume composites over a plate; the medium counts as object 0 for the
+    /// adaptive rays where it is met, else what is met behind.
+    CameraSample throughVolume(const openvdb::Vec3d& origin, const openvdb::Vec3d& dir, std::uint64_t key)
+    {
+        CameraSample c;
+        const VolumeTerm g = marchOn(origin, 0.0, dir, key);
+        c.direct = g.direct;
+        c.scatter = g.scatter;
+        for (int ch = 0; ch < 3; ++ch) c.combined[ch] = g.direct[ch] + g.scatter[ch] + g.transmittance[ch] * g.behind[ch];
+        c.alpha = g.opaque >= 0 ? 1.0 : 1.0 - (g.transmittance[0] + g.transmittance[1] + g.transmittance[2]) / 3.0;
+        c.object = g.touched ? int(mContext.levelSetObject - mContext.scene.objects.data()) : g.opaque;
+        return c;
+    }
+
     /// View mode: the ray marches on through the medium from @a from (where it met the medium,
     /// @a distance along the camera ray, or the camera inside it), up to the first occluder or
     /// emitter behind.
@@ -579,6 +603,7 @@ private:
                 const SceneObject& o = mContext.scene.objects[std::size_t(h->id)];
                 if (o.role != SceneObject::Role::Medium) { // opaque: an occluder or an emitter
                     behindDistance = h->distance;
+                    out.opaque = int(h->id);
                     out.behind = surfaceTerm(&o, from + dir * h->distance, h->normal, dir, key);
                     break;
                 }
@@ -593,6 +618,7 @@ private:
         out.direct = g.direct;
         out.scatter = g.scatter;
         out.transmittance = g.transmittance;
+        out.touched = g.touched;
         return out;
     }
 

@@ -41,7 +41,13 @@ struct SceneObject
     /// of the scene stands for what it emits: a flame around a point light, a bulb).
     enum class Role { Medium, Occluder, Emitter };
     std::string name;
-    std::string mesh;              ///< resolved path (relative to the scene file) or builtin:NAME
+    std::string mesh;              ///< resolved path (relative to the scene file) or builtin:NAME; "" for a volume
+    /// A medium given as a grid instead of a mesh (smoke, clouds, fog volumes from Houdini,
+    /// Blender or vdb_tool): the resolved path of a .vdb whose float grid @c grid is its
+    /// density, σ = density × the material's coefficients, on the grid's own voxels; "" for a mesh.
+    std::string volume;
+    std::string grid = "density";
+    bool isVolume() const { return !volume.empty(); }
     openvdb::Mat4d objectToWorld;  ///< scale, then rotate x, y, z (degrees), then translate
     Role role = Role::Medium;
     std::optional<Material> material; ///< present for media

@@ -9,7 +9,8 @@ namespace vxf {
 
 /// The world-space triangles of @a object: its mesh file (read and repaired as by
 /// `vxf voxelize`; a file is read once per process while its bytes stay the same) or
-/// built-in mesh, moved by its transform. Throws vxf::InputError for a bad mesh file.
+/// built-in mesh, moved by its transform. Throws vxf::InputError for a bad mesh file, and
+/// vxf::UsageError for a volume object (it has no mesh; the Embree scenes below leave them out).
 TriangleMesh objectMesh(const SceneObject& object);
 
 /// An Embree scene of the scene's objects of @a role, each with its index in scene.objects as

@@ -9,7 +9,9 @@
 namespace vxf {
 
 /// The scene's media on one voxel lattice, ready for the light stage.
-/// - One medium object: voxelize() of its (world-space) mesh.
+/// - One medium object: voxelize() of its (world-space) mesh; a volume object's grid as
+///   `density` on its own voxels (moved by its transform; options do not apply), no `surface`.
+///   A volume object must be the only medium.
 /// - Several: each is voxelized on the lattice of their joint bounds (dim counts voxels along
 ///   the longest side of all of them); `surface` is their CSG union, `density` the per-voxel
 ///   maximum, and `sigma_a` / `sigma_s` (Vec3f) hold Σ_i density_i·σ_i, so each object keeps its
