@@ -500,10 +500,7 @@ public:
         c.surface = surfaceTerm(hit->object, hit->point, hit->normal, dir, key);
         c.combined = c.surface;
         if (hit->object && hit->object->role != SceneObject::Role::Medium) return c; // opaque
-        const VolumeTerm g = mOptions.gather ? gatherInward(*hit, key) : marchOn(hit->point, hit->distance, dir, key);
-        c.direct = g.direct;
-        c.scatter = g.scatter;
-        for (int ch = 0; ch < 3; ++ch) c.combined[ch] += g.direct[ch] + g.scatter[ch] + g.transmittance[ch] * g.behind[ch];
+        addVolume(c, mOptions.gather ? gatherInward(*hit, key) : marchOn(hit->point, hit->distance, dir, key));
         return c;
     }
 
@@ -555,6 +552,15 @@ private:
         return object->surface.emission + mShader.shade(object->surface, x, normal, -dir, key);
     }
 
+    /// Adds the volume term @a g to @a c: its layers, and to the combined image the volume's
+    /// light plus what lies behind it seen through its transmittance.
+    static void addVolume(CameraSample& c, const VolumeTerm& g)
+    {
+        c.direct = g.direct;
+        c.scatter = g.scatter;
+        for (int ch = 0; ch < 3; ++ch) c.combined[ch] += g.direct[ch] + g.scatter[ch] + g.transmittance[ch] * g.behind[ch];
+    }
+
     /// A camera inside the medium (fog, a cloud around the viewer): no surface first; the ray
     /// marches from the camera on (marchOn), in view and gather mode alike, and what lies
     /// behind shows through the medium's transmittance. Alpha 1, depth and normal 0: the
@@ -564,10 +570,7 @@ private:
         CameraSample c;
         c.object = 0; // every ray from the camera starts in the medium alike
         c.alpha = 1.0;
-        const VolumeTerm g = marchOn(origin, 0.0, dir, key);
-        c.direct = g.direct;
-        c.scatter = g.scatter;
-        for (int ch = 0; ch < 3; ++ch) c.combined[ch] = g.direct[ch] + g.scatter[ch] + g.transmittance[ch] * g.behind[ch];
+        addVolume(c, marchOn(origin, 0.0, dir, key));
         return c;
     }
 
@@ -575,15 +578,13 @@ private:
     /// the camera through the density, over empty space in the marches' uniform bricks, up to
     /// the first occluder or emitter, in view and gather mode alike (gather mode has no surface
     /// to gather under). Alpha is 1 − T (the mean over the channels) where nothing opaque is
-    /// met, so the volume composites over a plate; the medium counts as object 0 for the
-    /// adaptive rays where it is met, else what is met behind.
+    /// met, so the volume composites over a plate; for the adaptive rays a ray that meets the
+    /// medium met its object, else what it meets behind.
     CameraSample throughVolume(const openvdb::Vec3d& origin, const openvdb::Vec3d& dir, std::uint64_t key)
     {
         CameraSample c;
         const VolumeTerm g = marchOn(origin, 0.0, dir, key);
-        c.direct = g.direct;
-        c.scatter = g.scatter;
-        for (int ch = 0; ch < 3; ++ch) c.combined[ch] = g.direct[ch] + g.scatter[ch] + g.transmittance[ch] * g.behind[ch];
+        addVolume(c, g);
         c.alpha = g.opaque >= 0 ? 1.0 : 1.0 - (g.transmittance[0] + g.transmittance[1] + g.transmittance[2]) / 3.0;
         c.object = g.touched ? int(mContext.levelSetObject - mContext.scene.objects.data()) : g.opaque;
         return c;
