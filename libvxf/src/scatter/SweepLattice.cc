@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <optional>
 #include <unordered_map>
 
 namespace vxf::detail {
@@ -129,6 +130,20 @@ inline int octantOf(const openvdb::Vec3d& omega)
 /// The part of a short characteristic's step inside the surface, from the signed distances at
 /// its start (the upwind crossing) and its end (the centre), linear along it: all of it, none,
 /// or the part next to the end inside, whose values then hold over that part.
+/// ψ at the end of a step of length @a h through a constant σt = @a sigma with J linear from
+/// @a jStart to @a jEnd: e^{−τ}ψ_in + h(in·J_a + own·J_b), and J integrated as it is where
+/// σt ≤ 0. @a weights holds stepWeights(@a tauOf), recomputed only when τ = σt·h changes (a
+/// uniform medium's steps share one τ: one exp a direction, not one a voxel; a pure function of
+/// τ, so the result does not depend on which voxel came before).
+inline float uniformStep(float psiIn, float jStart, float jEnd, double sigma, double h, StepWeights& weights, double& tauOf)
+{
+    if (sigma <= 0.0) return float(psiIn + 0.5 * h * (double(jStart) + double(jEnd)));
+    const double tau = sigma * h;
+    if (tau != tauOf) weights = stepWeights(tau);
+    tauOf = tau;
+    return float(weights.transmittance * psiIn + h * (weights.in * jStart + weights.own * jEnd));
+}
+
 struct InsidePart
 {
     double fraction = 1.0;
@@ -360,13 +375,14 @@ void SweepLattice::inUpwindOrder(const openvdb::Vec3d& omega, const std::vector<
     for (int a = 0; a < 3; ++a) sign[a] = (octant >> a) & 1 ? -1 : 1;
     const std::vector<Ghost> upwind = upwindGhosts(octant);
     const auto sweepLeaf = [&](std::size_t n, openvdb::Vec3f* buffer) {
-        const SweptSoFar swept(*this, values, octant, frontKey(n, octant));
+        std::optional<SweptSoFar> swept; // (for `outside`, made at the leaf's first ghost without a leaf)
         for (const Ghost& g : upwind) {
             const int leaf = mNeighbours[n * 27 + g.slot];
             if (leaf >= 0) {
                 buffer[g.padded] = values[std::size_t(leaf) * kLeafVoxels + g.local];
             } else if (outside) {
-                buffer[g.padded] = outside(mOrigins[n].offsetBy(g.padded / 100 - 1, g.padded / 10 % 10 - 1, g.padded % 10 - 1), swept);
+                if (!swept) swept.emplace(*this, values, octant, frontKey(n, octant));
+                buffer[g.padded] = outside(mOrigins[n].offsetBy(g.padded / 100 - 1, g.padded / 10 % 10 - 1, g.padded % 10 - 1), *swept);
             } else {
                 buffer[g.padded] = openvdb::Vec3f(0.0f);
             }
@@ -428,19 +444,7 @@ void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::v
                 }
                 openvdb::Vec3f result;
                 const openvdb::Vec3f sigmaT = st[0]; // the leaf's one σt: its padded block is not streamed
-                for (int ch = 0; ch < 3; ++ch) {
-                    const double sigma = sigmaT[ch];
-                    if (sigma <= 0.0) {
-                        result[ch] = float(psiIn[ch] + 0.5 * len * (double(jIn[ch]) + double(j[p][ch])));
-                        continue;
-                    }
-                    const double tau = sigma * len;
-                    if (tau != fastTau[ch]) {
-                        fast[ch] = stepWeights(tau);
-                        fastTau[ch] = tau;
-                    }
-                    result[ch] = float(fast[ch].transmittance * psiIn[ch] + len * (fast[ch].in * jIn[ch] + fast[ch].own * j[p][ch]));
-                }
+                for (int ch = 0; ch < 3; ++ch) result[ch] = uniformStep(psiIn[ch], jIn[ch], j[p][ch], sigmaT[ch], len, fast[ch], fastTau[ch]);
                 buffer[p] = result;
                 const int v = localIndex(x, y, z);
                 out[v] = result;
@@ -478,22 +482,15 @@ void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::v
             openvdb::Vec3f result = psiIn;
             if (inside > 0.0) {
                 const double h = len * inside;
-                // The last step's weights on this thread: a uniform medium's steps all have one τ
-                // (one exp a direction instead of one a voxel); a pure function of τ, so the
-                // result does not depend on which voxel came before.
+                // The last step's weights on this thread (uniformStep).
                 static thread_local StepWeights sw{0.0, 0.0, 1.0};
                 static thread_local double tauBefore = -1.0;
                 for (int ch = 0; ch < 3; ++ch) {
                     const double sa = sigmaStart[ch], sb = sigmaEnd[ch];
-                    if (sa <= 0.0 && sb <= 0.0) { // no extinction: J integrates as it is
-                        result[ch] = float(psiIn[ch] + 0.5 * h * (double(jStart[ch]) + double(jEnd[ch])));
-                        continue;
-                    }
-                    if (sa == sb) { // the common case inside: S linear is J linear, no division
-                        const double tau = sa * h;
-                        if (tau != tauBefore) sw = stepWeights(tau);
-                        tauBefore = tau;
-                        result[ch] = float(sw.transmittance * psiIn[ch] + h * (sw.in * jStart[ch] + sw.own * jEnd[ch]));
+                    // No extinction, or the common case inside, σt the same at both ends (S linear
+                    // is J linear, no division).
+                    if ((sa <= 0.0 && sb <= 0.0) || sa == sb) {
+                        result[ch] = uniformStep(psiIn[ch], jStart[ch], jEnd[ch], std::max(sa, sb), h, sw, tauBefore);
                         continue;
                     }
                     // dψ/dτ = −ψ + S with the source function S = J/σt linear in the
