@@ -21,6 +21,7 @@ int main(int argc, char** argv)
     commands.push_back(makeRunCommand(app));
     commands.push_back(makeOpCommand(app));
     commands.push_back(makeGraphCommand(app));
+    commands.push_back(makeViewCommand(app));
     commands.push_back(makeDemoCommand(app));
     return runMain(app, argc, argv, [&] {
         for (auto& command : commands) {

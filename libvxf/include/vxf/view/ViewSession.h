@@ -1,0 +1,123 @@
+// vxf — the state behind `vxf view`: one voxel set, its edits by the artist operators, undo, exports.
+#pragma once
+
+#include <vxf/core/VoxelSet.h>
+
+#include <nlohmann/json.hpp>
+
+#include <cstdint>
+#include <mutex>
+#include <string>
+#include <vector>
+
+namespace vxf::view {
+
+/// Points standing for a grid's active voxels, few enough to draw: each voxel where the grid has
+/// at most the budget, else one point per cell of 2^level voxels a side (the mean of the cell's
+/// active values at the mean of their centres, world space), the smallest level that fits.
+struct PointCloud
+{
+    int level = 0;                 ///< 0: one point per voxel
+    double cellSize = 0.0;         ///< world size of a point's cell
+    int channels = 1;              ///< 1 (float grids) or 3 (Vec3 grids)
+    std::vector<float> positions;  ///< x, y, z per point
+    std::vector<float> values;     ///< `channels` per point
+    double minValue = 0.0, maxValue = 0.0; ///< over every channel of the points (0, 0 when none)
+    std::uint64_t activeVoxels = 0;        ///< of the whole grid
+};
+
+/// An axis-aligned slice through a grid's active bounds: @a width x @a height values (index
+/// space, row-major, rows along the second axis), NaN where no voxel is active.
+struct Slice
+{
+    int axis = 2, index = 0;
+    openvdb::Coord origin;    ///< index of values[0]
+    int width = 0, height = 0;
+    int channels = 1;
+    std::vector<float> values; ///< channels per cell
+};
+
+/// A triangle mesh of the `surface` level set (OpenVDB's volumeToMesh), world space.
+struct SurfaceMesh
+{
+    std::vector<float> positions;     ///< x, y, z per vertex
+    std::vector<std::uint32_t> triangles;
+};
+
+/// How an export writes the edited grid (the thesis's three exports).
+enum class ExportMode
+{
+    Whole,    ///< the edited voxel set, every grid
+    Diff,     ///< the difference of the edited grid from the original (`vxf op diff`), alone
+    Smoothed  ///< the original set with that difference replayed, its edge blended (`apply_diff --smooth`)
+};
+
+/// One .vdb open for viewing and editing. Every edit is one operator of the registry (as
+/// `vxf op` runs it, checked by ops::checkArgs) applied to the current set and recorded; undo
+/// replays the recorded steps on the file as read, so the current set is always exactly what
+/// `vxf graph` makes of pipeline(). Thread-safe: every call takes the session's lock.
+class ViewSession
+{
+public:
+    /// Read @a path (vxf::Error naming it when it cannot be read).
+    explicit ViewSession(const std::string& path);
+
+    const std::string& path() const { return mPath; }
+    /// The folder exports may write into: the served file's.
+    const std::string& folder() const { return mFolder; }
+
+    /// The current set's grids: name, value type, class, active voxels, index and world bounds,
+    /// voxel size, value range; and the steps recorded.
+    nlohmann::json describe() const;
+
+    /// Points for @a grid (float or Vec3 of any precision; vxf::UsageError for other types or an
+    /// unknown name) within @a budget points (≥ 1).
+    PointCloud points(const std::string& grid, std::size_t budget) const;
+
+    /// The slice of @a grid across @a axis (0, 1, 2) at index @a index (clamped into its bounds).
+    Slice slice(const std::string& grid, int axis, int index) const;
+
+    /// The `surface` grid's mesh (empty when the set has none), at OpenVDB's @a adaptivity (0-1).
+    SurfaceMesh surfaceMesh(double adaptivity) const;
+
+    /// Apply operator @a op with @a params (a JSON object, as in a pipeline node) to the current
+    /// set and record it; returns the operator's report. Only the artist operators that edit a
+    /// set in place are allowed (not the pipeline stages, not those reading other files).
+    /// Errors leave the set and the record unchanged.
+    std::string apply(const std::string& op, const nlohmann::json& params);
+
+    /// Drop the last recorded step (false when there is none) and rebuild the set without it.
+    bool undo();
+
+    /// The recorded steps as a pipeline (schemas/pipeline.schema.json): the served file as the
+    /// source node, one node per step, the last written to @a output (a path, stored as given).
+    nlohmann::json pipeline(const std::string& output) const;
+
+    /// Write @a mode's result for @a grid to @a relativePath, a .vdb path inside folder() (no
+    /// absolute paths, no "..": vxf::UsageError), atomically; with Whole also the pipeline that
+    /// makes it beside it (NAME.pipeline.json). @a smooth: voxels blended (Smoothed). Returns
+    /// the absolute path written.
+    std::string exportTo(const std::string& relativePath, ExportMode mode, const std::string& grid, int smooth);
+
+    /// The operators apply() accepts.
+    static const std::vector<std::string>& editOperators();
+
+private:
+    struct Step
+    {
+        std::string op;
+        nlohmann::json params;
+    };
+    VoxelSet replay(const std::vector<Step>& steps) const;
+    static void run(VoxelSet& set, const std::string& op, const nlohmann::json& params, std::string* report);
+    openvdb::GridBase::ConstPtr gridNamed(const std::string& name) const;
+    std::string resolveInside(const std::string& relativePath) const;
+
+    std::string mPath, mFolder;
+    VoxelSet mOriginal; ///< as read (never edited: each replay starts from deep copies)
+    VoxelSet mCurrent;
+    std::vector<Step> mSteps;
+    mutable std::mutex mMutex;
+};
+
+} // namespace vxf::view

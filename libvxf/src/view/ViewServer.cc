@@ -1,0 +1,218 @@
+#include <vxf/view/ViewServer.h>
+
+#include <httplib.h>
+
+#include <fmt/format.h>
+
+#include <cstring>
+
+namespace vxf::view {
+
+namespace detail {
+// The page, its script and three.js (ViewAssets.cc, generated from libvxf/src/view/web and third_party/three).
+extern const char* const kIndexHtml;
+extern const char* const kViewJs;
+extern const char* const kThreeJs;
+extern const char* const kOrbitControlsJs;
+} // namespace detail
+
+namespace {
+
+/// Requests larger than this are refused (an edit is a few hundred bytes of JSON).
+constexpr std::size_t kMaxRequestBytes = 1 << 20;
+/// The most points one request may ask for.
+constexpr std::size_t kMaxPointBudget = 4'000'000;
+
+void sendError(httplib::Response& res, int status, const std::string& message)
+{
+    res.status = status;
+    res.set_content(nlohmann::json{{"error", message}}.dump(), "application/json");
+}
+
+void sendJson(httplib::Response& res, const nlohmann::json& body) { res.set_content(body.dump(), "application/json"); }
+
+template <typename T>
+void append(std::string& out, const T* data, std::size_t count)
+{
+    out.append(reinterpret_cast<const char*>(data), count * sizeof(T));
+}
+
+std::string param(const httplib::Request& req, const char* name)
+{
+    if (!req.has_param(name)) throw UsageError(fmt::format("missing query parameter '{}'", name));
+    return req.get_param_value(name);
+}
+
+long long integerParam(const httplib::Request& req, const char* name, long long fallback)
+{
+    if (!req.has_param(name)) return fallback;
+    const std::string text = req.get_param_value(name);
+    std::size_t used = 0;
+    long long value = 0;
+    try {
+        value = std::stoll(text, &used);
+    } catch (const std::exception&) {
+        used = 0;
+    }
+    if (used == 0 || used != text.size()) throw UsageError(fmt::format("query parameter '{}': '{}' is not a whole number", name, text));
+    return value;
+}
+
+nlohmann::json bodyJson(const httplib::Request& req)
+{
+    nlohmann::json body = nlohmann::json::parse(req.body, nullptr, /*allow_exceptions=*/false);
+    if (body.is_discarded() || !body.is_object()) throw UsageError("the request body is not a JSON object");
+    return body;
+}
+
+std::string stringField(const nlohmann::json& body, const char* name, const std::string& fallback = {}, bool required = true)
+{
+    if (!body.contains(name)) {
+        if (required) throw UsageError(fmt::format("the request lacks '{}'", name));
+        return fallback;
+    }
+    if (!body[name].is_string()) throw UsageError(fmt::format("'{}' must be a string", name));
+    return body[name].get<std::string>();
+}
+
+} // namespace
+
+struct ViewServer::Impl
+{
+    ViewSession& session;
+    httplib::Server server;
+    explicit Impl(ViewSession& s)
+        : session(s)
+    {
+    }
+};
+
+ViewServer::ViewServer(ViewSession& session)
+    : mImpl(std::make_unique<Impl>(session))
+{
+    httplib::Server& server = mImpl->server;
+    ViewSession& s = session;
+    server.set_payload_max_length(kMaxRequestBytes);
+    // vxf's errors from bad input are the client's (400); anything else is the server's (500).
+    server.set_exception_handler([](const httplib::Request&, httplib::Response& res, std::exception_ptr ep) {
+        try {
+            std::rethrow_exception(ep);
+        } catch (const Error& e) {
+            sendError(res, 400, e.what());
+        } catch (const std::exception& e) {
+            sendError(res, 500, e.what());
+        } catch (...) {
+            sendError(res, 500, "unknown error");
+        }
+    });
+    const auto asset = [&server](const char* path, const char* const& body, const char* type) {
+        server.Get(path, [&body, type](const httplib::Request&, httplib::Response& res) {
+            res.set_content(body, std::strlen(body), type);
+        });
+    };
+    asset("/", detail::kIndexHtml, "text/html; charset=utf-8");
+    asset("/view.js", detail::kViewJs, "text/javascript");
+    asset("/three.module.min.js", detail::kThreeJs, "text/javascript");
+    asset("/OrbitControls.js", detail::kOrbitControlsJs, "text/javascript");
+
+    server.Get("/api/info", [&s](const httplib::Request&, httplib::Response& res) { sendJson(res, s.describe()); });
+    server.Get("/api/points", [&s](const httplib::Request& req, httplib::Response& res) {
+        const long long budget = integerParam(req, "budget", 200000);
+        if (budget < 1 || std::size_t(budget) > kMaxPointBudget) {
+            throw UsageError(fmt::format("query parameter 'budget': {} is not in [1, {}]", budget, kMaxPointBudget));
+        }
+        const PointCloud cloud = s.points(param(req, "grid"), std::size_t(budget));
+        const std::size_t count = cloud.positions.size() / 3;
+        std::string body;
+        body.reserve(count * std::size_t(3 + cloud.channels) * sizeof(float));
+        for (std::size_t i = 0; i < count; ++i) {
+            append(body, &cloud.positions[3 * i], 3);
+            append(body, &cloud.values[std::size_t(cloud.channels) * i], std::size_t(cloud.channels));
+        }
+        res.set_header("X-Vxf-Count", std::to_string(count));
+        res.set_header("X-Vxf-Channels", std::to_string(cloud.channels));
+        res.set_header("X-Vxf-Level", std::to_string(cloud.level));
+        res.set_header("X-Vxf-Cell-Size", fmt::format("{}", cloud.cellSize));
+        res.set_header("X-Vxf-Min", fmt::format("{}", cloud.minValue));
+        res.set_header("X-Vxf-Max", fmt::format("{}", cloud.maxValue));
+        res.set_header("X-Vxf-Active", std::to_string(cloud.activeVoxels));
+        res.set_content(body, "application/octet-stream");
+    });
+    server.Get("/api/slice", [&s](const httplib::Request& req, httplib::Response& res) {
+        const long long axis = integerParam(req, "axis", 2), index = integerParam(req, "index", 0);
+        if (axis < 0 || axis > 2) throw UsageError(fmt::format("query parameter 'axis': {} is not 0, 1 or 2", axis));
+        const Slice slice = s.slice(param(req, "grid"), int(axis), int(std::clamp<long long>(index, INT32_MIN / 2, INT32_MAX / 2)));
+        nlohmann::json values = nlohmann::json::array();
+        for (float v : slice.values) values.push_back(std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr));
+        sendJson(res, {{"axis", slice.axis}, {"index", slice.index}, {"origin", {slice.origin.x(), slice.origin.y(), slice.origin.z()}},
+            {"width", slice.width}, {"height", slice.height}, {"channels", slice.channels}, {"values", values}});
+    });
+    server.Get("/api/mesh", [&s](const httplib::Request& req, httplib::Response& res) {
+        double adaptivity = 0.2;
+        if (req.has_param("adaptivity")) {
+            try {
+                adaptivity = std::stod(req.get_param_value("adaptivity"));
+            } catch (const std::exception&) {
+                throw UsageError("query parameter 'adaptivity' is not a number");
+            }
+        }
+        const SurfaceMesh mesh = s.surfaceMesh(adaptivity);
+        const std::uint32_t counts[2] = {std::uint32_t(mesh.positions.size() / 3), std::uint32_t(mesh.triangles.size() / 3)};
+        std::string body;
+        append(body, counts, 2);
+        append(body, mesh.positions.data(), mesh.positions.size());
+        append(body, mesh.triangles.data(), mesh.triangles.size());
+        res.set_content(body, "application/octet-stream");
+    });
+    server.Get("/api/pipeline", [&s](const httplib::Request& req, httplib::Response& res) {
+        sendJson(res, s.pipeline(req.has_param("output") ? req.get_param_value("output") : "edited.vdb"));
+    });
+    server.Post("/api/apply", [&s](const httplib::Request& req, httplib::Response& res) {
+        const nlohmann::json body = bodyJson(req);
+        const nlohmann::json params = body.contains("params") ? body["params"] : nlohmann::json::object();
+        const std::string report = s.apply(stringField(body, "op"), params);
+        sendJson(res, {{"report", report}, {"steps", s.describe()["steps"]}});
+    });
+    server.Post("/api/undo", [&s](const httplib::Request&, httplib::Response& res) {
+        const bool undone = s.undo();
+        sendJson(res, {{"undone", undone}, {"steps", s.describe()["steps"]}});
+    });
+    server.Post("/api/export", [&s](const httplib::Request& req, httplib::Response& res) {
+        const nlohmann::json body = bodyJson(req);
+        const std::string mode = stringField(body, "mode", "whole", false);
+        ExportMode m;
+        if (mode == "whole") m = ExportMode::Whole;
+        else if (mode == "diff") m = ExportMode::Diff;
+        else if (mode == "smoothed") m = ExportMode::Smoothed;
+        else throw UsageError(fmt::format("export mode '{}' is not whole, diff or smoothed", mode));
+        int smooth = 2;
+        if (body.contains("smooth")) {
+            if (!body["smooth"].is_number_integer()) throw UsageError("'smooth' must be a whole number of voxels");
+            smooth = body["smooth"].get<int>();
+        }
+        const std::string written = s.exportTo(stringField(body, "path"), m, stringField(body, "grid", "", m != ExportMode::Whole), smooth);
+        sendJson(res, {{"written", written}});
+    });
+    server.set_error_handler([](const httplib::Request& req, httplib::Response& res) {
+        if (res.status == 404 && res.body.empty()) sendError(res, 404, fmt::format("no such page or request: {}", req.path));
+    });
+}
+
+ViewServer::~ViewServer() = default;
+
+int ViewServer::bind(const std::string& host, int port)
+{
+    if (port == 0) {
+        const int bound = mImpl->server.bind_to_any_port(host);
+        if (bound <= 0) throw Error(fmt::format("view: cannot listen on {} (any port)", host));
+        return bound;
+    }
+    if (!mImpl->server.bind_to_port(host, port)) throw Error(fmt::format("view: cannot listen on {}:{} (in use? try --port 0)", host, port));
+    return port;
+}
+
+void ViewServer::listen() { mImpl->server.listen_after_bind(); }
+
+void ViewServer::stop() { mImpl->server.stop(); }
+
+} // namespace vxf::view

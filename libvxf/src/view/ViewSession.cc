@@ -1,0 +1,428 @@
+#include <vxf/view/ViewSession.h>
+
+#include <vxf/core/GridStats.h>
+#include <vxf/io/AtomicFile.h>
+#include <vxf/io/VoxelSetFile.h>
+#include <vxf/ops/Registry.h>
+
+#include <openvdb/tools/VolumeToMesh.h>
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <unordered_map>
+
+namespace vxf::view {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+/// The largest slice sent (cells): a 4096² plane of floats is 64 MiB, more than a page draws.
+constexpr std::int64_t kMaxSliceCells = std::int64_t(2048) * 2048;
+
+/// Visit every active value of a float or Vec3 grid (any precision) as floats: @a fn(box,
+/// values, channels), box one voxel or an active tile. vxf::UsageError for other types.
+template <typename Fn>
+int forEachActive(const openvdb::GridBase& grid, const std::string& name, Fn&& fn)
+{
+    const auto scalar = [&](const auto& typed) {
+        for (auto it = typed.cbeginValueOn(); it; ++it) {
+            const float v = float(*it);
+            fn(it.getBoundingBox(), &v, 1);
+        }
+        return 1;
+    };
+    const auto vector = [&](const auto& typed) {
+        for (auto it = typed.cbeginValueOn(); it; ++it) {
+            const auto& x = *it;
+            const float v[3] = {float(x[0]), float(x[1]), float(x[2])};
+            fn(it.getBoundingBox(), v, 3);
+        }
+        return 3;
+    };
+    if (const auto* g = dynamic_cast<const openvdb::FloatGrid*>(&grid)) return scalar(*g);
+    if (const auto* g = dynamic_cast<const openvdb::DoubleGrid*>(&grid)) return scalar(*g);
+    if (const auto* g = dynamic_cast<const openvdb::Vec3SGrid*>(&grid)) return vector(*g);
+    if (const auto* g = dynamic_cast<const openvdb::Vec3DGrid*>(&grid)) return vector(*g);
+    throw UsageError(fmt::format("grid '{}' holds {} values: the view shows float and vec3 grids", name, grid.valueType()));
+}
+
+int channelsOf(const openvdb::GridBase& grid)
+{
+    if (grid.isType<openvdb::Vec3SGrid>() || grid.isType<openvdb::Vec3DGrid>()) return 3;
+    if (grid.isType<openvdb::FloatGrid>() || grid.isType<openvdb::DoubleGrid>()) return 1;
+    return 0;
+}
+
+/// The value of voxel @a ijk as floats, false where it is inactive.
+bool activeValue(const openvdb::GridBase& grid, const openvdb::Coord& ijk, float* out)
+{
+    if (const auto* g = dynamic_cast<const openvdb::FloatGrid*>(&grid)) {
+        float v;
+        const bool on = g->tree().probeValue(ijk, v);
+        out[0] = v;
+        return on;
+    }
+    if (const auto* g = dynamic_cast<const openvdb::DoubleGrid*>(&grid)) {
+        double v;
+        const bool on = g->tree().probeValue(ijk, v);
+        out[0] = float(v);
+        return on;
+    }
+    if (const auto* g = dynamic_cast<const openvdb::Vec3SGrid*>(&grid)) {
+        openvdb::Vec3f v;
+        const bool on = g->tree().probeValue(ijk, v);
+        for (int c = 0; c < 3; ++c) out[c] = v[c];
+        return on;
+    }
+    if (const auto* g = dynamic_cast<const openvdb::Vec3DGrid*>(&grid)) {
+        openvdb::Vec3d v;
+        const bool on = g->tree().probeValue(ijk, v);
+        for (int c = 0; c < 3; ++c) out[c] = float(v[c]);
+        return on;
+    }
+    return false;
+}
+
+VoxelSet deepCopy(const VoxelSet& set)
+{
+    VoxelSet copy(set.transformPtr());
+    for (const auto& grid : set.grids()) copy.putAsIs(grid->deepCopyGrid());
+    copy.metadata() = set.metadata();
+    copy.setPath(set.path());
+    return copy;
+}
+
+} // namespace
+
+const std::vector<std::string>& ViewSession::editOperators()
+{
+    static const std::vector<std::string> names = {"add", "sub", "mul", "div", "pow", "blend", "blur", "blur_special",
+        "normalize", "denormalize", "gradient", "remove", "include", "select", "edit", "diff", "apply_diff", "split", "merge",
+        "rename", "copy"};
+    return names;
+}
+
+ViewSession::ViewSession(const std::string& path)
+    : mPath(fs::absolute(path).lexically_normal().string())
+    , mFolder(fs::path(mPath).parent_path().string())
+    , mOriginal(readVoxelSet(path))
+    , mCurrent(deepCopy(mOriginal))
+{
+}
+
+openvdb::GridBase::ConstPtr ViewSession::gridNamed(const std::string& name) const
+{
+    auto grid = mCurrent.find(name);
+    if (!grid) {
+        std::string names;
+        for (const auto& g : mCurrent.grids()) names += (names.empty() ? "" : ", ") + g->getName();
+        throw UsageError(fmt::format("no grid '{}' in {} (it has: {})", name, mPath, names));
+    }
+    return grid;
+}
+
+nlohmann::json ViewSession::describe() const
+{
+    std::lock_guard<std::mutex> lock(mMutex);
+    nlohmann::json grids = nlohmann::json::array();
+    for (const auto& grid : mCurrent.grids()) {
+        const GridStats stats = gridStats(*grid);
+        nlohmann::json g{{"name", grid->getName()}, {"type", grid->valueType()},
+            {"class", openvdb::GridBase::gridClassToString(grid->getGridClass())}, {"active_voxels", stats.activeVoxels},
+            {"channels", channelsOf(*grid)}, {"voxel_size", grid->voxelSize()[0]}};
+        if (!stats.activeBBox.empty()) {
+            const openvdb::BBoxd world = grid->transform().indexToWorld(stats.activeBBox);
+            g["index_min"] = {stats.activeBBox.min().x(), stats.activeBBox.min().y(), stats.activeBBox.min().z()};
+            g["index_max"] = {stats.activeBBox.max().x(), stats.activeBBox.max().y(), stats.activeBBox.max().z()};
+            g["world_min"] = {world.min().x(), world.min().y(), world.min().z()};
+            g["world_max"] = {world.max().x(), world.max().y(), world.max().z()};
+        }
+        if (channelsOf(*grid) > 0 && stats.activeVoxels > 0) {
+            double lo = std::numeric_limits<double>::max(), hi = -lo;
+            forEachActive(*grid, grid->getName(), [&](const openvdb::CoordBBox&, const float* v, int channels) {
+                for (int c = 0; c < channels; ++c) {
+                    if (!std::isfinite(v[c])) continue;
+                    lo = std::min(lo, double(v[c]));
+                    hi = std::max(hi, double(v[c]));
+                }
+            });
+            if (lo <= hi) g["range"] = {lo, hi};
+        }
+        grids.push_back(std::move(g));
+    }
+    nlohmann::json steps = nlohmann::json::array();
+    for (const Step& s : mSteps) steps.push_back({{"op", s.op}, {"params", s.params}});
+    return {{"file", mPath}, {"grids", grids}, {"steps", steps}, {"operators", editOperators()}};
+}
+
+PointCloud ViewSession::points(const std::string& name, std::size_t budget) const
+{
+    std::lock_guard<std::mutex> lock(mMutex);
+    const auto grid = gridNamed(name);
+    budget = std::max<std::size_t>(budget, 1);
+    PointCloud cloud;
+    cloud.channels = channelsOf(*grid);
+    if (cloud.channels == 0) forEachActive(*grid, name, [](const openvdb::CoordBBox&, const float*, int) {}); // the error
+    cloud.activeVoxels = gridStats(*grid).activeVoxels;
+
+    // The smallest level whose cells fit the budget (a tile counts as the cells it covers).
+    struct Cell
+    {
+        double weight = 0.0;
+        openvdb::Vec3d centre{0.0};
+        double value[3] = {0.0, 0.0, 0.0};
+    };
+    std::unordered_map<openvdb::Coord, Cell> cells;
+    const openvdb::CoordBBox bounds = gridStats(*grid).activeBBox;
+    const openvdb::Coord corner = bounds.empty() ? openvdb::Coord(0) : bounds.min();
+    int top = 0; // the level at which one cell covers the bounds
+    while (top < 30 && (std::int64_t(1) << top) < std::int64_t(std::max({bounds.dim().x(), bounds.dim().y(), bounds.dim().z()}))) ++top;
+    for (int level = 0;; ++level) {
+        cells.clear();
+        bool over = false;
+        forEachActive(*grid, name, [&](const openvdb::CoordBBox& box, const float* v, int channels) {
+            if (over) return;
+            for (int c = 0; c < channels; ++c) {
+                if (!std::isfinite(v[c])) return; // a NaN or inf voxel is not drawn
+            }
+            // Cells from the active bounds' corner (so that one cell holds them all at the top
+            // level); a tile wider than a cell adds itself to every cell it covers.
+            const openvdb::Coord a = box.min() - corner, b = box.max() - corner;
+            const openvdb::Coord lo(a.x() >> level, a.y() >> level, a.z() >> level);
+            const openvdb::Coord hi(b.x() >> level, b.y() >> level, b.z() >> level);
+            for (int x = lo.x(); x <= hi.x() && !over; ++x) {
+                for (int y = lo.y(); y <= hi.y() && !over; ++y) {
+                    for (int z = lo.z(); z <= hi.z(); ++z) {
+                        const openvdb::Coord key(x, y, z);
+                        const openvdb::Coord first = corner + openvdb::Coord(x << level, y << level, z << level);
+                        const openvdb::CoordBBox part(openvdb::Coord::maxComponent(box.min(), first),
+                            openvdb::Coord::minComponent(box.max(), first.offsetBy((1 << level) - 1)));
+                        const double w = double(part.volume());
+                        Cell& cell = cells[key];
+                        cell.weight += w;
+                        cell.centre += w * part.getCenter();
+                        for (int c = 0; c < channels; ++c) cell.value[c] += w * v[c];
+                        if (cells.size() > budget) {
+                            over = true;
+                            break;
+                        }
+                    }
+                }
+            }
+        });
+        if (!over || level >= top) {
+            cloud.level = level;
+            break;
+        }
+    }
+    // In a fixed order (by cell), so that the same grid gives the same points.
+    std::vector<std::pair<openvdb::Coord, Cell>> sorted(cells.begin(), cells.end());
+    std::sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    const openvdb::math::Transform& xform = grid->transform();
+    cloud.cellSize = grid->voxelSize()[0] * double(1 << cloud.level);
+    cloud.positions.reserve(sorted.size() * 3);
+    cloud.values.reserve(sorted.size() * std::size_t(cloud.channels));
+    double lo = std::numeric_limits<double>::max(), hi = -lo;
+    for (const auto& [key, cell] : sorted) {
+        const openvdb::Vec3d world = xform.indexToWorld(cell.centre / cell.weight);
+        for (int a = 0; a < 3; ++a) cloud.positions.push_back(float(world[a]));
+        for (int c = 0; c < cloud.channels; ++c) {
+            const double v = cell.value[c] / cell.weight;
+            cloud.values.push_back(float(v));
+            lo = std::min(lo, v);
+            hi = std::max(hi, v);
+        }
+    }
+    if (lo <= hi) {
+        cloud.minValue = lo;
+        cloud.maxValue = hi;
+    }
+    return cloud;
+}
+
+Slice ViewSession::slice(const std::string& name, int axis, int index) const
+{
+    std::lock_guard<std::mutex> lock(mMutex);
+    const auto grid = gridNamed(name);
+    if (axis < 0 || axis > 2) throw UsageError(fmt::format("slice axis {} is not 0, 1 or 2 (x, y, z)", axis));
+    Slice s;
+    s.axis = axis;
+    s.channels = channelsOf(*grid);
+    if (s.channels == 0) forEachActive(*grid, name, [](const openvdb::CoordBBox&, const float*, int) {}); // the error
+    const openvdb::CoordBBox bounds = gridStats(*grid).activeBBox;
+    if (bounds.empty()) return s;
+    const int u = axis == 0 ? 1 : 0, v = axis == 2 ? 1 : 2;
+    s.index = std::clamp(index, bounds.min()[axis], bounds.max()[axis]);
+    s.width = bounds.dim()[u];
+    s.height = bounds.dim()[v];
+    if (std::int64_t(s.width) * s.height > kMaxSliceCells) {
+        throw UsageError(fmt::format("grid '{}' is {} x {} voxels across axis {}: over the view's {} cells a slice", name, s.width,
+            s.height, axis, kMaxSliceCells));
+    }
+    s.origin = bounds.min();
+    s.origin[axis] = s.index;
+    s.values.assign(std::size_t(s.width) * std::size_t(s.height) * std::size_t(s.channels), std::nanf(""));
+    float value[3];
+    for (int j = 0; j < s.height; ++j) {
+        for (int i = 0; i < s.width; ++i) {
+            openvdb::Coord ijk = s.origin;
+            ijk[u] += i;
+            ijk[v] += j;
+            if (!activeValue(*grid, ijk, value)) continue;
+            const std::size_t at = (std::size_t(j) * std::size_t(s.width) + std::size_t(i)) * std::size_t(s.channels);
+            for (int c = 0; c < s.channels; ++c) s.values[at + std::size_t(c)] = value[c];
+        }
+    }
+    return s;
+}
+
+SurfaceMesh ViewSession::surfaceMesh(double adaptivity) const
+{
+    std::lock_guard<std::mutex> lock(mMutex);
+    SurfaceMesh mesh;
+    const auto surface = openvdb::gridPtrCast<openvdb::FloatGrid>(mCurrent.find("surface"));
+    if (!surface || surface->getGridClass() != openvdb::GRID_LEVEL_SET) return mesh;
+    std::vector<openvdb::Vec3s> points;
+    std::vector<openvdb::Vec3I> triangles;
+    std::vector<openvdb::Vec4I> quads;
+    openvdb::tools::volumeToMesh(*surface, points, triangles, quads, 0.0, std::clamp(adaptivity, 0.0, 1.0));
+    mesh.positions.reserve(points.size() * 3);
+    for (const auto& p : points) mesh.positions.insert(mesh.positions.end(), {p[0], p[1], p[2]});
+    // OpenVDB's faces wind clockwise seen from outside: reversed for the usual counter-clockwise front.
+    for (const auto& t : triangles) mesh.triangles.insert(mesh.triangles.end(), {t[0], t[2], t[1]});
+    for (const auto& q : quads) mesh.triangles.insert(mesh.triangles.end(), {q[0], q[2], q[1], q[0], q[3], q[2]});
+    return mesh;
+}
+
+void ViewSession::run(VoxelSet& set, const std::string& name, const nlohmann::json& params, std::string* report)
+{
+    const auto& allowed = editOperators();
+    if (std::find(allowed.begin(), allowed.end(), name) == allowed.end()) {
+        throw UsageError(fmt::format("the view applies the artist operators ({}), not '{}'", fmt::join(allowed, ", "), name));
+    }
+    if (!params.is_object()) throw UsageError(fmt::format("{}: params must be a JSON object", name));
+    for (const char* key : {"with_file", "from_file"}) {
+        if (params.contains(key)) throw UsageError(fmt::format("{}: the view edits one file; '{}' is not taken here", name, key));
+    }
+    const ops::Operator& op = ops::findOperator(name);
+    const ops::Args args = ops::checkArgs(op, params);
+    ops::OpContext context{set, args, nullptr};
+    const std::string r = op.run(context);
+    if (report) *report = r;
+}
+
+VoxelSet ViewSession::replay(const std::vector<Step>& steps) const
+{
+    VoxelSet set = deepCopy(mOriginal);
+    for (const Step& s : steps) run(set, s.op, s.params, nullptr);
+    return set;
+}
+
+std::string ViewSession::apply(const std::string& op, const nlohmann::json& params)
+{
+    std::lock_guard<std::mutex> lock(mMutex);
+    std::string report;
+    try {
+        run(mCurrent, op, params, &report);
+    } catch (...) {
+        mCurrent = replay(mSteps); // an operator may have changed part of the set before it failed
+        throw;
+    }
+    mSteps.push_back({op, params});
+    return report;
+}
+
+bool ViewSession::undo()
+{
+    std::lock_guard<std::mutex> lock(mMutex);
+    if (mSteps.empty()) return false;
+    std::vector<Step> kept(mSteps.begin(), mSteps.end() - 1);
+    mCurrent = replay(kept);
+    mSteps = std::move(kept);
+    return true;
+}
+
+nlohmann::json ViewSession::pipeline(const std::string& output) const
+{
+    std::lock_guard<std::mutex> lock(mMutex);
+    nlohmann::json nodes{{"source", {{"file", mPath}}}};
+    std::string last = "source";
+    for (std::size_t i = 0; i < mSteps.size(); ++i) {
+        const std::string node = fmt::format("step{}_{}", i + 1, mSteps[i].op);
+        nodes[node] = {{"op", mSteps[i].op}, {"input", last}, {"params", mSteps[i].params}};
+        last = node;
+    }
+    return {{"nodes", nodes}, {"outputs", {{last, output}}}};
+}
+
+std::string ViewSession::resolveInside(const std::string& relativePath) const
+{
+    const fs::path given(relativePath);
+    if (relativePath.empty() || given.is_absolute()) {
+        throw UsageError(fmt::format("export path '{}': give a path relative to {} (the served file's folder)", relativePath, mFolder));
+    }
+    for (const auto& part : given) {
+        if (part == "..") throw UsageError(fmt::format("export path '{}': '..' would leave {}", relativePath, mFolder));
+    }
+    if (given.extension() != ".vdb") throw UsageError(fmt::format("export path '{}': must end in .vdb", relativePath));
+    const fs::path full = (fs::path(mFolder) / given).lexically_normal();
+    if (fs::weakly_canonical(full) == fs::weakly_canonical(mPath)) {
+        throw UsageError(fmt::format("export path '{}' is the served file itself: export beside it", relativePath));
+    }
+    return full.string();
+}
+
+std::string ViewSession::exportTo(const std::string& relativePath, ExportMode mode, const std::string& grid, int smooth)
+{
+    const std::string path = resolveInside(relativePath);
+    nlohmann::json graph;
+    VoxelSet out;
+    {
+        std::lock_guard<std::mutex> lock(mMutex);
+        if (mode == ExportMode::Whole) {
+            out = mCurrent;
+        } else {
+            if (!mCurrent.find(grid)) throw UsageError(fmt::format("export: no grid '{}' in the edited set", grid));
+            if (!mOriginal.find(grid)) throw UsageError(fmt::format("export: grid '{}' is new (not in {}): export it whole", grid, mPath));
+            // The original with the edited grid beside it, then the same operators as `vxf op`.
+            VoxelSet work = deepCopy(mOriginal);
+            const std::string edited = grid + ":edited", difference = grid + "_diff";
+            auto copy = mCurrent.find(grid)->deepCopyGrid();
+            copy->setName(edited);
+            work.putAsIs(copy);
+            run(work, "diff", {{"grid", grid}, {"with", edited}, {"out", difference}}, nullptr);
+            if (mode == ExportMode::Diff) {
+                out = VoxelSet(work.transformPtr());
+                out.putAsIs(work.find(difference));
+            } else {
+                run(work, "apply_diff", {{"grid", grid}, {"with", difference}, {"smooth", std::clamp(smooth, 0, 64)}}, nullptr);
+                work.remove(edited);
+                work.remove(difference);
+                out = work;
+            }
+        }
+    }
+    out.setProvenance("view", nlohmann::json{{"file", mPath},
+        {"export", mode == ExportMode::Whole ? "whole" : mode == ExportMode::Diff ? "diff" : "smoothed"}, {"grid", grid}}.dump());
+    fs::create_directories(fs::path(path).parent_path());
+    writeVoxelSet(path, out);
+    if (mode == ExportMode::Whole) {
+        const std::string pipelinePath = (fs::path(path).parent_path() / (fs::path(path).stem().string() + ".pipeline.json")).string();
+        const std::string text = pipeline(path).dump(2) + "\n";
+        writeAtomically(pipelinePath, [&](const std::string& tmp) {
+            std::ofstream file(tmp, std::ios::binary);
+            file << text;
+            file.close();
+            if (!file) throw Error(fmt::format("{}: cannot write", pipelinePath));
+        });
+    }
+    return path;
+}
+
+} // namespace vxf::view

@@ -1,0 +1,164 @@
+#include <vxf/view/ViewSession.h>
+
+#include "../TestSupport.h"
+
+#include <vxf/io/VoxelSetFile.h>
+#include <vxf/ops/Edit.h>
+#include <vxf/ops/Select.h>
+#include <vxf/pipeline/Graph.h>
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+using namespace vxf;
+
+namespace {
+
+/// A sphere of 16 cells per unit (about 17k voxels) with `density` and a `direct` colour that
+/// varies along x, written to @a path.
+void writeSphere(const std::string& path)
+{
+    VoxelSet set = test::uniformSphere(test::albedoMaterial(4.0, 0.9), 1.0);
+    auto direct = set.get<openvdb::Vec3SGrid>("direct");
+    for (auto it = direct->beginValueOn(); it; ++it) {
+        const double x = direct->transform().indexToWorld(it.getCoord()).x();
+        it.setValue(openvdb::Vec3f(float(1.0 + x), 0.5f, float(1.0 - x)));
+    }
+    writeVoxelSet(path, set);
+}
+
+} // namespace
+
+TEST_CASE("view: points per voxel within the budget, cells of 2^level voxels beyond it", "[view]")
+{
+    test::TempDir dir;
+    writeSphere(dir.path("s.vdb"));
+    const view::ViewSession session(dir.path("s.vdb"));
+    const auto density = readVoxelSet(dir.path("s.vdb")).get<openvdb::FloatGrid>("density");
+    const auto active = density->activeVoxelCount();
+
+    const view::PointCloud all = session.points("density", active);
+    CHECK(all.level == 0);
+    CHECK(all.positions.size() == 3 * active);
+    CHECK(all.activeVoxels == active);
+    CHECK(all.minValue == 1.0); // every voxel of the sphere holds density 1
+    CHECK(all.maxValue == 1.0);
+
+    const view::PointCloud coarse = session.points("density", 1000);
+    CHECK(coarse.level >= 2);
+    CHECK(coarse.values.size() <= 1000);
+    CHECK(coarse.values.size() > 100);
+    CHECK(coarse.cellSize == Approx(density->voxelSize()[0] * (1 << coarse.level)));
+    CHECK(coarse.minValue == 1.0); // means of ones
+
+    // A Vec3 grid's cells hold the mean colour of their voxels: the whole sphere in one cell
+    // holds its mean (symmetric in x: red and blue average to 1).
+    const view::PointCloud one = session.points("direct", 1);
+    REQUIRE(one.values.size() == 3);
+    CHECK(one.channels == 3);
+    CHECK(one.values[0] == Approx(1.0).margin(1e-5));
+    CHECK(one.values[1] == Approx(0.5));
+    CHECK(one.values[2] == Approx(1.0).margin(1e-5));
+    CHECK(std::abs(one.positions[0]) < 1e-5); // at the centre
+
+    CHECK_THROWS_WITH(session.points("nope", 10), Catch::Contains("no grid 'nope'") && Catch::Contains("density"));
+}
+
+TEST_CASE("view: a slice holds the active voxels' values and NaN elsewhere", "[view]")
+{
+    test::TempDir dir;
+    writeSphere(dir.path("s.vdb"));
+    const view::ViewSession session(dir.path("s.vdb"));
+    const auto direct = readVoxelSet(dir.path("s.vdb")).get<openvdb::Vec3SGrid>("direct");
+    const view::Slice s = session.slice("direct", 2, 0);
+    REQUIRE(s.channels == 3);
+    REQUIRE(s.width > 0);
+    int active = 0, checked = 0;
+    for (int j = 0; j < s.height; ++j) {
+        for (int i = 0; i < s.width; ++i) {
+            const openvdb::Coord ijk = s.origin.offsetBy(i, j, 0);
+            const float* v = &s.values[(std::size_t(j) * std::size_t(s.width) + std::size_t(i)) * 3];
+            openvdb::Vec3f expected;
+            if (direct->tree().probeValue(ijk, expected)) {
+                ++active;
+                checked += v[0] == expected[0] && v[1] == expected[1] && v[2] == expected[2];
+            } else {
+                CHECK(std::isnan(v[0]));
+            }
+        }
+    }
+    CHECK(active > 100);
+    CHECK(checked == active);
+    CHECK(session.slice("direct", 2, 100000).index == direct->evalActiveVoxelBoundingBox().max().z()); // clamped
+    CHECK_THROWS_WITH(session.slice("direct", 3, 0), Catch::Contains("axis 3"));
+}
+
+TEST_CASE("view: edits are the registry's operators, undoable, and the pipeline replays them to the same bits", "[view]")
+{
+    test::TempDir dir;
+    writeSphere(dir.path("s.vdb"));
+    view::ViewSession session(dir.path("s.vdb"));
+    const nlohmann::json select = {{"grid", "direct"}, {"shape", "box"}, {"min", {-1, -1, -1}}, {"max", {0, 1, 1}}};
+    CHECK_THAT(session.apply("select", select), Catch::Contains("into 'mask'"));
+    session.apply("edit", {{"grid", "direct"}, {"selection", "mask"}, {"hue_shift", 120.0}});
+
+    // What the operators give when called directly.
+    VoxelSet expected = readVoxelSet(dir.path("s.vdb"));
+    auto direct = expected.get<openvdb::Vec3SGrid>("direct");
+    const auto mask = ops::selectBox(*direct, openvdb::BBoxd(openvdb::Vec3d(-1.0), openvdb::Vec3d(0.0, 1.0, 1.0)));
+    ops::EditOptions hue;
+    hue.hueShift = 120.0;
+    ops::edit(*direct, mask.get(), hue);
+
+    const std::string whole = session.exportTo("out/whole.vdb", view::ExportMode::Whole, "", 0);
+    const VoxelSet written = readVoxelSet(whole);
+    std::string why;
+    CHECK(test::identicalGrids(*written.find("direct"), *direct, &why));
+    INFO(why);
+
+    // The pipeline written beside it makes the same set (vxf graph).
+    nlohmann::json graph = session.pipeline(dir.path("replayed.vdb"));
+    test::spit(dir.path("p.json"), graph.dump());
+    runGraph(dir.path("p.json"), dir.path("cache"));
+    CHECK(test::identicalGrids(*readVoxelSet(dir.path("replayed.vdb")).find("direct"), *written.find("direct"), &why));
+    CHECK(std::filesystem::exists(dir.path("out/whole.pipeline.json")));
+
+    // The difference, as `vxf op diff` makes it, and the smoothed replay keeps the edit itself.
+    const VoxelSet diff = readVoxelSet(session.exportTo("out/diff.vdb", view::ExportMode::Diff, "direct", 0));
+    REQUIRE(diff.grids().size() == 1);
+    CHECK(diff.grids().front()->getName() == "direct_diff");
+    CHECK(diff.grids().front()->activeVoxelCount() == mask->activeVoxelCount());
+    const VoxelSet smoothed = readVoxelSet(session.exportTo("out/smooth.vdb", view::ExportMode::Smoothed, "direct", 2));
+    const auto s = smoothed.get<openvdb::Vec3SGrid>("direct");
+    for (auto it = mask->cbeginValueOn(); it; ++it) REQUIRE(s->tree().getValue(it.getCoord()) == direct->tree().getValue(it.getCoord()));
+    CHECK(!smoothed.find("mask")); // the original set's grids, the edit re-applied
+
+    // Undo: back to the file as read, bit for bit.
+    CHECK(session.undo());
+    CHECK(session.undo());
+    CHECK_FALSE(session.undo());
+    session.exportTo("out/undone.vdb", view::ExportMode::Whole, "", 0);
+    CHECK(test::identicalGrids(*readVoxelSet(dir.path("out/undone.vdb")).find("direct"),
+        *readVoxelSet(dir.path("s.vdb")).find("direct"), &why));
+}
+
+TEST_CASE("view: bad edits and exports are refused with a message and change nothing", "[view]")
+{
+    test::TempDir dir;
+    writeSphere(dir.path("s.vdb"));
+    view::ViewSession session(dir.path("s.vdb"));
+    CHECK_THROWS_WITH(session.apply("scatter", nlohmann::json::object()), Catch::Contains("not 'scatter'"));
+    CHECK_THROWS_WITH(session.apply("edit", {{"grid", "direct"}, {"hue_shift", 999}}), Catch::Contains("hue_shift"));
+    CHECK_THROWS_WITH(session.apply("copy", {{"grid", "direct"}, {"from_file", "/etc/passwd"}, {"out", "x"}}), Catch::Contains("from_file"));
+    CHECK_THROWS_WITH(session.apply("edit", {{"grid", "density"}}), Catch::Contains("density"));
+    CHECK(session.describe()["steps"].empty());
+    CHECK_THROWS_WITH(session.exportTo("../x.vdb", view::ExportMode::Whole, "", 0), Catch::Contains("'..'"));
+    CHECK_THROWS_WITH(session.exportTo("/tmp/x.vdb", view::ExportMode::Whole, "", 0), Catch::Contains("relative"));
+    CHECK_THROWS_WITH(session.exportTo("x.txt", view::ExportMode::Whole, "", 0), Catch::Contains(".vdb"));
+    CHECK_THROWS_WITH(session.exportTo("s.vdb", view::ExportMode::Whole, "", 0), Catch::Contains("served file itself"));
+    CHECK_THROWS_WITH(session.exportTo("d.vdb", view::ExportMode::Diff, "nope", 0), Catch::Contains("no grid 'nope'"));
+    CHECK_FALSE(std::filesystem::exists(dir.path("x.vdb")));
+    CHECK_FALSE(std::filesystem::exists(dir.path("d.vdb")));
+    CHECK_THROWS_WITH(view::ViewSession(dir.path("missing.vdb")), Catch::Contains("missing.vdb"));
+}

@@ -1,0 +1,72 @@
+// `vxf view FILE.vdb [--port P] [--grid NAME] [--no-browser]`: the voxel editor in a browser.
+#include "CliSupport.h"
+#include "Commands.h"
+
+#include <vxf/view/ViewServer.h>
+#include <vxf/view/ViewSession.h>
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <iostream>
+#include <thread>
+
+namespace vxf::cli {
+
+namespace {
+
+class ViewCommand : public Command
+{
+public:
+    explicit ViewCommand(CLI::App& parent)
+    {
+        mApp = parent.add_subcommand("view",
+            "The voxel editor in a browser: any grid of a .vdb as points (level of detail on the server), the surface as a mesh, "
+            "slices with a value readout; select by box, sphere, value range or brushing, then set RGB, shift hue, scale "
+            "saturation and value, add or remove voxels, undo; export the whole set, the difference, or the difference with "
+            "smoothed edges. Every edit is the libvxf operator `vxf op` runs, recorded as a pipeline `vxf graph` replays. "
+            "Serves on 127.0.0.1 until Ctrl-C.");
+        mApp->add_option("input", mInput, "The .vdb to view and edit (never written: exports go beside it)")->required();
+        mApp->add_option("--port", mPort, "Port to listen on (0: any free port)")->check(CLI::Range(0, 65535));
+        mApp->add_option("--bind", mHost, "Address to listen on (the default serves this machine only)");
+        mApp->add_option("--grid", mGrid, "The grid shown first (default: scatter, illumination, direct, density, or the first)");
+        mApp->add_flag("--no-browser", mNoBrowser, "Do not open a browser; only print the address");
+    }
+
+    void run() override
+    {
+        view::ViewSession session(mInput);
+        if (!mGrid.empty()) {
+            bool found = false;
+            for (const auto& g : session.describe()["grids"]) found = found || g["name"] == mGrid;
+            if (!found) throw UsageError(fmt::format("--grid: no grid '{}' in {}", mGrid, mInput));
+        }
+        view::ViewServer server(session);
+        const int port = server.bind(mHost, mPort);
+        const std::string url = fmt::format("http://{}:{}/{}", mHost, port, mGrid.empty() ? "" : "?grid=" + mGrid);
+        std::cout << fmt::format("view: {} at {} (Ctrl-C stops)", session.path(), url) << std::endl;
+        std::thread serving([&] { server.listen(); });
+        if (!mNoBrowser) {
+            // xdg-open returns at once; no browser is not an error (the address is printed above).
+            const std::string command = fmt::format("xdg-open '{}' >/dev/null 2>&1 &", url);
+            if (std::system(command.c_str()) != 0) warn("could not open a browser: open " + url);
+        }
+        TerminalProgress interrupt; // Ctrl-C sets it
+        while (!interrupt.wasInterrupted()) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+        server.stop();
+        serving.join();
+        std::cout << "view: stopped" << std::endl;
+    }
+
+private:
+    std::string mInput, mHost = "127.0.0.1", mGrid;
+    int mPort = 8765;
+    bool mNoBrowser = false;
+};
+
+} // namespace
+
+std::unique_ptr<Command> makeViewCommand(CLI::App& parent) { return std::make_unique<ViewCommand>(parent); }
+
+} // namespace vxf::cli
