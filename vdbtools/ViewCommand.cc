@@ -38,8 +38,9 @@ public:
     {
         view::ViewSession session(mInput);
         if (!mGrid.empty()) {
+            const nlohmann::json info = session.describe();
             bool found = false;
-            for (const auto& g : session.describe()["grids"]) found = found || g["name"] == mGrid;
+            for (const auto& g : info["grids"]) found = found || g["name"] == mGrid;
             if (!found) throw UsageError(fmt::format("--grid: no grid '{}' in {}", mGrid, mInput));
         }
         view::ViewServer server(session);

@@ -14,7 +14,7 @@ namespace vxf::view {
 /// | request | answer |
 /// |---|---|
 /// | GET /api/info | ViewSession::describe() |
-/// | GET /api/points?grid=G&budget=N | points: binary little-endian float32, per point x y z then 1 or 3 values; headers X-Vxf-Count, X-Vxf-Channels, X-Vxf-Level, X-Vxf-Cell-Size, X-Vxf-Min, X-Vxf-Max, X-Vxf-Active |
+/// | GET /api/points?grid=G&budget=N | points: binary little-endian float32, per point x y z then 1 or 3 values; headers X-Vxf-Count, X-Vxf-Channels, X-Vxf-Cell-Voxels, X-Vxf-Cell-Size, X-Vxf-Min, X-Vxf-Max, X-Vxf-Active |
 /// | GET /api/slice?grid=G&axis=A&index=I | JSON: axis, index, origin, width, height, channels, values (null where inactive) |
 /// | GET /api/mesh?adaptivity=F | binary: uint32 vertex count, uint32 triangle count, float32 positions, uint32 indices |
 /// | GET /api/pipeline?output=PATH | ViewSession::pipeline() |

@@ -13,11 +13,11 @@
 namespace vxf::view {
 
 /// Points standing for a grid's active voxels, few enough to draw: each voxel where the grid has
-/// at most the budget, else one point per cell of 2^level voxels a side (the mean of the cell's
-/// active values at the mean of their centres, world space), the smallest level that fits.
+/// at most the budget, else one point per cell of 2, 3, 4, 6, 8, 12… voxels a side (the mean of
+/// the cell's active values at the mean of their centres, world space), the smallest that fits.
 struct PointCloud
 {
-    int level = 0;                 ///< 0: one point per voxel
+    int cellVoxels = 1;            ///< a cell's side in voxels (1: one point per voxel)
     double cellSize = 0.0;         ///< world size of a point's cell
     int channels = 1;              ///< 1 (float grids) or 3 (Vec3 grids)
     std::vector<float> positions;  ///< x, y, z per point
@@ -66,8 +66,8 @@ public:
     /// The folder exports may write into: the served file's.
     const std::string& folder() const { return mFolder; }
 
-    /// The current set's grids: name, value type, class, active voxels, index and world bounds,
-    /// voxel size, value range; and the steps recorded.
+    /// The current set's grids: name, value type, class, channels, active voxels, index and
+    /// world bounds, voxel size; the steps recorded; the operators apply() takes.
     nlohmann::json describe() const;
 
     /// Points for @a grid (float or Vec3 of any precision; vxf::UsageError for other types or an
@@ -77,8 +77,9 @@ public:
     /// The slice of @a grid across @a axis (0, 1, 2) at index @a index (clamped into its bounds).
     Slice slice(const std::string& grid, int axis, int index) const;
 
-    /// The `surface` grid's mesh (empty when the set has none), at OpenVDB's @a adaptivity (0-1).
-    SurfaceMesh surfaceMesh(double adaptivity) const;
+    /// The `surface` grid's mesh (empty when the set has none) of at most about @a triangleBudget
+    /// triangles (from a coarser level set where the grid's own gives more).
+    SurfaceMesh surfaceMesh(std::size_t triangleBudget) const;
 
     /// Apply operator @a op with @a params (a JSON object, as in a pipeline node) to the current
     /// set and record it; returns the operator's report. Only the artist operators that edit a

@@ -24,9 +24,12 @@ async function call(method, url, body) {
   return response;
 }
 
+// The first description is asked for at once, while WebGL starts (a software renderer takes a second).
+let firstInfo = call('GET', '/api/info').then((r) => r.json());
+
 // --- three.js scene ---------------------------------------------------------------------------
 const container = $('view');
-const renderer = new THREE.WebGLRenderer({ antialias: false, preserveDrawingBuffer: true });
+const renderer = new THREE.WebGLRenderer({ antialias: false });
 renderer.setPixelRatio(1);
 container.appendChild(renderer.domElement);
 const scene = new THREE.Scene();
@@ -47,7 +50,9 @@ function resize() {
 window.addEventListener('resize', resize);
 resize();
 
-let frames = 0, since = performance.now();
+// Dynamic resolution: below 30 frames a second (a software renderer, a big grid) the canvas is
+// drawn at fewer pixels, down to 0.4 of the screen's; above 50 at more, up to all of them.
+let frames = 0, since = performance.now(), pixelRatio = 1;
 function animate() {
   requestAnimationFrame(animate);
   sun.position.copy(camera.position);
@@ -55,7 +60,14 @@ function animate() {
   renderer.render(scene, camera);
   frames++;
   const now = performance.now();
-  if (now - since > 1000) { state.fps = frames * 1000 / (now - since); frames = 0; since = now; }
+  if (now - since > 1000) {
+    state.fps = frames * 1000 / (now - since);
+    frames = 0;
+    since = now;
+    const wanted = state.fps < 30 ? Math.max(0.4, pixelRatio * 0.8) : state.fps > 50 ? Math.min(1, pixelRatio * 1.25) : pixelRatio;
+    if (wanted !== pixelRatio) { pixelRatio = wanted; renderer.setPixelRatio(pixelRatio); resize(); }
+    state.pixelRatio = pixelRatio;
+  }
 }
 animate();
 
@@ -122,7 +134,8 @@ function highlightSelection(colours) {
 function gridInfo(name) { return state.info.grids.find((g) => g.name === name); }
 
 async function loadInfo() {
-  state.info = await (await call('GET', '/api/info')).json();
+  state.info = firstInfo ? await firstInfo : await (await call('GET', '/api/info')).json();
+  firstInfo = null;
   $('file').textContent = state.info.file.split('/').pop();
   const select = $('grid');
   const previous = state.grid;
@@ -144,12 +157,12 @@ async function loadInfo() {
 async function loadPoints(fitCamera) {
   if (!state.grid) { status('no float or vec3 grid to show'); return; }
   const started = performance.now();
-  const budget = Math.max(1, parseInt($('budget').value) || 200000);
+  const budget = Math.max(1, parseInt($('budget').value) || 10000);
   const response = await call('GET', `/api/points?grid=${encodeURIComponent(state.grid)}&budget=${budget}`);
   const header = (name) => parseFloat(response.headers.get(name));
   const data = new Float32Array(await response.arrayBuffer());
   const channels = header('X-Vxf-Channels'), count = header('X-Vxf-Count');
-  state.cloud = { data, channels, count, level: header('X-Vxf-Level'), cellSize: header('X-Vxf-Cell-Size'),
+  state.cloud = { data, channels, count, cellVoxels: header('X-Vxf-Cell-Voxels'), cellSize: header('X-Vxf-Cell-Size'),
     min: header('X-Vxf-Min'), max: header('X-Vxf-Max'), active: header('X-Vxf-Active') };
   if (fitCamera || $('rampMax').value === '') {
     $('rampMin').value = channels === 1 ? state.cloud.min.toPrecision(4) : 0;
@@ -169,7 +182,7 @@ async function loadPoints(fitCamera) {
   colourPoints();
   const g = gridInfo(state.grid);
   $('gridInfo').textContent = `${count.toLocaleString()} points for ${state.cloud.active.toLocaleString()} active voxels` +
-    (state.cloud.level ? ` (cells of ${2 ** state.cloud.level}³)` : ' (one per voxel)') +
+    (state.cloud.cellVoxels > 1 ? ` (cells of ${state.cloud.cellVoxels}³ voxels)` : ' (one per voxel)') +
     `; values ${state.cloud.min.toPrecision(3)} to ${state.cloud.max.toPrecision(3)}`;
   if (fitCamera && g && g.world_min) fit(g.world_min, g.world_max);
   if (g && g.index_min) setupSlice(g);
@@ -203,7 +216,7 @@ function fit(lo, hi) {
 async function loadMesh() {
   if (mesh) { scene.remove(mesh); mesh.geometry.dispose(); mesh = null; }
   if (!$('showMesh').checked || !state.info.grids.some((g) => g.name === 'surface')) return;
-  const buffer = await (await call('GET', '/api/mesh?adaptivity=0.3')).arrayBuffer();
+  const buffer = await (await call('GET', '/api/mesh?triangles=20000')).arrayBuffer();
   const [vertices, triangles] = new Uint32Array(buffer, 0, 2);
   if (!triangles) return;
   const geometry = new THREE.BufferGeometry();
@@ -211,7 +224,7 @@ async function loadMesh() {
   geometry.setIndex(new THREE.BufferAttribute(new Uint32Array(buffer, 8 + 12 * vertices, 3 * triangles), 1));
   geometry.computeVertexNormals();
   mesh = new THREE.Mesh(geometry, new THREE.MeshStandardMaterial({ color: 0x9aa0a8, transparent: true, opacity: 0.18,
-    depthWrite: false, side: THREE.DoubleSide }));
+    depthWrite: false }));
   scene.add(mesh);
 }
 
@@ -268,28 +281,36 @@ $('slice').addEventListener('mousemove', (event) => {
 });
 
 // --- brushing: shift-drag a rectangle, the box around the points under it --------------------
+// Listened for on the container, before the canvas (capture), and kept from it: the orbit
+// controls never see a brushing drag (shift-drag would pan the camera under the brush).
 let brushStart = null;
 const brush = $('brush');
-renderer.domElement.addEventListener('pointerdown', (event) => {
+const local = (event) => {
+  const rect = renderer.domElement.getBoundingClientRect();
+  return [event.clientX - rect.left, event.clientY - rect.top];
+};
+container.addEventListener('pointerdown', (event) => {
   if (!event.shiftKey || !points) return;
-  controls.enabled = false;
-  brushStart = [event.offsetX, event.offsetY];
-  Object.assign(brush.style, { display: 'block', left: `${event.offsetX}px`, top: `${event.offsetY}px`, width: '0px', height: '0px' });
-});
-renderer.domElement.addEventListener('pointermove', (event) => {
+  event.stopPropagation();
+  event.preventDefault();
+  brushStart = local(event);
+  Object.assign(brush.style, { display: 'block', left: `${brushStart[0]}px`, top: `${brushStart[1]}px`, width: '0px', height: '0px' });
+}, { capture: true });
+container.addEventListener('pointermove', (event) => {
   if (!brushStart) return;
-  const [x0, y0] = brushStart;
-  Object.assign(brush.style, { left: `${Math.min(x0, event.offsetX)}px`, top: `${Math.min(y0, event.offsetY)}px`,
-    width: `${Math.abs(event.offsetX - x0)}px`, height: `${Math.abs(event.offsetY - y0)}px` });
-});
-renderer.domElement.addEventListener('pointerup', (event) => {
+  event.stopPropagation();
+  const [x0, y0] = brushStart, [x, y] = local(event);
+  Object.assign(brush.style, { left: `${Math.min(x0, x)}px`, top: `${Math.min(y0, y)}px`,
+    width: `${Math.abs(x - x0)}px`, height: `${Math.abs(y - y0)}px` });
+}, { capture: true });
+container.addEventListener('pointerup', (event) => {
   if (!brushStart) return;
-  const [x0, y0] = brushStart;
+  event.stopPropagation();
+  const [x0, y0] = brushStart, [x, y] = local(event);
   brushStart = null;
   brush.style.display = 'none';
-  controls.enabled = true;
-  brushBox(x0, y0, event.offsetX, event.offsetY);
-});
+  brushBox(x0, y0, x, y);
+}, { capture: true });
 function brushBox(x0, y0, x1, y1) {
   const w = renderer.domElement.clientWidth, h = renderer.domElement.clientHeight;
   const [ax, bx] = [Math.min(x0, x1), Math.max(x0, x1)], [ay, by] = [Math.min(y0, y1), Math.max(y0, y1)];
