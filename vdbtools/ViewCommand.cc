@@ -1,4 +1,4 @@
-// `vxf view FILE.vdb [--port P] [--grid NAME] [--no-browser]`: the voxel editor in a browser.
+// `vxf view FILE.vdb [--port P] [--grid NAME] [--scene S.json] [--no-browser]`: the voxel editor in a browser.
 #include "CliSupport.h"
 #include "Commands.h"
 
@@ -31,6 +31,9 @@ public:
         mApp->add_option("--port", mPort, "Port to listen on (0: any free port)")->check(CLI::Range(0, 65535));
         mApp->add_option("--bind", mHost, "Address to listen on (the default serves this machine only)");
         mApp->add_option("--grid", mGrid, "The grid shown first (default: scatter, illumination, direct, density, or the first)");
+        mApp->add_option("--scene", mScene, "A scene (camera, lights, material) to render the edited set with from the page: the "
+                                            "scatter stage re-runs where an edit changed what it reads, then the render stage")
+            ->check(CLI::ExistingFile);
         mApp->add_flag("--no-browser", mNoBrowser, "Do not open a browser; only print the address");
     }
 
@@ -43,7 +46,7 @@ public:
             for (const auto& g : info["grids"]) found = found || g["name"] == mGrid;
             if (!found) throw UsageError(fmt::format("--grid: no grid '{}' in {}", mGrid, mInput));
         }
-        view::ViewServer server(session);
+        view::ViewServer server(session, {mScene, ""});
         const int port = server.bind(mHost, mPort);
         const std::string url = fmt::format("http://{}:{}/{}", mHost, port, mGrid.empty() ? "" : "?grid=" + mGrid);
         std::cout << fmt::format("view: {} at {} (Ctrl-C stops)", session.path(), url) << std::endl;
@@ -61,7 +64,7 @@ public:
     }
 
 private:
-    std::string mInput, mHost = "127.0.0.1", mGrid;
+    std::string mInput, mHost = "127.0.0.1", mGrid, mScene;
     int mPort = 8765;
     bool mNoBrowser = false;
 };

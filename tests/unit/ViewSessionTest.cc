@@ -2,6 +2,7 @@
 
 #include "../TestSupport.h"
 
+#include <vxf/io/ImageFile.h>
 #include <vxf/io/VoxelSetFile.h>
 #include <vxf/ops/Edit.h>
 #include <vxf/ops/Select.h>
@@ -30,7 +31,7 @@ void writeSphere(const std::string& path)
 
 } // namespace
 
-TEST_CASE("view: points per voxel within the budget, cells of 2^level voxels beyond it", "[view]")
+TEST_CASE("view: points per voxel within the budget, cells of 2, 3, 4, 6… voxels beyond it", "[view]")
 {
     test::TempDir dir;
     writeSphere(dir.path("s.vdb"));
@@ -39,17 +40,17 @@ TEST_CASE("view: points per voxel within the budget, cells of 2^level voxels bey
     const auto active = density->activeVoxelCount();
 
     const view::PointCloud all = session.points("density", active);
-    CHECK(all.level == 0);
+    CHECK(all.cellVoxels == 1);
     CHECK(all.positions.size() == 3 * active);
     CHECK(all.activeVoxels == active);
     CHECK(all.minValue == 1.0); // every voxel of the sphere holds density 1
     CHECK(all.maxValue == 1.0);
 
     const view::PointCloud coarse = session.points("density", 1000);
-    CHECK(coarse.level >= 2);
+    CHECK(coarse.cellVoxels >= 2);
     CHECK(coarse.values.size() <= 1000);
-    CHECK(coarse.values.size() > 100);
-    CHECK(coarse.cellSize == Approx(density->voxelSize()[0] * (1 << coarse.level)));
+    CHECK(coarse.values.size() > 1000 / 4); // the next size up holds at most 3.4 times fewer
+    CHECK(coarse.cellSize == Approx(density->voxelSize()[0] * coarse.cellVoxels));
     CHECK(coarse.minValue == 1.0); // means of ones
 
     // A Vec3 grid's cells hold the mean colour of their voxels: the whole sphere in one cell
@@ -161,4 +162,49 @@ TEST_CASE("view: bad edits and exports are refused with a message and change not
     CHECK_FALSE(std::filesystem::exists(dir.path("x.vdb")));
     CHECK_FALSE(std::filesystem::exists(dir.path("d.vdb")));
     CHECK_THROWS_WITH(view::ViewSession(dir.path("missing.vdb")), Catch::Contains("missing.vdb"));
+}
+
+TEST_CASE("view: a render re-runs the scatter stage only after an edit of what it reads", "[view]")
+{
+    test::TempDir dir;
+    test::spit(dir.path("s.json"), R"({
+  "objects": [{"mesh": "builtin:sphere", "material": {"albedo": 0.8, "mean_free_path": 0.3}}],
+  "lights": [{"type": "point", "position": [0, 0, 2], "intensity": 3}],
+  "camera": {"position": [0, -4, 0], "look_at": [0, 0, 0]}
+})");
+    test::spit(dir.path("p.json"), R"({
+  "nodes": {
+    "vox": {"op": "voxelize", "params": {"mesh": "builtin:sphere", "dim": 16}},
+    "lit": {"op": "light", "input": "vox", "params": {"scene": "s.json"}},
+    "sc": {"op": "scatter", "input": "lit", "params": {"kernel": "sweep", "directions": 8}}
+  },
+  "outputs": {"sc": "sc.vdb"}
+})");
+    runGraph(dir.path("p.json"), dir.path("cache"));
+    view::ViewSession session(dir.path("sc.vdb"));
+    const auto brightness = [&](const std::string& folder) {
+        double sum = 0.0;
+        const RgbImage image = readExr(dir.path(folder + "/view.exr"));
+        for (const openvdb::Vec3f& v : image.pixels) sum += double(v[0]) + double(v[1]) + double(v[2]);
+        return sum;
+    };
+
+    const auto first = session.render(dir.path("s.json"), 24, 18, dir.path("r1"));
+    CHECK(first.ran == std::vector<std::string>{"render"}); // nothing edited: the file's scatter as it is
+    CHECK(std::filesystem::exists(first.png));
+    const double before = brightness("r1");
+    CHECK(before > 0.0);
+
+    session.apply("mul", {{"grid", "scatter"}, {"value", 0.0}});
+    CHECK(session.render(dir.path("s.json"), 24, 18, dir.path("r2")).ran == std::vector<std::string>{"render"}); // downstream only
+    CHECK(brightness("r2") < before);
+
+    session.undo();
+    session.apply("mul", {{"grid", "scatter_source"}, {"value", 0.5}});
+    CHECK(session.render(dir.path("s.json"), 24, 18, dir.path("r3")).ran == std::vector<std::string>{"scatter", "render"});
+    const double halved = brightness("r3");
+    CHECK(halved < before);
+    const auto again = session.render(dir.path("s.json"), 24, 18, dir.path("r4"));
+    CHECK(again.ran.front() == "scatter (kept from the last render)");
+    CHECK(brightness("r4") == halved);
 }

@@ -5,6 +5,11 @@
 #include <fmt/format.h>
 
 #include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+
+#include <unistd.h>
 
 namespace vxf::view {
 
@@ -85,18 +90,34 @@ std::string stringField(const nlohmann::json& body, const char* name, const std:
 struct ViewServer::Impl
 {
     ViewSession& session;
+    ViewServerOptions options;
+    bool ownFolder = false;
     httplib::Server server;
-    explicit Impl(ViewSession& s)
+    std::mutex renderMutex;
+    std::string lastPng;
+    Impl(ViewSession& s, ViewServerOptions o)
         : session(s)
+        , options(std::move(o))
     {
+        if (options.renderFolder.empty()) {
+            options.renderFolder = (std::filesystem::temp_directory_path() / fmt::format("vxf-view-{}-{}", ::getpid(),
+                reinterpret_cast<std::uintptr_t>(this))).string();
+            ownFolder = true;
+        }
+    }
+    ~Impl()
+    {
+        std::error_code ignored;
+        if (ownFolder) std::filesystem::remove_all(options.renderFolder, ignored);
     }
 };
 
-ViewServer::ViewServer(ViewSession& session)
-    : mImpl(std::make_unique<Impl>(session))
+ViewServer::ViewServer(ViewSession& session, ViewServerOptions options)
+    : mImpl(std::make_unique<Impl>(session, std::move(options)))
 {
     httplib::Server& server = mImpl->server;
     ViewSession& s = session;
+    Impl& impl = *mImpl;
     server.set_payload_max_length(kMaxRequestBytes);
     // vxf's errors from bad input are the client's (400); anything else is the server's (500).
     server.set_exception_handler([](const httplib::Request&, httplib::Response& res, std::exception_ptr ep) {
@@ -121,7 +142,36 @@ ViewServer::ViewServer(ViewSession& session)
     asset("/OrbitControls.js", detail::kOrbitControlsJs, kJavaScript);
 
     server.Get("/favicon.ico", [](const httplib::Request&, httplib::Response& res) { res.status = 204; });
-    server.Get("/api/info", [&s](const httplib::Request&, httplib::Response& res) { sendJson(res, s.describe()); });
+    server.Get("/api/info", [&s, &impl](const httplib::Request&, httplib::Response& res) {
+        nlohmann::json info = s.describe();
+        info["scene"] = impl.options.scene.empty() ? nlohmann::json(nullptr) : nlohmann::json(impl.options.scene);
+        sendJson(res, info);
+    });
+    server.Post("/api/render", [&s, &impl](const httplib::Request& req, httplib::Response& res) {
+        if (impl.options.scene.empty()) throw UsageError("no scene to render with: start vxf view with --scene S.json");
+        const nlohmann::json body = bodyJson(req);
+        const auto dimension = [&](const char* key, int fallback) {
+            if (!body.contains(key)) return fallback;
+            if (!body[key].is_number_integer() || body[key].get<long long>() < 1 || body[key].get<long long>() > 8192) {
+                throw UsageError(fmt::format("'{}' must be a whole number of pixels in [1, 8192]", key));
+            }
+            return body[key].get<int>();
+        };
+        const int width = dimension("width", 480), height = dimension("height", 360);
+        std::lock_guard<std::mutex> lock(impl.renderMutex);
+        const ViewSession::Rendered r = s.render(impl.options.scene, width, height, impl.options.renderFolder);
+        impl.lastPng = r.png;
+        sendJson(res, {{"ran", r.ran}, {"seconds", r.seconds}});
+    });
+    server.Get("/api/image", [&impl](const httplib::Request&, httplib::Response& res) {
+        std::lock_guard<std::mutex> lock(impl.renderMutex);
+        std::ifstream file(impl.lastPng, std::ios::binary);
+        if (impl.lastPng.empty() || !file) {
+            sendError(res, 404, "nothing rendered yet (POST /api/render)");
+            return;
+        }
+        res.set_content(std::string(std::istreambuf_iterator<char>(file), {}), "image/png");
+    });
     server.Get("/api/points", [&s](const httplib::Request& req, httplib::Response& res) {
         const long long budget = integerParam(req, "budget", 200000);
         if (budget < 1 || std::size_t(budget) > kMaxPointBudget) {

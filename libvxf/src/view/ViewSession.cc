@@ -11,10 +11,12 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <set>
 #include <unordered_map>
 
 namespace vxf::view {
@@ -306,7 +308,7 @@ SurfaceMesh ViewSession::surfaceMesh(std::size_t triangleBudget) const
     return mesh;
 }
 
-void ViewSession::run(VoxelSet& set, const std::string& name, const nlohmann::json& params, std::string* report)
+void ViewSession::checkEdit(const std::string& name, const nlohmann::json& params)
 {
     const auto& allowed = editOperators();
     if (std::find(allowed.begin(), allowed.end(), name) == allowed.end()) {
@@ -316,6 +318,10 @@ void ViewSession::run(VoxelSet& set, const std::string& name, const nlohmann::js
     for (const char* key : {"with_file", "from_file"}) {
         if (params.contains(key)) throw UsageError(fmt::format("{}: the view edits one file; '{}' is not taken here", name, key));
     }
+}
+
+void ViewSession::run(VoxelSet& set, const std::string& name, const nlohmann::json& params, std::string* report)
+{
     const ops::Operator& op = ops::findOperator(name);
     const ops::Args args = ops::checkArgs(op, params);
     ops::OpContext context{set, args, nullptr};
@@ -333,6 +339,7 @@ VoxelSet ViewSession::replay(const std::vector<Step>& steps) const
 std::string ViewSession::apply(const std::string& op, const nlohmann::json& params)
 {
     std::lock_guard<std::mutex> lock(mMutex);
+    checkEdit(op, params);
     std::string report;
     try {
         run(mCurrent, op, params, &report);
@@ -365,6 +372,60 @@ nlohmann::json ViewSession::pipeline(const std::string& output) const
         last = node;
     }
     return {{"nodes", nodes}, {"outputs", {{last, output}}}};
+}
+
+ViewSession::Rendered ViewSession::render(const std::string& scenePath, int width, int height, const std::string& folder)
+{
+    std::lock_guard<std::mutex> lock(mMutex);
+    const auto start = std::chrono::steady_clock::now();
+    Rendered result;
+    static const std::set<std::string> upstream = {"surface", "density", "direct", "scatter_source"};
+    bool scatterInputEdited = false;
+    nlohmann::json steps = nlohmann::json::array();
+    for (const Step& s : mSteps) {
+        steps.push_back({s.op, s.params});
+        for (const char* key : {"grid", "out"}) {
+            if (s.params.contains(key) && s.params[key].is_string() && upstream.count(s.params[key].get<std::string>())) {
+                scatterInputEdited = true;
+            }
+        }
+    }
+    VoxelSet set = mCurrent;
+    if (scatterInputEdited && mCurrent.find("scatter")) {
+        if (mScatteredFor != steps.dump()) {
+            // The file's own scatter parameters where it recorded them (`vxf scatter`), else sweeps.
+            nlohmann::json params = nlohmann::json::object();
+            const nlohmann::json recorded = nlohmann::json::parse(mOriginal.paramsJson(), nullptr, false);
+            if (mOriginal.stage() == "scatter" && recorded.is_object()) {
+                for (const char* key : {"passes", "directions", "step", "cutoff", "tolerance", "band", "extrapolate", "fine_passes",
+                         "coarse_factor", "kernel"}) {
+                    if (recorded.contains(key)) params[key] = recorded[key];
+                }
+                if (recorded.value("accelerate", true) == false) params["no_accelerate"] = true;
+            }
+            if (params.empty()) params = {{"kernel", "sweep"}};
+            VoxelSet scattered = deepCopy(mCurrent);
+            try {
+                run(scattered, "scatter", params, nullptr);
+            } catch (const UsageError&) { // recorded values this version no longer takes
+                scattered = deepCopy(mCurrent);
+                run(scattered, "scatter", {{"kernel", "sweep"}}, nullptr);
+            }
+            mScattered = scattered;
+            mScatteredFor = steps.dump();
+            result.ran.push_back("scatter");
+        } else {
+            result.ran.push_back("scatter (kept from the last render)");
+        }
+        set = mScattered;
+    }
+    fs::create_directories(folder);
+    result.png = (fs::path(folder) / "view.png").string();
+    run(set, "render", {{"scene", scenePath}, {"image", (fs::path(folder) / "view.exr").string()}, {"png", result.png},
+        {"width", width}, {"height", height}}, nullptr);
+    result.ran.push_back("render");
+    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return result;
 }
 
 std::string ViewSession::resolveInside(const std::string& relativePath) const

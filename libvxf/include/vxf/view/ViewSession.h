@@ -100,6 +100,23 @@ public:
     /// the absolute path written.
     std::string exportTo(const std::string& relativePath, ExportMode mode, const std::string& grid, int smooth);
 
+    /// What render() did: the stages it ran ("scatter", or the scatter kept from the last render;
+    /// "render") and the PNG it wrote.
+    struct Rendered
+    {
+        std::vector<std::string> ran;
+        std::string png;
+        double seconds = 0.0;
+    };
+
+    /// Render the edited set with @a scenePath's camera and lights (the `render` operator,
+    /// @a width x @a height) into @a folder, first re-running the `scatter` operator where a
+    /// recorded step edited a grid it reads (surface, density, direct, scatter_source) and the
+    /// set holds a `scatter` to replace: with the parameters the file's scatter stage recorded,
+    /// else accelerated sweeps. The re-scattered set is kept until the steps change, so renders
+    /// of the same edits scatter once (as `vxf run`'s cache reuses unchanged stages).
+    Rendered render(const std::string& scenePath, int width, int height, const std::string& folder);
+
     /// The operators apply() accepts.
     static const std::vector<std::string>& editOperators();
 
@@ -110,6 +127,9 @@ private:
         nlohmann::json params;
     };
     VoxelSet replay(const std::vector<Step>& steps) const;
+    /// vxf::UsageError unless @a op is one of editOperators() with @a params an object naming no other file.
+    static void checkEdit(const std::string& op, const nlohmann::json& params);
+    /// Operator @a op of the registry on @a set, its parameters checked as `vxf op` checks them.
     static void run(VoxelSet& set, const std::string& op, const nlohmann::json& params, std::string* report);
     openvdb::GridBase::ConstPtr gridNamed(const std::string& name) const;
     std::string resolveInside(const std::string& relativePath) const;
@@ -118,6 +138,8 @@ private:
     VoxelSet mOriginal; ///< as read (never edited: each replay starts from deep copies)
     VoxelSet mCurrent;
     std::vector<Step> mSteps;
+    std::string mScatteredFor; ///< the steps (as JSON) mScattered was made for; "" none
+    VoxelSet mScattered;
     mutable std::mutex mMutex;
 };
 

@@ -151,6 +151,7 @@ async function loadInfo() {
   const names = state.info.grids.filter((g) => g.channels).map((g) => g.name);
   state.grid = [previous, wanted, 'scatter', 'illumination', 'direct', 'density'].find((n) => n && names.includes(n)) || names[0] || null;
   if (state.grid) select.value = state.grid;
+  $('renderFields').hidden = !state.info.scene;
   $('steps').innerHTML = state.info.steps.map((s, i) => `${i + 1}. ${s.op} ${JSON.stringify(s.params)}`).join('<br>');
 }
 
@@ -402,6 +403,16 @@ $('export').addEventListener('click', () => guarded(async () => {
   const result = await (await call('POST', '/api/export', body)).json();
   status(`wrote ${result.written}`);
   state.lastExport = result.written;
+}));
+
+$('render').addEventListener('click', () => guarded(async () => {
+  status('rendering…');
+  const body = { width: parseInt($('renderWidth').value) || 480, height: parseInt($('renderHeight').value) || 360 };
+  const result = await (await call('POST', '/api/render', body)).json();
+  $('renderImage').src = `/api/image?t=${Date.now()}`;
+  $('renderReport').textContent = `${result.ran.join(' + ')} in ${result.seconds.toFixed(1)} s`;
+  status(`rendered: ran ${result.ran.join(', ')}`);
+  state.rendered = result;
 }));
 
 // --- wiring --------------------------------------------------------------------------------------
