@@ -719,3 +719,19 @@ TEST_CASE("vxf run lights and renders a fog volume made by vdb_tool (a volume ob
     CHECK(alpha[12 * 32 + 16] == Approx(1.0 - std::exp(-4.0)).epsilon(0.05));
     CHECK(alpha[0] == 0.0f);
 }
+
+TEST_CASE("vxf view refuses what it cannot serve before listening", "[cli][view]")
+{
+    TempDir dir;
+    const std::string vxf = binary("vxf");
+    const auto missing = run(vxf + " view " + quoted(dir.path("none.vdb")) + " --no-browser --port 0");
+    CHECK(missing.status == 1);
+    CHECK_THAT(missing.err, Catch::Contains("none.vdb"));
+    REQUIRE(run(vxf + " voxelize builtin:sphere -o " + quoted(dir.path("s.vdb")) + " --dim 12 -q").status == 0);
+    const auto grid = run(vxf + " view " + quoted(dir.path("s.vdb")) + " --no-browser --port 0 --grid nope");
+    CHECK(grid.status == 2);
+    CHECK_THAT(grid.err, Catch::Contains("--grid: no grid 'nope'"));
+    const auto scene = run(vxf + " view " + quoted(dir.path("s.vdb")) + " --no-browser --port 0 --scene " + quoted(dir.path("no.json")));
+    CHECK(scene.status == 2);
+    CHECK_THAT(scene.err, Catch::Contains("no.json"));
+}
