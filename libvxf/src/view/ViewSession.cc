@@ -28,25 +28,23 @@ namespace fs = std::filesystem;
 /// The largest slice sent (cells): a 4096² plane of floats is 64 MiB, more than a page draws.
 constexpr std::int64_t kMaxSliceCells = std::int64_t(2048) * 2048;
 
-/// Visit every active value of a float or Vec3 grid (any precision) as floats: @a fn(box,
-/// values, channels), box one voxel or an active tile. vxf::UsageError for other types.
+/// Visit the active values of a float or Vec3 grid (any precision) as floats: @a fn(box, values,
+/// channels) → false to stop, box one voxel or an active tile. vxf::UsageError for other types.
 template <typename Fn>
-int forEachActive(const openvdb::GridBase& grid, const std::string& name, Fn&& fn)
+void forEachActive(const openvdb::GridBase& grid, const std::string& name, Fn&& fn)
 {
     const auto scalar = [&](const auto& typed) {
         for (auto it = typed.cbeginValueOn(); it; ++it) {
             const float v = float(*it);
-            fn(it.getBoundingBox(), &v, 1);
+            if (!fn(it.getBoundingBox(), &v, 1)) return;
         }
-        return 1;
     };
     const auto vector = [&](const auto& typed) {
         for (auto it = typed.cbeginValueOn(); it; ++it) {
             const auto& x = *it;
             const float v[3] = {float(x[0]), float(x[1]), float(x[2])};
-            fn(it.getBoundingBox(), v, 3);
+            if (!fn(it.getBoundingBox(), v, 3)) return;
         }
-        return 3;
     };
     if (const auto* g = dynamic_cast<const openvdb::FloatGrid*>(&grid)) return scalar(*g);
     if (const auto* g = dynamic_cast<const openvdb::DoubleGrid*>(&grid)) return scalar(*g);
@@ -160,7 +158,7 @@ PointCloud ViewSession::points(const std::string& name, std::size_t budget) cons
     budget = std::max<std::size_t>(budget, 1);
     PointCloud cloud;
     cloud.channels = channelsOf(*grid);
-    if (cloud.channels == 0) forEachActive(*grid, name, [](const openvdb::CoordBBox&, const float*, int) {}); // the error
+    if (cloud.channels == 0) forEachActive(*grid, name, [](const openvdb::CoordBBox&, const float*, int) { return false; }); // the error
     cloud.activeVoxels = gridStats(*grid).activeVoxels;
 
     // The smallest cells that fit the budget (a tile counts as the cells it covers).
@@ -181,9 +179,8 @@ PointCloud ViewSession::points(const std::string& name, std::size_t budget) cons
         cells.clear();
         bool over = false;
         forEachActive(*grid, name, [&](const openvdb::CoordBBox& box, const float* v, int channels) {
-            if (over) return;
             for (int c = 0; c < channels; ++c) {
-                if (!std::isfinite(v[c])) return; // a NaN or inf voxel is not drawn
+                if (!std::isfinite(v[c])) return true; // a NaN or inf voxel is not drawn
             }
             // Cells from the active bounds' corner (so that one cell holds them all at the top);
             // a tile wider than a cell adds itself to every cell it covers.
@@ -206,6 +203,7 @@ PointCloud ViewSession::points(const std::string& name, std::size_t budget) cons
                     }
                 }
             }
+            return !over; // over the budget: this size is done with
         });
         if (!over || size >= widest) {
             cloud.cellVoxels = size;
@@ -245,7 +243,7 @@ Slice ViewSession::slice(const std::string& name, int axis, int index) const
     Slice s;
     s.axis = axis;
     s.channels = channelsOf(*grid);
-    if (s.channels == 0) forEachActive(*grid, name, [](const openvdb::CoordBBox&, const float*, int) {}); // the error
+    if (s.channels == 0) forEachActive(*grid, name, [](const openvdb::CoordBBox&, const float*, int) { return false; }); // the error
     const openvdb::CoordBBox bounds = gridStats(*grid).activeBBox;
     if (bounds.empty()) return s;
     const int u = axis == 0 ? 1 : 0, v = axis == 2 ? 1 : 2;
