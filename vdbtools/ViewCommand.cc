@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include <cctype>
 #include <chrono>
 #include <cstdlib>
 #include <iostream>
@@ -40,15 +41,21 @@ public:
     void run() override
     {
         view::ViewSession session(mInput);
+        const nlohmann::json info = session.describe();
         if (!mGrid.empty()) {
-            const nlohmann::json info = session.describe();
             bool found = false;
             for (const auto& g : info["grids"]) found = found || g["name"] == mGrid;
             if (!found) throw UsageError(fmt::format("--grid: no grid '{}' in {}", mGrid, mInput));
+        } else if (info["default_grid"].is_string()) {
+            mGrid = info["default_grid"].get<std::string>(); // in the address: the page asks for its points at once
         }
         view::ViewServer server(session, {mScene, ""});
         const int port = server.bind(mHost, mPort);
-        const std::string url = fmt::format("http://{}:{}/{}", mHost, port, mGrid.empty() ? "" : "?grid=" + mGrid);
+        std::string query; // the grid's name, percent-encoded
+        for (const unsigned char c : mGrid) {
+            query += std::isalnum(c) || c == '.' || c == '_' || c == '-' ? std::string(1, char(c)) : fmt::format("%{:02X}", c);
+        }
+        const std::string url = fmt::format("http://{}:{}/{}", mHost, port, query.empty() ? "" : "?grid=" + query);
         std::cout << fmt::format("view: {} at {} (Ctrl-C stops)", session.path(), url) << std::endl;
         std::thread serving([&] { server.listen(); });
         if (!mNoBrowser) {

@@ -64,6 +64,7 @@ TEST_CASE("view: points per voxel within the budget, cells of 2, 3, 4, 6… voxe
     CHECK(std::abs(one.positions[0]) < 1e-5); // at the centre
 
     CHECK_THROWS_WITH(session.points("nope", 10), Catch::Contains("no grid 'nope'") && Catch::Contains("density"));
+    CHECK(session.describe()["default_grid"] == "direct"); // the light's result before the density
 }
 
 TEST_CASE("view: a slice holds the active voxels' values and NaN elsewhere", "[view]")

@@ -148,7 +148,17 @@ nlohmann::json ViewSession::describe() const
     }
     nlohmann::json steps = nlohmann::json::array();
     for (const Step& s : mSteps) steps.push_back({{"op", s.op}, {"params", s.params}});
-    return {{"file", mPath}, {"grids", grids}, {"steps", steps}, {"operators", editOperators()}};
+    // Shown first: the light's result where there is one, else the first float or vec3 grid.
+    std::string shown;
+    for (const char* name : {"scatter", "illumination", "direct", "density"}) {
+        const auto grid = mCurrent.find(name);
+        if (shown.empty() && grid && channelsOf(*grid) > 0) shown = name;
+    }
+    for (const auto& grid : mCurrent.grids()) {
+        if (shown.empty() && channelsOf(*grid) > 0) shown = grid->getName();
+    }
+    return {{"file", mPath}, {"grids", grids}, {"steps", steps}, {"operators", editOperators()},
+        {"default_grid", shown.empty() ? nlohmann::json(nullptr) : nlohmann::json(shown)}};
 }
 
 PointCloud ViewSession::points(const std::string& name, std::size_t budget) const

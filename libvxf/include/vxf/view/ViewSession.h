@@ -67,7 +67,9 @@ public:
     const std::string& folder() const { return mFolder; }
 
     /// The current set's grids: name, value type, class, channels, active voxels, index and
-    /// world bounds, voxel size; the steps recorded; the operators apply() takes.
+    /// world bounds, voxel size; the steps recorded; the operators apply() takes; the grid to
+    /// show first (default_grid: scatter, illumination, direct or density, else the first float
+    /// or vec3 grid; null when there is none).
     nlohmann::json describe() const;
 
     /// Points for @a grid (float or Vec3 of any precision; vxf::UsageError for other types or an

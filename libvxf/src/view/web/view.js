@@ -24,8 +24,13 @@ async function call(method, url, body) {
   return response;
 }
 
-// The first description is asked for at once, while WebGL starts (a software renderer takes a second).
+// The first description, and the points of the grid the address names, are asked for at once,
+// while WebGL starts (a software renderer takes a second).
+const pointsUrl = (grid, budget) => `/api/points?grid=${encodeURIComponent(grid)}&budget=${budget}`;
 let firstInfo = call('GET', '/api/info').then((r) => r.json());
+const addressGrid = new URLSearchParams(location.search).get('grid');
+let firstPoints = addressGrid ? { url: pointsUrl(addressGrid, 10000), response: call('GET', pointsUrl(addressGrid, 10000)) } : null;
+firstPoints?.response.catch(() => {}); // an unknown grid: loadInfo picks another, and this answer is dropped
 
 // --- three.js scene ---------------------------------------------------------------------------
 const container = $('view');
@@ -149,7 +154,7 @@ async function loadInfo() {
   }
   const wanted = new URLSearchParams(location.search).get('grid');
   const names = state.info.grids.filter((g) => g.channels).map((g) => g.name);
-  state.grid = [previous, wanted, 'scatter', 'illumination', 'direct', 'density'].find((n) => n && names.includes(n)) || names[0] || null;
+  state.grid = [previous, wanted, state.info.default_grid].find((n) => n && names.includes(n)) || null;
   if (state.grid) select.value = state.grid;
   $('renderFields').hidden = !state.info.scene;
   $('steps').innerHTML = state.info.steps.map((s, i) => `${i + 1}. ${s.op} ${JSON.stringify(s.params)}`).join('<br>');
@@ -159,7 +164,9 @@ async function loadPoints(fitCamera) {
   if (!state.grid) { status('no float or vec3 grid to show'); return; }
   const started = performance.now();
   const budget = Math.max(1, parseInt($('budget').value) || 10000);
-  const response = await call('GET', `/api/points?grid=${encodeURIComponent(state.grid)}&budget=${budget}`);
+  const url = pointsUrl(state.grid, budget);
+  const response = firstPoints && firstPoints.url === url ? await firstPoints.response : await call('GET', url);
+  firstPoints = null;
   const header = (name) => parseFloat(response.headers.get(name));
   const data = new Float32Array(await response.arrayBuffer());
   const channels = header('X-Vxf-Channels'), count = header('X-Vxf-Count');
