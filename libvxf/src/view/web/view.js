@@ -224,7 +224,7 @@ function fit(lo, hi) {
 async function loadMesh() {
   if (mesh) { scene.remove(mesh); mesh.geometry.dispose(); mesh = null; }
   if (!$('showMesh').checked || !state.info.grids.some((g) => g.name === 'surface')) return;
-  const buffer = await (await call('GET', '/api/mesh?triangles=20000')).arrayBuffer();
+  const buffer = await (await call('GET', '/api/mesh?triangles=8000')).arrayBuffer();
   const [vertices, triangles] = new Uint32Array(buffer, 0, 2);
   if (!triangles) return;
   const geometry = new THREE.BufferGeometry();
