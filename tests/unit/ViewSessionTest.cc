@@ -136,6 +136,17 @@ TEST_CASE("view: edits are the registry's operators, undoable, and the pipeline 
     for (auto it = mask->cbeginValueOn(); it; ++it) REQUIRE(s->tree().getValue(it.getCoord()) == direct->tree().getValue(it.getCoord()));
     CHECK(!smoothed.find("mask")); // the original set's grids, the edit re-applied
 
+    // Removing and adding voxels: every voxel of `direct` removed, then the density's voxels
+    // added back with a colour, selected among the density's (the page's "among").
+    session.apply("select", {{"grid", "direct"}, {"shape", "box"}, {"min", {-2, -2, -2}}, {"max", {2, 2, 2}}, {"out", "all"}});
+    session.apply("edit", {{"grid", "direct"}, {"selection", "all"}, {"remove", true}});
+    session.apply("select", {{"grid", "density"}, {"shape", "box"}, {"min", {-2, -2, -2}}, {"max", {2, 2, 2}}, {"out", "wider"}});
+    session.apply("edit", {{"grid", "direct"}, {"selection", "wider"}, {"add", true}, {"set", {1, 1, 1}}});
+    const auto added = readVoxelSet(session.exportTo("out/added.vdb", view::ExportMode::Whole, "", 0)).get<openvdb::Vec3SGrid>("direct");
+    CHECK(added->activeVoxelCount() == readVoxelSet(dir.path("s.vdb")).find("density")->activeVoxelCount());
+    for (auto it = added->cbeginValueOn(); it; ++it) REQUIRE(*it == openvdb::Vec3f(1.0f));
+    for (int i = 0; i < 4; ++i) CHECK(session.undo());
+
     // Undo: back to the file as read, bit for bit.
     CHECK(session.undo());
     CHECK(session.undo());

@@ -156,6 +156,11 @@ async function loadInfo() {
   const names = state.info.grids.filter((g) => g.channels).map((g) => g.name);
   state.grid = [previous, wanted, state.info.default_grid].find((n) => n && names.includes(n)) || null;
   if (state.grid) select.value = state.grid;
+  // Candidates of a selection: the shown grid's voxels, or another grid's (to add voxels where it has them).
+  const from = $('selectFrom'), chosen = from.value;
+  from.innerHTML = '<option value="">the shown grid</option>' +
+    state.info.grids.map((g) => `<option value="${g.name}">${g.name}</option>`).join('');
+  from.value = state.info.grids.some((g) => g.name === chosen) ? chosen : '';
   $('renderFields').hidden = !state.info.scene;
   $('steps').innerHTML = state.info.steps.map((s, i) => `${i + 1}. ${s.op} ${JSON.stringify(s.params)}`).join('<br>');
 }
@@ -374,7 +379,7 @@ async function guarded(action) {
 
 $('select').addEventListener('click', () => guarded(async () => {
   const shape = $('shape').value;
-  const params = { grid: state.grid, shape, out: 'mask' };
+  const params = { grid: $('selectFrom').value || state.grid, shape, out: 'mask' };
   if (shape === 'box') { params.min = numbers(['minX', 'minY', 'minZ']); params.max = numbers(['maxX', 'maxY', 'maxZ']); }
   if (shape === 'sphere') { params.centre = numbers(['cX', 'cY', 'cZ']); params.radius = parseFloat($('radius').value); }
   if (shape === 'range') { params.low = parseFloat($('low').value); params.high = parseFloat($('high').value); }
