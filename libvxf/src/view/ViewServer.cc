@@ -221,11 +221,11 @@ ViewServer::ViewServer(ViewSession& session, ViewServerOptions options)
         const nlohmann::json body = bodyJson(req);
         const nlohmann::json params = body.contains("params") ? body["params"] : nlohmann::json::object();
         const std::string report = s.apply(stringField(body, "op"), params);
-        sendJson(res, {{"report", report}, {"steps", s.describe()["steps"]}});
+        sendJson(res, {{"report", report}, {"steps", s.steps()}});
     });
     server.Post("/api/undo", [&s](const httplib::Request&, httplib::Response& res) {
         const bool undone = s.undo();
-        sendJson(res, {{"undone", undone}, {"steps", s.describe()["steps"]}});
+        sendJson(res, {{"undone", undone}, {"steps", s.steps()}});
     });
     server.Post("/api/export", [&s](const httplib::Request& req, httplib::Response& res) {
         const nlohmann::json body = bodyJson(req);

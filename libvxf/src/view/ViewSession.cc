@@ -28,29 +28,43 @@ namespace fs = std::filesystem;
 /// The largest slice sent (cells): a 4096² plane of floats is 64 MiB, more than a page draws.
 constexpr std::int64_t kMaxSliceCells = std::int64_t(2048) * 2048;
 
-/// Visit the active values of a float or Vec3 grid (any precision) as floats: @a fn(box, values,
-/// channels) → false to stop, box one voxel or an active tile. vxf::UsageError for other types.
+/// Call @a fn with @a grid as its own type when it holds float or Vec3 values (any precision);
+/// vxf::UsageError naming it for other types. One dispatch per call, not per voxel.
+template <typename Fn>
+void withTypedGrid(const openvdb::GridBase& grid, const std::string& name, Fn&& fn)
+{
+    if (const auto* g = dynamic_cast<const openvdb::FloatGrid*>(&grid)) return fn(*g);
+    if (const auto* g = dynamic_cast<const openvdb::DoubleGrid*>(&grid)) return fn(*g);
+    if (const auto* g = dynamic_cast<const openvdb::Vec3SGrid*>(&grid)) return fn(*g);
+    if (const auto* g = dynamic_cast<const openvdb::Vec3DGrid*>(&grid)) return fn(*g);
+    throw UsageError(fmt::format("grid '{}' holds {} values: the view shows float and vec3 grids", name, grid.valueType()));
+}
+
+/// A value of a float or Vec3 grid as 1 or 3 floats in @a out; returns the channels.
+inline int toFloats(double v, float* out)
+{
+    out[0] = float(v);
+    return 1;
+}
+template <typename T>
+int toFloats(const openvdb::math::Vec3<T>& v, float* out)
+{
+    for (int c = 0; c < 3; ++c) out[c] = float(v[c]);
+    return 3;
+}
+
+/// Visit the active values of a float or Vec3 grid as floats: @a fn(box, values, channels) →
+/// false to stop, box one voxel or an active tile.
 template <typename Fn>
 void forEachActive(const openvdb::GridBase& grid, const std::string& name, Fn&& fn)
 {
-    const auto scalar = [&](const auto& typed) {
+    withTypedGrid(grid, name, [&](const auto& typed) {
+        float v[3];
         for (auto it = typed.cbeginValueOn(); it; ++it) {
-            const float v = float(*it);
-            if (!fn(it.getBoundingBox(), &v, 1)) return;
+            const int channels = toFloats(*it, v);
+            if (!fn(it.getBoundingBox(), v, channels)) return;
         }
-    };
-    const auto vector = [&](const auto& typed) {
-        for (auto it = typed.cbeginValueOn(); it; ++it) {
-            const auto& x = *it;
-            const float v[3] = {float(x[0]), float(x[1]), float(x[2])};
-            if (!fn(it.getBoundingBox(), v, 3)) return;
-        }
-    };
-    if (const auto* g = dynamic_cast<const openvdb::FloatGrid*>(&grid)) return scalar(*g);
-    if (const auto* g = dynamic_cast<const openvdb::DoubleGrid*>(&grid)) return scalar(*g);
-    if (const auto* g = dynamic_cast<const openvdb::Vec3SGrid*>(&grid)) return vector(*g);
-    if (const auto* g = dynamic_cast<const openvdb::Vec3DGrid*>(&grid)) return vector(*g);
-    throw UsageError(fmt::format("grid '{}' holds {} values: the view shows float and vec3 grids", name, grid.valueType()));
+    });
 }
 
 int channelsOf(const openvdb::GridBase& grid)
@@ -58,36 +72,6 @@ int channelsOf(const openvdb::GridBase& grid)
     if (grid.isType<openvdb::Vec3SGrid>() || grid.isType<openvdb::Vec3DGrid>()) return 3;
     if (grid.isType<openvdb::FloatGrid>() || grid.isType<openvdb::DoubleGrid>()) return 1;
     return 0;
-}
-
-/// The value of voxel @a ijk as floats, false where it is inactive.
-bool activeValue(const openvdb::GridBase& grid, const openvdb::Coord& ijk, float* out)
-{
-    if (const auto* g = dynamic_cast<const openvdb::FloatGrid*>(&grid)) {
-        float v;
-        const bool on = g->tree().probeValue(ijk, v);
-        out[0] = v;
-        return on;
-    }
-    if (const auto* g = dynamic_cast<const openvdb::DoubleGrid*>(&grid)) {
-        double v;
-        const bool on = g->tree().probeValue(ijk, v);
-        out[0] = float(v);
-        return on;
-    }
-    if (const auto* g = dynamic_cast<const openvdb::Vec3SGrid*>(&grid)) {
-        openvdb::Vec3f v;
-        const bool on = g->tree().probeValue(ijk, v);
-        for (int c = 0; c < 3; ++c) out[c] = v[c];
-        return on;
-    }
-    if (const auto* g = dynamic_cast<const openvdb::Vec3DGrid*>(&grid)) {
-        openvdb::Vec3d v;
-        const bool on = g->tree().probeValue(ijk, v);
-        for (int c = 0; c < 3; ++c) out[c] = float(v[c]);
-        return on;
-    }
-    return false;
 }
 
 VoxelSet deepCopy(const VoxelSet& set)
@@ -146,8 +130,6 @@ nlohmann::json ViewSession::describe() const
         }
         grids.push_back(std::move(g));
     }
-    nlohmann::json steps = nlohmann::json::array();
-    for (const Step& s : mSteps) steps.push_back({{"op", s.op}, {"params", s.params}});
     // Shown first: the light's result where there is one, else the first float or vec3 grid.
     std::string shown;
     for (const char* name : {"scatter", "illumination", "direct", "density"}) {
@@ -157,8 +139,21 @@ nlohmann::json ViewSession::describe() const
     for (const auto& grid : mCurrent.grids()) {
         if (shown.empty() && channelsOf(*grid) > 0) shown = grid->getName();
     }
-    return {{"file", mPath}, {"grids", grids}, {"steps", steps}, {"operators", editOperators()},
+    return {{"file", mPath}, {"grids", grids}, {"steps", stepsLocked()}, {"operators", editOperators()},
         {"default_grid", shown.empty() ? nlohmann::json(nullptr) : nlohmann::json(shown)}};
+}
+
+nlohmann::json ViewSession::steps() const
+{
+    std::lock_guard<std::mutex> lock(mMutex);
+    return stepsLocked();
+}
+
+nlohmann::json ViewSession::stepsLocked() const
+{
+    nlohmann::json steps = nlohmann::json::array();
+    for (const Step& s : mSteps) steps.push_back({{"op", s.op}, {"params", s.params}});
+    return steps;
 }
 
 PointCloud ViewSession::points(const std::string& name, std::size_t budget) const
@@ -168,7 +163,7 @@ PointCloud ViewSession::points(const std::string& name, std::size_t budget) cons
     budget = std::max<std::size_t>(budget, 1);
     PointCloud cloud;
     cloud.channels = channelsOf(*grid);
-    if (cloud.channels == 0) forEachActive(*grid, name, [](const openvdb::CoordBBox&, const float*, int) { return false; }); // the error
+    if (cloud.channels == 0) withTypedGrid(*grid, name, [](const auto&) {}); // the error
     cloud.activeVoxels = gridStats(*grid).activeVoxels;
 
     // The smallest cells that fit the budget (a tile counts as the cells it covers).
@@ -253,7 +248,7 @@ Slice ViewSession::slice(const std::string& name, int axis, int index) const
     Slice s;
     s.axis = axis;
     s.channels = channelsOf(*grid);
-    if (s.channels == 0) forEachActive(*grid, name, [](const openvdb::CoordBBox&, const float*, int) { return false; }); // the error
+    if (s.channels == 0) withTypedGrid(*grid, name, [](const auto&) {}); // the error
     const openvdb::CoordBBox bounds = gridStats(*grid).activeBBox;
     if (bounds.empty()) return s;
     const int u = axis == 0 ? 1 : 0, v = axis == 2 ? 1 : 2;
@@ -267,17 +262,19 @@ Slice ViewSession::slice(const std::string& name, int axis, int index) const
     s.origin = bounds.min();
     s.origin[axis] = s.index;
     s.values.assign(std::size_t(s.width) * std::size_t(s.height) * std::size_t(s.channels), std::nanf(""));
-    float value[3];
-    for (int j = 0; j < s.height; ++j) {
-        for (int i = 0; i < s.width; ++i) {
-            openvdb::Coord ijk = s.origin;
-            ijk[u] += i;
-            ijk[v] += j;
-            if (!activeValue(*grid, ijk, value)) continue;
-            const std::size_t at = (std::size_t(j) * std::size_t(s.width) + std::size_t(i)) * std::size_t(s.channels);
-            for (int c = 0; c < s.channels; ++c) s.values[at + std::size_t(c)] = value[c];
+    withTypedGrid(*grid, name, [&](const auto& typed) {
+        auto accessor = typed.getConstAccessor();
+        typename std::decay_t<decltype(typed)>::ValueType value;
+        for (int j = 0; j < s.height; ++j) {
+            for (int i = 0; i < s.width; ++i) {
+                openvdb::Coord ijk = s.origin;
+                ijk[u] += i;
+                ijk[v] += j;
+                if (!accessor.probeValue(ijk, value)) continue;
+                toFloats(value, &s.values[(std::size_t(j) * std::size_t(s.width) + std::size_t(i)) * std::size_t(s.channels)]);
+            }
         }
-    }
+    });
     return s;
 }
 

@@ -72,6 +72,9 @@ public:
     /// or vec3 grid; null when there is none).
     nlohmann::json describe() const;
 
+    /// The recorded steps: [{"op", "params"}…], oldest first.
+    nlohmann::json steps() const;
+
     /// Points for @a grid (float or Vec3 of any precision; vxf::UsageError for other types or an
     /// unknown name) within @a budget points (≥ 1).
     PointCloud points(const std::string& grid, std::size_t budget) const;
@@ -134,6 +137,7 @@ private:
     /// Operator @a op of the registry on @a set, its parameters checked as `vxf op` checks them.
     static void run(VoxelSet& set, const std::string& op, const nlohmann::json& params, std::string* report);
     openvdb::GridBase::ConstPtr gridNamed(const std::string& name) const;
+    nlohmann::json stepsLocked() const; ///< steps(), the lock held
     std::string resolveInside(const std::string& relativePath) const;
 
     std::string mPath, mFolder;
