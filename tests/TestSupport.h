@@ -64,7 +64,8 @@ void putConstantFluence(vxf::VoxelSet& set, const std::string& name, double phi)
 
 /// A homogeneous sphere of radius 1 (voxel size 1/@a cells) of material @a m: `density` 1 at
 /// the voxels whose centre lies inside, `direct` = @a phi0 there and `scatter_source` =
-/// σs·phi0/4π, as the light stage would write for uniform light.
+/// σs'·phi0/4π (σs' = (1 − g)·σs, the transport's, Phase.h), as the light stage would write
+/// for uniform light.
 vxf::VoxelSet uniformSphere(const vxf::Material& m, double phi0, int cells = 16);
 
 /// Whether two grids are identical: type, class, background, transform, and every stored

@@ -39,6 +39,27 @@ vxf::Scene frontView()
     return scene;
 }
 
+/// A directional light of irradiance @a irradiance travelling along @a direction.
+vxf::Light sunAlong(const openvdb::Vec3d& direction, double irradiance)
+{
+    vxf::Light sun;
+    sun.type = vxf::Light::Type::Directional;
+    sun.direction = direction;
+    sun.intensity = irradiance;
+    return sun;
+}
+
+/// 31x31 pixels, one camera ray each, the volume term alone, single scattering marched to the lights.
+vxf::RenderOptions marchedToLights()
+{
+    vxf::RenderOptions options;
+    options.width = options.height = 31;
+    options.samples = 1;
+    options.surface = false;
+    options.directFromLights = true;
+    return options;
+}
+
 } // namespace
 
 TEST_CASE("view mode: a constant source in a thick sphere gives J/sigma_t", "[render]")
@@ -424,17 +445,8 @@ TEST_CASE("direct from the lights: a face lit at a grazing angle gives sigma_s E
     const vxf::Medium medium(set, vxf::test::albedoMaterial(sigmaT, albedo));
     vxf::Scene scene = frontView();
     scene.camera.position = turn * openvdb::Vec3d(0, -5, 0); // facing the turned face y = −1
-    vxf::Light sun;
-    sun.type = vxf::Light::Type::Directional;
-    sun.direction = turn * openvdb::Vec3d(std::sqrt(1.0 - mu * mu), mu, 0.0); // travelling into the face
-    sun.intensity = irradiance;
-    scene.lights.push_back(sun);
-    vxf::RenderOptions options;
-    options.width = options.height = 31;
-    options.samples = 1;
-    options.surface = false;
-    options.directFromLights = true;
-    const vxf::RenderedImage image = vxf::render(set, medium, scene, options);
+    scene.lights.push_back(sunAlong(turn * openvdb::Vec3d(std::sqrt(1.0 - mu * mu), mu, 0.0), irradiance)); // into the face
+    const vxf::RenderedImage image = vxf::render(set, medium, scene, marchedToLights());
     const double expected = albedo * sigmaT * irradiance * mu / (4.0 * M_PI * sigmaT * (1.0 + mu));
     // Pixels on the face away from its edges (light through the side x = −1 adds e^{−σt·0.9}).
     for (int y = 10; y <= 20; y += 5) {
@@ -590,4 +602,63 @@ TEST_CASE("a volume object's grid: camera rays march it from the camera, alpha 1
         CHECK(image.alpha[0] == 0.0f);
         CHECK(image.combined[0] == openvdb::Vec3f(options.background));
     }
+}
+
+TEST_CASE("a Henyey-Greenstein phase: a thin slab's single scattering in closed form for each g", "[render][phase]")
+{
+    // A slab D thick seen along its normal from the side the sun leaves through, the sun
+    // crossing it at cosine μ0 to the normal: at depth z from the lit face the light has come
+    // z/μ0 through the medium and the camera's ray D − z, so
+    // L = σs E p(θ) ∫_0^D e^{−σt z/μ0} e^{−σt (D − z)} dz = σs E p(θ) e^{−σt D} (1 − e^{−aD})/a,
+    // a = σt (1/μ0 − 1) (D as a → 0), θ the angle the light turns through: cosθ = μ0 here.
+    // p is Henyey-Greenstein's, written out here: 4πp = (1 − g²)/(1 + g² − 2gμ)^{3/2}.
+    const double g = GENERATE(-0.5, 0.0, 0.5, 0.9);
+    const double degrees = GENERATE(0.0, 40.0);
+    const double sigmaT = 4.0, albedo = 0.8, irradiance = 2.0, depth = 0.2; // τ = 0.8 across
+    vxf::VoxelizeOptions voxelize;
+    voxelize.dim = 64; // 6.4 voxels across the slab
+    const vxf::VoxelSet set = vxf::voxelize(vxf::makeBox(openvdb::Vec3d(-1.0, -0.5 * depth, -1.0),
+                                                openvdb::Vec3d(1.0, 0.5 * depth, 1.0)), voxelize);
+    vxf::Material m = vxf::test::albedoMaterial(sigmaT, albedo);
+    m.phaseG = g;
+    const vxf::Medium medium(set, m);
+    vxf::Scene scene = frontView();
+    scene.camera.position = openvdb::Vec3d(0, 5, 0); // on the side the light leaves through
+    const double mu0 = std::cos(degrees * M_PI / 180.0);
+    scene.lights.push_back(sunAlong(openvdb::Vec3d(std::sqrt(1.0 - mu0 * mu0), mu0, 0.0), irradiance)); // in through y = −D/2
+    vxf::RenderOptions options = marchedToLights();
+    options.background = openvdb::Vec3d(0.25);
+    const vxf::RenderedImage image = vxf::render(set, medium, scene, options);
+    const double a = sigmaT * (1.0 / mu0 - 1.0);
+    const double along = a > 0.0 ? -std::expm1(-a * depth) / a : depth;
+    const double phase = (1.0 - g * g) / std::pow(1.0 + g * g - 2.0 * g * mu0, 1.5);
+    const double expected = albedo * sigmaT * irradiance * phase / (4.0 * M_PI) * std::exp(-sigmaT * depth) * along;
+    for (int x = 13; x <= 17; x += 2) {
+        INFO("g " << g << ", " << degrees << " degrees, pixel " << x);
+        CHECK(image.direct[15 * 31 + std::size_t(x)].x() == Approx(expected).epsilon(0.01));
+        // The background behind it through the slab's own transmittance e^{−σt D}, not the reduced medium's.
+        const std::size_t i = 15 * 31 + std::size_t(x);
+        CHECK(image.combined[i].x() - image.direct[i].x() == Approx(0.25 * std::exp(-sigmaT * depth)).epsilon(0.01));
+    }
+}
+
+TEST_CASE("a Henyey-Greenstein phase: the scattered light reaches the camera through the reduced medium", "[render][phase]")
+{
+    // A constant scatter fluence φ in a thick sphere, solved (as the passes solve it) in the
+    // medium of σs' = (1 − g)σs, σt' = σt − gσs: L = σs'φ/(4π σt'), the similarity relation's
+    // radiance; through the medium's own σt it would be σs'φ/(4π σt), darker by σt'/σt.
+    const double g = GENERATE(-0.6, 0.7);
+    vxf::Material m = vxf::test::greyMaterial(2.0, 8.0); // σt = 10, d = 2
+    m.phaseG = g;
+    const double phi = 3.0;
+    vxf::VoxelSet set = litSphere(0.0);
+    vxf::test::putConstantFluence(set, "scatter", phi);
+    const vxf::Medium medium(set, m);
+    vxf::RenderOptions options;
+    options.width = options.height = 31;
+    options.samples = 1;
+    const vxf::RenderedImage image = vxf::render(set, medium, frontView(), options);
+    const double reducedS = (1.0 - g) * 8.0, reducedT = 10.0 - g * 8.0;
+    INFO("g " << g);
+    CHECK(image.scatter[15 * 31 + 15].x() == Approx(reducedS * phi / (4.0 * M_PI) / reducedT).epsilon(0.01));
 }

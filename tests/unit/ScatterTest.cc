@@ -256,3 +256,31 @@ TEST_CASE("two passes from a uniform source near a flat face: the closed form an
         CHECK(skins == 1);
     }
 }
+
+TEST_CASE("with a Henyey-Greenstein phase each pass scales by the reduced albedo; at albedo 1 none loses light", "[scatter][phase]")
+{
+    // The transport's medium (Phase.h): σs' = (1 − g)σs, σt' = σt − gσs, so each pass deep in a
+    // large medium scales by a' = σs'/σt', and at albedo 1 by exactly 1 for any g: the forward
+    // part of the phase keeps light on its way, none is lost. Both kernels, plain passes.
+    const auto kernel = GENERATE(vxf::ScatterKernel::Gather, vxf::ScatterKernel::Sweep);
+    for (const auto& [albedo, g] : {std::pair{1.0, 0.7}, std::pair{0.9, 0.5}, std::pair{0.9, -0.5}}) {
+        vxf::Material m = vxf::test::albedoMaterial(40.0, albedo); // σt' R ≥ 12 at g = 0.7
+        m.phaseG = g;
+        vxf::VoxelSet set = uniformSphere(m, 1.0);
+        const vxf::Medium medium(set, m);
+        vxf::ScatterOptions options;
+        options.passes = 3;
+        options.tolerance = 0.0;
+        options.keepPasses = true;
+        options.pass.kernel = kernel;
+        vxf::scatter(set, medium, options);
+        const double reducedS = (1.0 - g) * albedo * 40.0, reduced = reducedS / (40.0 - g * albedo * 40.0);
+        double power = 1.0;
+        for (int k = 1; k <= 3; ++k) {
+            power *= reduced;
+            INFO("albedo " << albedo << ", g " << g << ", pass " << k);
+            CHECK(set.get<openvdb::Vec3SGrid>("scatter_pass_" + std::to_string(k))->tree().getValue(openvdb::Coord(0)).x() ==
+                Approx(power).epsilon(0.02));
+        }
+    }
+}

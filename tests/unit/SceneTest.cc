@@ -152,7 +152,29 @@ TEST_CASE("bad scenes are refused with the field at fault", "[pipeline][scene]")
         Catch::StartsWith("/scenes/test.json: /objects/1"));
     CHECK_THAT(errorOf(edited(R"({"mesh": "builtin:box", "role": "occluder"})", R"({"role": "occluder"})")),
         Catch::StartsWith("/scenes/test.json: /objects/1"));
+    // The phase: |g| ≤ 0.95, one g for every medium of the scene.
+    CHECK_THAT(errorOf(edited(R"("mean_free_path": 0.5})", R"("mean_free_path": 0.5, "phase": {"g": 0.99}})")),
+        Catch::StartsWith("/scenes/test.json: /objects/0/material/phase/g: "));
+    CHECK(errorOf(edited(R"("mean_free_path": 0.5})", R"("mean_free_path": 0.5, "phase": {"g": 0.6}})")) ==
+          "/scenes/test.json: /objects/2/material/phase/g: 0 differs from medium 'grape''s 0.6: every medium of a scene has the same phase");
     CHECK_THROWS_WITH(vxf::loadScene("/nonexistent/scene.json"), "/nonexistent/scene.json: cannot open scene file");
+}
+
+TEST_CASE("a material's phase: Henyey-Greenstein g, and single scattering marched to the lights unless the scene says", "[pipeline][scene][phase]")
+{
+    const std::string anisotropic = edited(R"("mean_free_path": 0.5})", R"("mean_free_path": 0.5, "phase": {"g": -0.3}})");
+    std::string both = anisotropic;
+    const std::string wax = R"("sigma_s": 2,)";
+    both.replace(both.find(wax), wax.size(), R"("sigma_s": 2, "phase": {"g": -0.3},)");
+    const vxf::Scene scene = parse(both);
+    CHECK(scene.objects[0].material->phaseG == -0.3);
+    CHECK(scene.objects[2].material->phaseG == -0.3);
+    CHECK(scene.settings.directFromLights);   // the phase shows in single scattering marched to the lights
+    CHECK_FALSE(parse(kScene).settings.directFromLights); // isotropic: the direct grid, as before
+    std::string asked = both;
+    const std::string render = R"("mode": "gather",)";
+    asked.replace(asked.find(render), render.size(), R"("mode": "gather", "direct": "grid",)");
+    CHECK_FALSE(parse(asked).settings.directFromLights);
 }
 
 TEST_CASE("a volume object names a .vdb and its density grid, resolved against the scene", "[pipeline][scene][volume]")

@@ -1,5 +1,6 @@
 #include <vxf/light/Medium.h>
 
+#include <vxf/light/Phase.h>
 #include <vxf/light/UniformBricks.h>
 
 #include <vxf/core/RayScene.h>
@@ -7,6 +8,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <openvdb/tools/Morphology.h>
+#include <openvdb/tools/ValueTransformer.h>
 #include <openvdb/tree/LeafManager.h>
 #include <tbb/enumerable_thread_specific.h>
 
@@ -65,6 +67,8 @@ openvdb::FloatGrid::ConstPtr marchSurface(const openvdb::FloatGrid::ConstPtr& su
 Medium::Medium(const VoxelSet& set, const Material& material)
     : mDensity(set.get<openvdb::FloatGrid>("density"))
     , mMaterial(material)
+    , mActualMaterial(material)
+    , mPhaseG(material.phaseG)
 {
     // Errors name the file the set came from, when it came from one.
     const std::string file = set.path().empty() ? "" : set.path() + ": ";
@@ -88,6 +92,20 @@ Medium::Medium(const VoxelSet& set, const Material& material)
             mSurface = marchSurface(typed);
         }
     }
+    mActualSigmaS = mSigmaS;
+    if (mPhaseG != 0.0) {
+        // The transport's medium: σs' = (1 − g)·σs, σa as it is (Phase.h).
+        const double reduce = reducedScatteringFactor(mPhaseG);
+        mMaterial.sigmaS *= reduce;
+        mMaterial.phaseG = 0.0;
+        if (mSigmaS) {
+            openvdb::Vec3SGrid::Ptr reduced = mSigmaS->deepCopy();
+            openvdb::tools::foreach(reduced->beginValueAll(), [reduce](const openvdb::Vec3SGrid::ValueAllIter& it) {
+                it.setValue(openvdb::Vec3f(openvdb::Vec3d(*it) * reduce));
+            });
+            mSigmaS = reduced;
+        }
+    }
     mBounds = mDensity->evalActiveVoxelBoundingBox();
     // Trilinear lookups reach a voxel beyond the active voxels (marchBounds).
     mDensityDense = DenseCopy<openvdb::FloatGrid>::create(*mDensity, 2, kDenseCopyBytes);
@@ -95,6 +113,14 @@ Medium::Medium(const VoxelSet& set, const Material& material)
     if (!mSigmaA && !mSigmaS && mDensityDense) {
         mUniform = std::make_shared<const UniformBricks>(mDensityDense.get(), mBounds, mSurfaceDense.get(), voxelSize(), bool(mSurface));
     }
+}
+
+Medium Medium::actual() const
+{
+    Medium m(*this);
+    m.mMaterial = mActualMaterial;
+    m.mSigmaS = mActualSigmaS;
+    return m;
 }
 
 Medium::Sampler::Sampler(const Medium& medium)
@@ -254,7 +280,8 @@ openvdb::Vec3d Medium::Sampler::sigmaT(const openvdb::Vec3d& ijk)
 void recordMaterial(VoxelSet& set, const Material& material)
 {
     const auto rgb = [](const openvdb::Vec3d& v) { return nlohmann::json::array({v[0], v[1], v[2]}); };
-    const nlohmann::json j = {{"sigma_a", rgb(material.sigmaA)}, {"sigma_s", rgb(material.sigmaS)}};
+    nlohmann::json j = {{"sigma_a", rgb(material.sigmaA)}, {"sigma_s", rgb(material.sigmaS)}};
+    if (material.phaseG != 0.0) j["phase_g"] = material.phaseG; // isotropic sets' metadata as before
     set.metadata().insertMeta(kMaterialMetaKey, openvdb::StringMetadata(j.dump()));
 }
 
@@ -269,6 +296,7 @@ Material recordedMaterial(const VoxelSet& set)
             m.sigmaA[c] = j.at("sigma_a").at(std::size_t(c)).get<double>();
             m.sigmaS[c] = j.at("sigma_s").at(std::size_t(c)).get<double>();
         }
+        m.phaseG = j.value("phase_g", 0.0);
     } catch (const nlohmann::json::exception&) {
         throw Error(fmt::format("malformed '{}' metadata: {}", kMaterialMetaKey, meta->value()));
     }

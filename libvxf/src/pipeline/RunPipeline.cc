@@ -109,8 +109,9 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
     for (const auto& l : scene.lights) {
         if (!l.file.empty()) lights.push_back(fileFingerprint(l.file)); // environment map, emission grid: their bytes
     }
-    const json lightInputs = {{"voxels", voxelHash}, {"sigma_a", vec(material.sigmaA)}, {"sigma_s", vec(material.sigmaS)},
+    json lightInputs = {{"voxels", voxelHash}, {"sigma_a", vec(material.sigmaA)}, {"sigma_s", vec(material.sigmaS)},
         {"lights", lights}, {"occluders", occluders}, {"step", s.step}, {"sweep", true}};
+    if (material.phaseG != 0.0) lightInputs["phase_g"] = material.phaseG; // isotropic scenes keep their cached stages
     const std::string lightHash = hashOf(lightInputs);
     const fs::path lightFile = cache / ("light-" + lightHash + ".vdb");
     if (fs::exists(lightFile)) {

@@ -100,6 +100,7 @@ public:
                 m.sigmaA[c] = std::max(0.0, sigmaT - m.sigmaS[c]);
             }
         }
+        if (j.contains("phase")) m.phaseG = j["phase"].value("g", 0.0);
         if (j.contains("grids")) {
             const json& g = j["grids"];
             m.gridsFile = resolvePath(g["file"].get<std::string>());
@@ -226,7 +227,25 @@ Scene parseScene(const std::string& text, const std::string& path)
     }
     scene.camera = reader.camera(document["camera"]);
 
+    // One phase for the scene's media: the voxel set's coefficient grids sum the objects'
+    // σs, which a per-object g would have to weigh voxel by voxel.
+    const SceneObject* firstMedium = nullptr;
+    for (std::size_t i = 0; i < scene.objects.size(); ++i) {
+        const SceneObject& o = scene.objects[i];
+        if (o.role != SceneObject::Role::Medium) continue;
+        if (!firstMedium) {
+            firstMedium = &o;
+        } else if (o.material->phaseG != firstMedium->material->phaseG) {
+            reader.fail(fmt::format("/objects/{}/material/phase/g", i),
+                fmt::format("{} differs from medium '{}''s {}: every medium of a scene has the same phase", o.material->phaseG,
+                    firstMedium->name, firstMedium->material->phaseG));
+        }
+    }
+    const bool anisotropic = firstMedium && firstMedium->material->phaseG != 0.0;
+
     SceneSettings& s = scene.settings;
+    // An anisotropic phase shows in single scattering marched to the lights; the direct grid's is isotropic.
+    s.directFromLights = anisotropic;
     if (document.contains("voxelize")) {
         const json& v = document["voxelize"];
         s.dim = v.value("dim", s.dim);
@@ -256,7 +275,7 @@ Scene parseScene(const std::string& text, const std::string& path)
         s.noiseLevel = v.value("noise_level", s.noiseLevel);
         s.gather = v.value("mode", std::string("view")) == "gather";
         s.gatherDirections = v.value("gather_directions", s.gatherDirections);
-        s.directFromLights = v.value("direct", std::string("grid")) == "lights";
+        s.directFromLights = v.value("direct", std::string(anisotropic ? "lights" : "grid")) == "lights";
         s.surface = v.value("surface", s.surface);
         if (v.contains("background")) s.background = reader.rgb(v["background"]);
     }

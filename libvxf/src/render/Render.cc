@@ -5,6 +5,7 @@
 #include <vxf/light/DirectLight.h>
 #include <vxf/light/InteriorField.h>
 #include <vxf/light/LightSampler.h>
+#include <vxf/light/Phase.h>
 #include <vxf/light/Transmittance.h>
 #include <vxf/scatter/SourceField.h>
 
@@ -26,6 +27,9 @@ namespace {
 struct Gathered
 {
     openvdb::Vec3d direct{0.0}, scatter{0.0}, transmittance{1.0};
+    /// The transmittance of the transport's medium (σt − g·σs, Medium), which the light in the
+    /// grids crosses toward the camera; `transmittance` where the phase is isotropic.
+    openvdb::Vec3d reducedTransmittance{1.0};
     bool touched = false; ///< the march met any medium
 };
 
@@ -36,6 +40,11 @@ public:
     /// (options.directFromLights) marched to them at every step; multiple scattering from
     /// @a scatter, J = σs·φ/4π of the `scatter` grid (SourceField: near a surface, its layers;
     /// the passes read the lattice alone there). Either layer may be null (none).
+    /// @a medium holds the material's own coefficients (Medium::actual). With a phase of g ≠ 0
+    /// the light marched to the lights is scattered toward the camera by the phase through the
+    /// medium's own σt; the grids' J, solved in the transport's reduced medium, reaches the
+    /// camera through that medium's σt' = σt − g·σs (the similarity relation: the forward part
+    /// of the phase keeps light on its way; Phase.h).
     /// With @a boundary (the media's meshes) the marches cross the surface where the meshes
     /// do (Medium::Sampler::snapCrossingsTo): grazing rays, at silhouettes and terminators.
     Marcher(const Medium& medium, const RenderOptions& options, const InteriorField* direct,
@@ -48,6 +57,7 @@ public:
         , mOptions(options)
         , mLights(lights)
         , mOccluders(occluders)
+        , mPhaseG(medium.phaseG())
     {
         // Camera and shadow rays cross the surface where the meshes do, as the reference's do.
         if (boundary && !boundary->empty()) {
@@ -89,7 +99,9 @@ public:
         const int steps = std::max(1, int(std::ceil((t1 - t0) / std::max(mOptions.step, 1e-3))));
         const double h = (t1 - t0) / steps;
         mExtraPoint = 3 * std::uint64_t(steps); // per ray: a ray traced again gets the same light picks
-        openvdb::Vec3d tau(0.0);
+        mRayDirection = dir;
+        openvdb::Vec3d tau(0.0), reducedTau(0.0);
+        const bool reduced = mPhaseG != 0.0;
         InsideSteps inside(mSampler, o, d, t0, h);
         InsideStep step;
         Emission eStart, eMiddle, eEnd; // J at the step's start, middle and end
@@ -109,9 +121,14 @@ public:
             g.touched = true;
             const double hWorld = step.length * mMedium.voxelSize();
             const Segment whole{step.start, step.end, hWorld, eStart, eMiddle, eEnd};
-            integrate(whole, sigmaT, scaleAt, key, kRefineDepth, g);
+            const openvdb::Vec3d reducedSigmaT =
+                reduced ? sigmaT - mSampler.sigmaS(step.midpoint) * (mPhaseG * step.interior) : sigmaT;
+            integrate(whole, sigmaT, reduced ? &reducedSigmaT : nullptr, scaleAt, key, kRefineDepth, g);
             for (int c = 0; c < 3; ++c) tau[c] += std::max(0.0, sigmaT[c]) * hWorld;
-            if (std::min({tau[0], tau[1], tau[2]}) > mTauCutoff) {
+            for (int c = 0; c < 3 && reduced; ++c) reducedTau[c] += std::max(0.0, reducedSigmaT[c]) * hWorld;
+            // Stop where neither transmittance lets anything through (σt' < σt for g > 0).
+            if (std::min({tau[0], tau[1], tau[2]}) > mTauCutoff &&
+                (!reduced || std::min({reducedTau[0], reducedTau[1], reducedTau[2]}) > mTauCutoff)) {
                 g.transmittance = openvdb::Vec3d(0.0);
                 break;
             }
@@ -139,6 +156,8 @@ private:
 
     /// Adds ΔL = T·∫ J(s)·e^{−σt s} ds over @a s to @a g (J quadratic through its three values,
     /// emissionWeights) and multiplies g's T by e^{−σt·length}; σt constant over the step.
+    /// With @a reducedSigmaT (a phase of g ≠ 0) the grids' J is taken through it and g's
+    /// reducedTransmittance; the light marched to the lights through @a sigmaT.
     /// Where single scattering changes by more than kRefineRatio across @a s, the quadratic
     /// cannot follow it and @a s is halved (up to @a depth times), J read at the quarter
     /// points: light that reaches the medium only by grazing it (beyond the terminator; lit at
@@ -147,8 +166,8 @@ private:
     /// voxels per mean free path) the darkest third's single scattering came out 7.9% bright
     /// at one-voxel steps and 1.8% at a tenth of a voxel; halved so from one-voxel steps, 1.6%.
     template<typename ScaleAt>
-    void integrate(const Segment& s, const openvdb::Vec3d& sigmaT, const ScaleAt& scaleAt, std::uint64_t key, int depth,
-        Gathered& g)
+    void integrate(const Segment& s, const openvdb::Vec3d& sigmaT, const openvdb::Vec3d* reducedSigmaT,
+        const ScaleAt& scaleAt, std::uint64_t key, int depth, Gathered& g)
     {
         const std::array<EmissionWeights, 3> w = emissionWeights(sigmaT, s.length);
         if (depth > 0 && needsRefinement(s, w, g)) {
@@ -156,15 +175,32 @@ private:
             const openvdb::Vec3d q1 = 0.5 * (s.start + middle), q3 = 0.5 * (middle + s.end);
             const Emission e1 = emission(q1, scaleAt(q1), key, mExtraPoint++);
             const Emission e3 = emission(q3, scaleAt(q3), key, mExtraPoint++);
-            integrate(Segment{s.start, middle, 0.5 * s.length, s.eStart, e1, s.eMiddle}, sigmaT, scaleAt, key, depth - 1, g);
-            integrate(Segment{middle, s.end, 0.5 * s.length, s.eMiddle, e3, s.eEnd}, sigmaT, scaleAt, key, depth - 1, g);
+            integrate(Segment{s.start, middle, 0.5 * s.length, s.eStart, e1, s.eMiddle}, sigmaT, reducedSigmaT, scaleAt,
+                key, depth - 1, g);
+            integrate(Segment{middle, s.end, 0.5 * s.length, s.eMiddle, e3, s.eEnd}, sigmaT, reducedSigmaT, scaleAt, key,
+                depth - 1, g);
             return;
         }
+        if (!reducedSigmaT) {
+            for (int c = 0; c < 3; ++c) {
+                const double weight = g.transmittance[c];
+                g.direct[c] += weight * emissionIntegral(w[c], s.eStart.direct[c], s.eMiddle.direct[c], s.eEnd.direct[c]);
+                g.scatter[c] += weight * emissionIntegral(w[c], s.eStart.scatter[c], s.eMiddle.scatter[c], s.eEnd.scatter[c]);
+                g.transmittance[c] *= w[c].transmittance;
+            }
+            g.reducedTransmittance = g.transmittance;
+            return;
+        }
+        const std::array<EmissionWeights, 3> wReduced = emissionWeights(*reducedSigmaT, s.length);
+        const bool directMarched = mLights != nullptr; // else read from the grid, solved in the reduced medium
         for (int c = 0; c < 3; ++c) {
-            const double weight = g.transmittance[c];
-            g.direct[c] += weight * emissionIntegral(w[c], s.eStart.direct[c], s.eMiddle.direct[c], s.eEnd.direct[c]);
-            g.scatter[c] += weight * emissionIntegral(w[c], s.eStart.scatter[c], s.eMiddle.scatter[c], s.eEnd.scatter[c]);
+            const EmissionWeights& wDirect = directMarched ? w[c] : wReduced[c];
+            const double directWeight = directMarched ? g.transmittance[c] : g.reducedTransmittance[c];
+            g.direct[c] += directWeight * emissionIntegral(wDirect, s.eStart.direct[c], s.eMiddle.direct[c], s.eEnd.direct[c]);
+            g.scatter[c] += g.reducedTransmittance[c] *
+                emissionIntegral(wReduced[c], s.eStart.scatter[c], s.eMiddle.scatter[c], s.eEnd.scatter[c]);
             g.transmittance[c] *= w[c].transmittance;
+            g.reducedTransmittance[c] *= wReduced[c].transmittance;
         }
     }
 
@@ -233,7 +269,10 @@ private:
             light.sample(x, pointKey, 0.5 * mMedium.voxelSize(), mLightSamples, pick, pick + 1);
             if (mLightSamples.empty()) continue; // a sample that carries nothing
             const LightSample& s = mLightSamples.front();
-            const openvdb::Vec3d f = s.fluence * double(n) * sampleTransmittance(s, mShadowSampler, mMedium, x, mShadowMarch, mOccluders);
+            // The phase scatters the light's direction of travel (−s.direction) toward the camera (−mRayDirection).
+            const double phase = henyeyGreenstein4Pi(mPhaseG, s.direction.dot(mRayDirection));
+            const openvdb::Vec3d f =
+                s.fluence * (double(n) * phase) * sampleTransmittance(s, mShadowSampler, mMedium, x, mShadowMarch, mOccluders);
             phi += f;
             if (n == 1) exact += f;
         }
@@ -252,6 +291,8 @@ private:
     openvdb::BBoxd mBounds;
     double mTauCutoff;
     std::uint64_t mExtraPoint = 0; ///< the next refined point's index along the ray (after the steps' 3 per step)
+    double mPhaseG;                ///< Henyey-Greenstein g (0: isotropic)
+    openvdb::Vec3d mRayDirection;  ///< the marched ray's world direction (the phase's outgoing one)
 };
 
 } // namespace
@@ -383,6 +424,7 @@ struct RenderContext
         const RenderMeshes& meshes_)
         : set(set_)
         , medium(medium_)
+        , actual(medium_.actual())
         , scene(scene_)
         , options(options_)
         , meshes(meshes_)
@@ -445,7 +487,10 @@ struct RenderContext
     }
 
     const VoxelSet& set;
+    /// The transport's medium (σs reduced by the phase, Medium), which the direct and scatter
+    /// grids were solved in, and the medium itself, which camera and shadow rays cross.
     const Medium& medium;
+    const Medium actual;
     const Scene& scene;
     const RenderOptions& options;
     const RenderMeshes& meshes;
@@ -472,10 +517,10 @@ public:
         : mContext(context)
         , mOptions(context.options)
         , mIntersector(context.levelSetIntersector)
-        , mMarcher(context.medium, context.options, context.directField ? &*context.directField : nullptr,
+        , mMarcher(context.actual, context.options, context.directField ? &*context.directField : nullptr,
               context.scatterField ? &*context.scatterField : nullptr, context.options.directFromLights ? &context.volumeLights : nullptr,
               context.meshes.occluders, context.meshes.media)
-        , mShader(context.medium, context.surfaceLights, context.meshes.occluders)
+        , mShader(context.actual, context.surfaceLights, context.meshes.occluders)
         , mEpsilon(1e-4 * context.medium.voxelSize())
     {
     }

@@ -16,6 +16,11 @@ class UniformBricks;
 /// σa(x) = density(x)·σa, σs(x) = density(x)·σs from the material, unless the voxel set
 /// has per-voxel `sigma_a` / `sigma_s` (Vec3f) grids, which replace them. Lookups are
 /// trilinear. Read-only and cheap to copy; give each thread its own Sampler.
+/// A material of Henyey-Greenstein g ≠ 0 gives the transport's coefficients: σs reduced to
+/// (1 − g)·σs, σt to σt − g·σs (the similarity relation, Phase.h), which the light stage, the
+/// scatter passes and their diffusion correction take with an isotropic phase; actual() is the
+/// medium of the material's own coefficients, for the camera's transmittance and its single
+/// scattering with the phase. With g = 0 both are the material's, bit for bit.
 class Medium
 {
 public:
@@ -23,11 +28,19 @@ public:
     /// throws vxf::Error when an optional grid has the wrong type or another transform.
     Medium(const VoxelSet& set, const Material& material);
 
+    /// The Henyey-Greenstein g of the material (0: isotropic), whichever coefficients this holds.
+    double phaseG() const { return mPhaseG; }
+    /// The same medium with the material's own coefficients (σs not reduced by the phase);
+    /// a copy of this one when g = 0. Shares the grids and their dense copies.
+    Medium actual() const;
+
     const openvdb::math::Transform& transform() const { return mDensity->transform(); }
     double voxelSize() const { return mDensity->voxelSize()[0]; }
     /// Index-space bounds of the medium (active density), empty when there is none.
     const openvdb::CoordBBox& activeBounds() const { return mBounds; }
     const openvdb::FloatGrid& density() const { return *mDensity; }
+    /// The material of the coefficients held: the transport's, σs reduced by the phase and g 0
+    /// (an isotropic medium of the same diffuse transport), or actual()'s, the material itself.
     const Material& material() const { return mMaterial; }
     /// The per-voxel coefficient grids, or null when the material's constants apply.
     const openvdb::Vec3SGrid* sigmaAGrid() const { return mSigmaA.get(); }
@@ -145,6 +158,10 @@ private:
     std::shared_ptr<const DenseCopy<openvdb::FloatGrid>> mDensityDense, mSurfaceDense;
     std::shared_ptr<const UniformBricks> mUniform;
     Material mMaterial;
+    /// The material and `sigma_s` grid as given, which actual() holds (the reduced ones above).
+    Material mActualMaterial;
+    openvdb::Vec3SGrid::ConstPtr mActualSigmaS;
+    double mPhaseG = 0.0;
     openvdb::CoordBBox mBounds;
 };
 

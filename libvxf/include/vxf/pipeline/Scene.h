@@ -16,6 +16,10 @@ struct Material
     openvdb::Vec3d sigmaA{0.0}, sigmaS{0.0};
     std::string gridsFile;            ///< optional .vdb with per-voxel coefficient grids ("" if none)
     std::string sigmaAGrid, sigmaSGrid; ///< their names in gridsFile ("" if not given)
+    /// Henyey-Greenstein asymmetry of the phase function, in [−kMaxPhaseG, kMaxPhaseG]: 0
+    /// isotropic, > 0 forward (smoke, clouds, skin), < 0 backward. Medium takes the transport's
+    /// coefficients reduced by it (vxf/light/Phase.h); the camera's single scattering the phase.
+    double phaseG = 0.0;
 
     openvdb::Vec3d sigmaT() const { return sigmaA + sigmaS; }
     /// sigma_s / sigma_t per channel (0 where sigma_t is 0).

@@ -1,0 +1,87 @@
+#include <vxf/light/Medium.h>
+#include <vxf/light/Phase.h>
+
+#include "TestSupport.h"
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+TEST_CASE("Henyey-Greenstein: unit mean over the sphere, mean cosine g, 1 everywhere at g = 0", "[phase]")
+{
+    for (const double g : {-0.95, -0.5, 0.0, 0.3, 0.8, 0.95}) {
+        INFO("g " << g);
+        // ∫ p dω = ½ ∫_{−1}^{1} 4πp(μ) dμ, midpoints in μ, fine enough for g = 0.95's peak.
+        const int n = 400000;
+        double mean = 0.0, cosine = 0.0;
+        for (int i = 0; i < n; ++i) {
+            const double mu = -1.0 + (i + 0.5) * 2.0 / n;
+            const double p = vxf::henyeyGreenstein4Pi(g, mu);
+            mean += 0.5 * p * 2.0 / n;
+            cosine += 0.5 * p * mu * 2.0 / n;
+        }
+        CHECK(mean == Approx(1.0).epsilon(1e-4));
+        CHECK(cosine == Approx(g).margin(1e-4));
+        // Closed form at straight on and straight back: (1 ± g)/(1 ∓ g)².
+        CHECK(vxf::henyeyGreenstein4Pi(g, 1.0) == Approx((1.0 + g) / ((1.0 - g) * (1.0 - g))));
+        CHECK(vxf::henyeyGreenstein4Pi(g, -1.0) == Approx((1.0 - g) / ((1.0 + g) * (1.0 + g))));
+    }
+    CHECK(vxf::henyeyGreenstein4Pi(0.0, 0.3) == 1.0);
+}
+
+TEST_CASE("a medium of phase g holds the transport's reduced coefficients; actual() the material's", "[phase]")
+{
+    vxf::Material m = vxf::test::greyMaterial(1.0, 4.0);
+    m.phaseG = 0.75;
+    vxf::VoxelSet set = vxf::test::uniformSphere(m, 1.0, 8);
+    const vxf::Medium medium(set, m);
+    const openvdb::Vec3d centre(0.0);
+    vxf::Medium::Sampler reduced(medium);
+    // σs' = (1 − g)σs = 1, σt' = σa + σs' = 2 (= σt − gσs = 5 − 3).
+    CHECK(reduced.sigmaS(centre).x() == Approx(1.0));
+    CHECK(reduced.sigmaT(centre).x() == Approx(2.0));
+    CHECK(medium.material().sigmaS.x() == Approx(1.0));
+    CHECK(medium.material().phaseG == 0.0); // an isotropic medium: a copy (coarse levels) is not reduced again
+    CHECK(medium.phaseG() == 0.75);
+    const vxf::Medium actual = medium.actual();
+    vxf::Medium::Sampler own(actual);
+    CHECK(own.sigmaS(centre).x() == Approx(4.0));
+    CHECK(own.sigmaT(centre).x() == Approx(5.0));
+    CHECK(actual.phaseG() == 0.75);
+
+    // Per-voxel sigma_s grids are reduced alike; the set's own grid is left as it is.
+    auto sigmaS = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
+    sigmaS->setName("sigma_s");
+    sigmaS->setTransform(set.transformPtr());
+    sigmaS->tree().topologyUnion(set.get<openvdb::FloatGrid>("density")->tree());
+    for (auto it = sigmaS->beginValueOn(); it; ++it) it.setValue(openvdb::Vec3f(8.0f));
+    set.put(sigmaS);
+    const vxf::Medium gridded(set, m);
+    vxf::Medium::Sampler griddedReduced(gridded);
+    CHECK(griddedReduced.sigmaS(centre).x() == Approx(2.0));
+    CHECK(griddedReduced.sigmaT(centre).x() == Approx(1.0 + 2.0));
+    vxf::Medium::Sampler griddedOwn(gridded.actual());
+    CHECK(griddedOwn.sigmaS(centre).x() == Approx(8.0));
+    CHECK(sigmaS->tree().getValue(openvdb::Coord(0)).x() == 8.0f);
+
+    // g = 0: both are the material's, bit for bit.
+    const vxf::Medium isotropic(set, vxf::test::greyMaterial(1.0, 4.0));
+    vxf::Medium::Sampler a(isotropic);
+    const vxf::Medium isotropicActual = isotropic.actual();
+    vxf::Medium::Sampler b(isotropicActual);
+    const openvdb::Vec3d p(0.3, -1.2, 2.7);
+    CHECK(a.sigmaT(p) == b.sigmaT(p));
+    CHECK(a.sigmaS(p) == b.sigmaS(p));
+}
+
+TEST_CASE("the material's phase is recorded in the voxel set, and isotropic sets' records are as before", "[phase]")
+{
+    vxf::Material m = vxf::test::greyMaterial(1.0, 4.0);
+    vxf::VoxelSet set = vxf::test::uniformSphere(m, 1.0, 4);
+    vxf::recordMaterial(set, m);
+    const std::string isotropic = set.metadata().metaValue<std::string>(vxf::kMaterialMetaKey);
+    CHECK(isotropic.find("phase") == std::string::npos);
+    m.phaseG = -0.4;
+    vxf::recordMaterial(set, m);
+    CHECK(vxf::recordedMaterial(set).phaseG == -0.4);
+}
