@@ -3,10 +3,13 @@
 #include "Commands.h"
 
 #include <vxf/pipeline/RunPipeline.h>
+#include <vxf/pipeline/Scene.h>
+#include <vxf/pipeline/SceneGeometry.h>
 
 #include <fmt/format.h>
 
 #include <iostream>
+#include <set>
 
 namespace vxf::cli {
 
@@ -28,7 +31,14 @@ public:
     {
         TerminalProgress progress;
         const auto start = std::chrono::steady_clock::now();
-        const PipelineReport report = runPipeline(loadScene(mScene), mOut, &progress);
+        const Scene scene = loadScene(mScene);
+        const PipelineReport report = runPipeline(scene, mOut, &progress);
+        // What repairing the meshes did, once per file, as `vxf voxelize` says it.
+        std::set<std::string> told;
+        for (const auto& object : scene.objects) {
+            if (object.isVolume() || !told.insert(object.mesh).second) continue;
+            for (const auto& warning : objectMeshWarnings(object)) warn(fmt::format("{}: {}", object.mesh, warning));
+        }
         for (const auto& stage : report.stages) {
             std::cout << fmt::format("  {:<9} {:<7} {:>7.2f} s  {}\n", stage.stage, stage.action, stage.seconds, stage.why);
         }

@@ -146,6 +146,29 @@ TEST_CASE("files made by other tools (pyopenvdb) are read, listed and converted"
     CHECK(slurp(dir.path("h.vxf")).find("grid density float class=fog_volume\ncount 3\n") != std::string::npos);
 }
 
+TEST_CASE("vxf run says what repairing a scene's mesh did, as vxf voxelize does", "[cli][run]")
+{
+    TempDir dir;
+    vxf::test::spit(dir.path("open.off"), "OFF\n8 5 0\n-1 -1 -1\n1 -1 -1\n-1 1 -1\n1 1 -1\n-1 -1 1\n1 -1 1\n-1 1 1\n1 1 1\n"
+                                          "4 0 4 6 2\n4 1 3 7 5\n4 0 1 5 4\n4 2 6 7 3\n4 0 2 3 1\n");
+    vxf::test::spit(dir.path("open.json"), R"({
+  "objects": [{"name": "box", "mesh": "open.off", "material": {"albedo": 0.5, "mean_free_path": 0.5}},
+              {"name": "floor", "mesh": "open.off", "role": "occluder", "transform": {"translate": [0, 0, -3]}}],
+  "lights": [{"type": "directional", "direction": [0, 0, -1]}],
+  "camera": {"position": [0, -6, 0], "look_at": [0, 0, 0]},
+  "voxelize": {"dim": 16}, "scatter": {"passes": 1, "directions": 4},
+  "render": {"width": 16, "height": 12, "samples": 1}
+})");
+    for (int pass = 0; pass < 2; ++pass) { // run, then every stage but the render cached: the same words
+        const auto result = run(fmt::format("{} run {} --out {}", binary("vxf"), dir.path("open.json"), dir.path("out")));
+        INFO(result.out << result.err);
+        REQUIRE(result.status == 0);
+        const std::string said = fmt::format("vxf: run: warning: {}: the mesh is open: 1 holes", dir.path("open.off"));
+        CHECK(result.err.find(said) != std::string::npos);
+        CHECK(result.err.find(said, result.err.find(said) + 1) == std::string::npos); // once per file
+    }
+}
+
 TEST_CASE("vxf voxelize on a real open mesh warns and still voxelizes", "[cli][voxelize]")
 {
     TempDir dir;

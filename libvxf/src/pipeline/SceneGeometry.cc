@@ -17,36 +17,53 @@ namespace vxf {
 
 namespace {
 
+/// A mesh file as read and repaired, with what the repair found.
+struct ReadMesh
+{
+    std::shared_ptr<const TriangleMesh> mesh;
+    std::vector<std::string> warnings; ///< MeshReport::warnings (no self-intersection check)
+};
+
 /// The meshes this process has read, so that the stages of one `vxf run` (voxelize, light,
 /// render) or one `vxf graph` read and repair each file once: on the accuracy bench's bunny
 /// (75k triangles) a read is 0.17 s, and it was done three times in a 2.6 s run. A file is
 /// known by its path and the hash of its bytes (a few ms), so an edited file is read again.
-/// The few most recent are kept.
+/// The few most recent are kept. The self-intersection check (0.13 s of the bunny's read,
+/// reporting only) is `vxf voxelize`'s; the repairs' warnings are kept for the caller to show.
 class ReadMeshes
 {
 public:
-    std::shared_ptr<const TriangleMesh> get(const std::string& path)
+    static ReadMeshes& instance()
     {
-        if (!std::ifstream(path).good()) return std::make_shared<const TriangleMesh>(readMesh(path)); // it names the problem
+        static ReadMeshes read;
+        return read;
+    }
+
+    ReadMesh get(const std::string& path)
+    {
+        if (!std::ifstream(path).good()) return {std::make_shared<const TriangleMesh>(readMesh(path)), {}}; // it names the problem
         const Key key{path, fileFingerprint(path)};
         {
             std::lock_guard<std::mutex> lock(mMutex);
-            for (const auto& [k, mesh] : mEntries) {
-                if (k == key) return mesh;
+            for (const auto& [k, read] : mEntries) {
+                if (k == key) return read;
             }
         }
-        auto mesh = std::make_shared<const TriangleMesh>(readMesh(path));
+        MeshReadOptions options;
+        options.checkSelfIntersections = false;
+        MeshReport report;
+        ReadMesh read{std::make_shared<const TriangleMesh>(readMesh(path, options, &report)), std::move(report.warnings)};
         std::lock_guard<std::mutex> lock(mMutex);
-        mEntries.emplace_front(key, mesh);
+        mEntries.emplace_front(key, read);
         if (mEntries.size() > kKept) mEntries.pop_back();
-        return mesh;
+        return read;
     }
 
 private:
     using Key = std::pair<std::string, std::string>; ///< path, fileFingerprint
     static constexpr std::size_t kKept = 8;
     std::mutex mMutex;
-    std::deque<std::pair<Key, std::shared_ptr<const TriangleMesh>>> mEntries; ///< newest first
+    std::deque<std::pair<Key, ReadMesh>> mEntries; ///< newest first
 };
 
 } // namespace
@@ -66,11 +83,16 @@ TriangleMesh objectMesh(const SceneObject& object)
         }
         mesh = std::move(*builtin);
     } else {
-        static ReadMeshes read;
-        mesh = *read.get(object.mesh);
+        mesh = *ReadMeshes::instance().get(object.mesh).mesh;
     }
     for (auto& p : mesh.points) p = object.objectToWorld.transform(p);
     return mesh;
+}
+
+std::vector<std::string> objectMeshWarnings(const SceneObject& object)
+{
+    if (object.isVolume() || object.mesh.rfind("builtin:", 0) == 0) return {};
+    return ReadMeshes::instance().get(object.mesh).warnings;
 }
 
 RayScene sceneGeometry(const Scene& scene, SceneObject::Role role)
