@@ -328,7 +328,7 @@ struct CameraSample
 {
     openvdb::Vec3d combined{0.0}, surface{0.0}, direct{0.0}, scatter{0.0}, normal{0.0};
     double alpha = 0.0, depth = 0.0;
-    int object = -1; ///< what it hit first (an index in Scene::objects; 0 for the level set), -1: nothing
+    int object = -1; ///< what it met first (an index in Scene::objects; the level set and a volume are the medium object's, 0 without one), -1: nothing
 };
 
 /// A pixel's camera rays so far, and whether they disagree enough to call for more.
@@ -499,6 +499,8 @@ struct RenderContext
     openvdb::FloatGrid::ConstPtr levelSet;
     std::optional<openvdb::tools::LevelSetRayIntersector<openvdb::FloatGrid>> levelSetIntersector;
     const SceneObject* levelSetObject = nullptr;
+    /// The medium's index in scene.objects (what a camera ray that meets it first reports), 0 without one.
+    int mediumIndex() const { return levelSetObject ? int(levelSetObject - scene.objects.data()) : 0; }
     /// The medium is a volume object's grid: no surface, every camera ray marches from the camera.
     bool volumeMedium = false;
     std::vector<LightSampler> surfaceLights; ///< the lights the surface term reflects (none: no surface term)
@@ -584,7 +586,7 @@ private:
         if (!mIntersector->intersectsWS(ray, hit.point, hit.normal, hit.distance)) return std::nullopt;
         hit.normal.normalize();
         if (hit.normal.dot(dir) > 0.0) hit.normal = -hit.normal;
-        hit.id = 0;
+        hit.id = mContext.mediumIndex(); // the level set is the medium's surface
         hit.object = mContext.levelSetObject;
         return hit;
     }
@@ -613,7 +615,7 @@ private:
     CameraSample fromInside(const openvdb::Vec3d& origin, const openvdb::Vec3d& dir, std::uint64_t key)
     {
         CameraSample c;
-        c.object = 0; // every ray from the camera starts in the medium alike
+        c.object = mContext.mediumIndex(); // every ray from inside meets the medium first, as a ray hitting its surface does
         c.alpha = 1.0;
         addVolume(c, marchOn(origin, 0.0, dir, key));
         return c;
@@ -631,7 +633,7 @@ private:
         const VolumeTerm g = marchOn(origin, 0.0, dir, key);
         addVolume(c, g);
         c.alpha = g.opaque >= 0 ? 1.0 : 1.0 - (g.transmittance[0] + g.transmittance[1] + g.transmittance[2]) / 3.0;
-        c.object = g.touched ? int(mContext.levelSetObject - mContext.scene.objects.data()) : g.opaque;
+        c.object = g.touched ? mContext.mediumIndex() : g.opaque;
         return c;
     }
 
