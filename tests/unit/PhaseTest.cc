@@ -84,4 +84,7 @@ TEST_CASE("the material's phase is recorded in the voxel set, and isotropic sets
     m.phaseG = -0.4;
     vxf::recordMaterial(set, m);
     CHECK(vxf::recordedMaterial(set).phaseG == -0.4);
+    // A file claiming a phase no medium can have is refused, not solved with σs' < 0.
+    set.metadata().insertMeta(vxf::kMaterialMetaKey, openvdb::StringMetadata(R"({"sigma_a": [1, 1, 1], "sigma_s": [4, 4, 4], "phase_g": 5})"));
+    CHECK_THROWS_WITH(vxf::recordedMaterial(set), "malformed 'vxf:material' metadata: phase_g 5 is outside [-0.95, 0.95]");
 }

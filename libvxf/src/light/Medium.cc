@@ -300,6 +300,10 @@ Material recordedMaterial(const VoxelSet& set)
     } catch (const nlohmann::json::exception&) {
         throw Error(fmt::format("malformed '{}' metadata: {}", kMaterialMetaKey, meta->value()));
     }
+    if (!(std::abs(m.phaseG) <= kMaxPhaseG)) {
+        throw Error(fmt::format("malformed '{}' metadata: phase_g {} is outside [-{}, {}]", kMaterialMetaKey, m.phaseG,
+            kMaxPhaseG, kMaxPhaseG));
+    }
     return m;
 }
 
