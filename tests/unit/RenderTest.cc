@@ -4,6 +4,8 @@
 #include <vxf/core/ProceduralMesh.h>
 #include <vxf/core/RayScene.h>
 #include <vxf/io/ImageFile.h>
+#include <vxf/io/VoxelSetFile.h>
+#include <vxf/light/DirectLight.h>
 #include <vxf/pipeline/SceneGeometry.h>
 #include <vxf/voxelize/Voxelize.h>
 
@@ -661,4 +663,51 @@ TEST_CASE("a Henyey-Greenstein phase: the scattered light reaches the camera thr
     const double reducedS = (1.0 - g) * 8.0, reducedT = 10.0 - g * 8.0;
     INFO("g " << g);
     CHECK(image.scatter[15 * 31 + 15].x() == Approx(reducedS * phi / (4.0 * M_PI) / reducedT).epsilon(0.01));
+}
+
+TEST_CASE("a volume light: its emission x colour x intensity in J0, and seen along camera rays", "[render][light][volume]")
+{
+    // A glow of E = 0.5 per unit length (a float grid on its own voxels, as a simulation's
+    // flame) in a purely absorbing sphere (σt = 10, chord 2): the camera sees
+    // L = E·c·I (1 − e^{−σt d})/σt, and the light stage puts E·c·I in J0 for the passes.
+    vxf::test::TempDir dir;
+    auto glow = openvdb::FloatGrid::create(0.0f);
+    glow->setName("flame");
+    glow->setTransform(openvdb::math::Transform::createLinearTransform(0.1));
+    glow->tree().fill(openvdb::CoordBBox(openvdb::Coord(-15), openvdb::Coord(15)), 0.5f, true);
+    vxf::VoxelSet emitting(glow->transformPtr());
+    emitting.put(glow);
+    vxf::writeVoxelSet(dir.path("fire.vdb"), emitting);
+
+    vxf::VoxelSet set = litSphere(0.0);
+    const vxf::Medium medium(set, vxf::test::greyMaterial(10.0, 0.0));
+    vxf::Scene scene = frontView();
+    vxf::Light fire;
+    fire.type = vxf::Light::Type::Volume;
+    fire.name = "fire";
+    fire.file = dir.path("fire.vdb");
+    fire.grid = "flame";
+    fire.color = openvdb::Vec3d(1.0, 0.5, 0.25);
+    fire.intensity = 2.0;
+    scene.lights.push_back(fire);
+    vxf::computeDirectLight(set, medium, scene.lights);
+    const openvdb::Vec3f j0 = set.get<openvdb::Vec3SGrid>("scatter_source")->tree().getValue(openvdb::Coord(0));
+    CHECK(j0.x() == Approx(1.0));
+    CHECK(j0.z() == Approx(0.25));
+
+    vxf::RenderOptions options;
+    options.width = options.height = 31;
+    options.samples = 1;
+    for (const bool marched : {false, true}) { // the direct grid read or the lights marched: emission seen alike
+        options.directFromLights = marched;
+        const vxf::RenderedImage image = vxf::render(set, medium, scene, options);
+        INFO("direct from the lights: " << marched);
+        CHECK(image.direct[15 * 31 + 15].x() == Approx(0.5 * 2.0 / 10.0).epsilon(0.01));
+        CHECK(image.direct[15 * 31 + 15].z() == Approx(0.5 * 0.5 / 10.0).epsilon(0.01));
+    }
+
+    fire.grid = "nope";
+    scene.lights = {fire};
+    CHECK_THROWS_WITH(vxf::render(set, medium, scene, options),
+        Catch::Contains("light 'fire': no grid 'nope' in " + dir.path("fire.vdb")));
 }

@@ -1,5 +1,7 @@
 #include <vxf/light/DirectLight.h>
 
+#include <vxf/light/VolumeEmission.h>
+
 #include "../scatter/SweepLattice.h"
 
 #include <vxf/core/Hash.h>
@@ -237,7 +239,7 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
     DirectLightReport report;
     std::vector<LightSampler> active;
     std::vector<int> activeIndex; // per report entry: its index in `active`, or -1
-    std::vector<openvdb::GridBase::ConstPtr> emission; // volume lights, sampled in world space
+    std::vector<VolumeEmission> emission; // volume lights
     for (const Light& light : lights) {
         DirectLightReport::PerLight entry;
         entry.name = light.name;
@@ -245,13 +247,7 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
             entry.skipped = true;
             entry.why = "zero colour or intensity";
         } else if (light.type == Light::Type::Volume) {
-            const VoxelSet source = readVoxelSet(light.file);
-            auto grid = source.find(light.grid);
-            if (!grid) throw Error(fmt::format("light '{}': no grid '{}' in {}", light.name, light.grid, light.file));
-            if (!grid->isType<openvdb::FloatGrid>() && !grid->isType<openvdb::Vec3SGrid>()) {
-                throw Error(fmt::format("light '{}': grid '{}' must be float or vec3s", light.name, light.grid));
-            }
-            emission.push_back(grid);
+            emission.emplace_back(light);
             entry.why = "volume light: its emission adds to scatter_source";
         } else {
             activeIndex.push_back(int(active.size()));
@@ -334,13 +330,7 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
         // J0 = σs φ0 / 4π (+ emission of volume lights, radiance per unit length).
         openvdb::Vec3d j = sampler.sigmaS(pointIjk) * phi / (4.0 * M_PI);
         const openvdb::Vec3d world = medium.transform().indexToWorld(pointIjk);
-        for (const auto& e : emission) {
-            if (auto f = openvdb::gridConstPtrCast<openvdb::FloatGrid>(e)) {
-                j += openvdb::Vec3d(openvdb::tools::BoxSampler::sample(f->tree(), f->transform().worldToIndex(world)));
-            } else if (auto v = openvdb::gridConstPtrCast<openvdb::Vec3SGrid>(e)) {
-                j += openvdb::Vec3d(openvdb::tools::BoxSampler::sample(v->tree(), v->transform().worldToIndex(world)));
-            }
-        }
+        for (const VolumeEmission& e : emission) j += e.at(world);
         for (int c = 0; c < 3; ++c) {
             if (!std::isfinite(phi[c])) phi[c] = 0.0; // cannot happen by construction; never let NaN in
             if (!std::isfinite(j[c])) j[c] = 0.0;

@@ -7,6 +7,7 @@
 #include <vxf/light/LightSampler.h>
 #include <vxf/light/Phase.h>
 #include <vxf/light/Transmittance.h>
+#include <vxf/light/VolumeEmission.h>
 #include <vxf/scatter/SourceField.h>
 
 #include <openvdb/tools/RayIntersector.h>
@@ -44,13 +45,14 @@ public:
     /// the light marched to the lights is scattered toward the camera by the phase through the
     /// medium's own σt; the grids' J, solved in the transport's reduced medium, reaches the
     /// camera through that medium's σt' = σt − g·σs (the similarity relation: the forward part
-    /// of the phase keeps light on its way; Phase.h).
+    /// of the phase keeps light on its way; Phase.h). @a emitters (volume lights) are seen along
+    /// the march, in the direct layer, through the medium's own σt, where the medium is.
     /// With @a boundary (the media's meshes) the marches cross the surface where the meshes
     /// do (Medium::Sampler::snapCrossingsTo): grazing rays, at silhouettes and terminators.
     Marcher(const Medium& medium, const RenderOptions& options, const InteriorField* direct,
         const SourceField* scatter,
         const std::vector<LightSampler>* lights = nullptr, const RayScene* occluders = nullptr,
-        const RayScene* boundary = nullptr)
+        const RayScene* boundary = nullptr, const std::vector<VolumeEmission>* emitters = nullptr)
         : mMedium(medium)
         , mSampler(medium)
         , mShadowSampler(medium)
@@ -58,6 +60,7 @@ public:
         , mLights(lights)
         , mOccluders(occluders)
         , mPhaseG(medium.phaseG())
+        , mEmitters(emitters && !emitters->empty() ? emitters : nullptr)
     {
         // Camera and shadow rays cross the surface where the meshes do, as the reference's do.
         if (boundary && !boundary->empty()) {
@@ -141,6 +144,7 @@ private:
     struct Emission
     {
         openvdb::Vec3d direct{0.0}, scatter{0.0};
+        openvdb::Vec3d emitted{0.0}; ///< volume lights' emission (radiance per unit length)
         /// The part of `direct` that is a function of the point, not one random sample of a
         /// light of many (environment, area): what tells whether a step resolves it.
         openvdb::Vec3d directExact{0.0};
@@ -180,6 +184,11 @@ private:
             integrate(Segment{middle, s.end, 0.5 * s.length, s.eMiddle, e3, s.eEnd}, sigmaT, reducedSigmaT, scaleAt, key,
                 depth - 1, g);
             return;
+        }
+        if (mEmitters) { // seen as emitted, through the medium's own σt
+            for (int c = 0; c < 3; ++c) {
+                g.direct[c] += g.transmittance[c] * emissionIntegral(w[c], s.eStart.emitted[c], s.eMiddle.emitted[c], s.eEnd.emitted[c]);
+            }
         }
         if (!reducedSigmaT) {
             for (int c = 0; c < 3; ++c) {
@@ -243,6 +252,10 @@ private:
         }
         if (mDirect) e.direct = e.directExact = mDirect->sample(p);
         if (mScatter) e.scatter = mScatter->sample(p);
+        if (mEmitters) {
+            const openvdb::Vec3d world = mMedium.transform().indexToWorld(p);
+            for (const VolumeEmission& emitter : *mEmitters) e.emitted += emitter.at(world);
+        }
         return e;
     }
 
@@ -292,6 +305,7 @@ private:
     double mTauCutoff;
     std::uint64_t mExtraPoint = 0; ///< the next refined point's index along the ray (after the steps' 3 per step)
     double mPhaseG;                ///< Henyey-Greenstein g (0: isotropic)
+    const std::vector<VolumeEmission>* mEmitters; ///< volume lights, or null
     openvdb::Vec3d mRayDirection;  ///< the marched ray's world direction (the phase's outgoing one)
 };
 
@@ -459,6 +473,9 @@ struct RenderContext
         for (const auto& o : scene.objects) anyReflects = anyReflects || o.surface.reflects();
         if (options.surface && anyReflects) shining(surfaceLights);
         if (options.directFromLights) shining(volumeLights);
+        for (const Light& l : scene.lights) {
+            if (l.type == Light::Type::Volume && l.power() != openvdb::Vec3d(0.0)) emitters.emplace_back(l);
+        }
         if (!options.directFromLights && set.find("direct")) directField.emplace(medium, *set.get<openvdb::Vec3SGrid>("direct"));
         if (set.find("scatter")) {
             scatterField.emplace(medium, *sourceFromFluence(medium, *set.get<openvdb::Vec3SGrid>("scatter")), SourceField::Near::Layers);
@@ -507,6 +524,7 @@ struct RenderContext
     std::vector<LightSampler> volumeLights;  ///< the lights single scattering is marched to (directFromLights)
     std::optional<InteriorField> directField; ///< single scattering read from the `direct` grid (not directFromLights)
     std::optional<SourceField> scatterField; ///< J = σs·φ/4π of the `scatter` grid, or none
+    std::vector<VolumeEmission> emitters;    ///< the volume lights, seen along camera rays
     openvdb::Vec3d forward, right, up;       ///< the camera's frame
     double aspect = 1.0, tanHalf = 1.0;
 };
@@ -521,7 +539,7 @@ public:
         , mIntersector(context.levelSetIntersector)
         , mMarcher(context.actual, context.options, context.directField ? &*context.directField : nullptr,
               context.scatterField ? &*context.scatterField : nullptr, context.options.directFromLights ? &context.volumeLights : nullptr,
-              context.meshes.occluders, context.meshes.media)
+              context.meshes.occluders, context.meshes.media, &context.emitters)
         , mShader(context.actual, context.surfaceLights, context.meshes.occluders)
         , mEpsilon(1e-4 * context.medium.voxelSize())
     {

@@ -80,6 +80,8 @@ struct RenderMeshes
 ///   occluder or emitter behind (its surface term) or the background, and the march stops
 ///   there. Gather mode: the average of such marches over a cosine-weighted hemisphere of
 ///   directions into the volume, dropping those that leave it at once.
+/// Volume lights (VolumeEmission) are seen along every march, in the direct layer, through the
+/// medium's own σt, where the medium is.
 /// A camera inside the medium (inside its `surface`, or where σt > 0 without one) meets no
 /// surface first: every ray marches from the camera as above (gather mode too), alpha 1.
 /// Occluders and emitters show their surface term only: their SurfaceShading::emission plus,

@@ -1,0 +1,31 @@
+// vxf — a volume light's emission: a grid of radiance per unit length (a fire's flame, a glow).
+#pragma once
+
+#include <vxf/pipeline/Scene.h>
+
+#include <openvdb/openvdb.h>
+
+namespace vxf {
+
+/// The emission of a `"type": "volume"` light: its file's grid (float, grey, or vec3s), radiance
+/// per unit length times the light's colour × intensity, sampled trilinearly at world points on
+/// the grid's own transform (a flame or temperature grid of a simulation, any voxels). The light
+/// stage adds it to J0, so the passes scatter it; the render adds it along camera rays, so it is
+/// seen. Read-only after construction: safe to sample from many threads.
+class VolumeEmission
+{
+public:
+    /// Reads @a light's grid; throws vxf::Error naming the light, the file and the grid when the
+    /// file cannot be read, has no such grid, or the grid is neither float nor vec3s.
+    explicit VolumeEmission(const Light& light);
+
+    /// Radiance per unit length emitted at world point @a world (0 outside the grid's values).
+    openvdb::Vec3d at(const openvdb::Vec3d& world) const;
+
+private:
+    openvdb::FloatGrid::ConstPtr mFloat;
+    openvdb::Vec3SGrid::ConstPtr mVec3;
+    openvdb::Vec3d mPower;
+};
+
+} // namespace vxf

@@ -1,0 +1,37 @@
+#include <vxf/light/VolumeEmission.h>
+
+#include <vxf/core/Error.h>
+#include <vxf/io/VoxelSetFile.h>
+
+#include <fmt/format.h>
+#include <openvdb/tools/Interpolation.h>
+
+namespace vxf {
+
+VolumeEmission::VolumeEmission(const Light& light)
+    : mPower(light.power())
+{
+    const VoxelSet source = readVoxelSet(light.file);
+    const openvdb::GridBase::Ptr grid = source.find(light.grid);
+    if (!grid) throw Error(fmt::format("light '{}': no grid '{}' in {}", light.name, light.grid, light.file));
+    mFloat = openvdb::gridConstPtrCast<openvdb::FloatGrid>(grid);
+    mVec3 = openvdb::gridConstPtrCast<openvdb::Vec3SGrid>(grid);
+    if (!mFloat && !mVec3) {
+        throw Error(fmt::format("light '{}': grid '{}' in {} must be float or vec3s, not {}", light.name, light.grid, light.file,
+            grid->valueType()));
+    }
+}
+
+openvdb::Vec3d VolumeEmission::at(const openvdb::Vec3d& world) const
+{
+    openvdb::Vec3d e(0.0);
+    if (mFloat) {
+        e = openvdb::Vec3d(openvdb::tools::BoxSampler::sample(mFloat->tree(), mFloat->transform().worldToIndex(world)));
+    } else {
+        e = openvdb::Vec3d(openvdb::tools::BoxSampler::sample(mVec3->tree(), mVec3->transform().worldToIndex(world)));
+    }
+    for (int c = 0; c < 3; ++c) e[c] *= mPower[c];
+    return e;
+}
+
+} // namespace vxf
