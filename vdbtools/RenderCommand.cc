@@ -46,7 +46,8 @@ public:
         mApp->add_flag("--no-surface", [this](std::int64_t) { mNoSurface = true; }, "Leave out the surface term");
         mApp->add_flag("--direct-from-lights", [this](std::int64_t) { mDirectFromLights = true; },
             "March single scattering to the lights at every step instead of reading the `direct` grid (exact in dense "
-            "media at any voxel size; edits of `direct` do not show)");
+            "media at any voxel size, and the only way an anisotropic phase shows in single scattering: the scene's "
+            "default when its medium's phase g is not 0; edits of `direct` do not show)");
         mApp->add_flag("--half", mHalf, "16-bit half EXR channels");
     }
 
