@@ -5,12 +5,10 @@
 #include "../scatter/SweepLattice.h"
 
 #include <vxf/core/Hash.h>
-#include <vxf/io/VoxelSetFile.h>
 
 #include <openvdb/tools/Morphology.h>
 #include <openvdb/tree/LeafManager.h>
 
-#include <fmt/format.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
@@ -314,7 +312,8 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
         }
     }
 
-    const auto evaluate = [&](Medium::Sampler& sampler, const openvdb::Coord& ijk, const openvdb::Vec3d& pointIjk,
+    const auto evaluate = [&](Medium::Sampler& sampler, std::vector<VolumeEmission::Sampler>& emitters,
+                              const openvdb::Coord& ijk, const openvdb::Vec3d& pointIjk,
                               std::vector<openvdb::Vec3d>& sums, openvdb::Vec3f& outDirect, openvdb::Vec3f& outSource,
                               double weight) {
         openvdb::Vec3d phi(0.0);
@@ -330,7 +329,7 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
         // J0 = σs φ0 / 4π (+ emission of volume lights, radiance per unit length).
         openvdb::Vec3d j = sampler.sigmaS(pointIjk) * phi / (4.0 * M_PI);
         const openvdb::Vec3d world = medium.transform().indexToWorld(pointIjk);
-        for (const VolumeEmission& e : emission) j += e.at(world);
+        for (VolumeEmission::Sampler& e : emitters) j += e.at(world);
         for (int c = 0; c < 3; ++c) {
             if (!std::isfinite(phi[c])) phi[c] = 0.0; // cannot happen by construction; never let NaN in
             if (!std::isfinite(j[c])) j[c] = 0.0;
@@ -342,6 +341,7 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, total, 1), [&](const tbb::blocked_range<std::size_t>& range) {
         Medium::Sampler sampler(medium);
         sampler.snapCrossingsTo(options.boundary);
+        std::vector<VolumeEmission::Sampler> emitters(emission.begin(), emission.end());
         for (std::size_t item = range.begin(); item != range.end(); ++item) {
             if (cancelled) return;
             auto& sums = perLight[item];
@@ -351,7 +351,7 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
                 auto& sourceLeaf = sourceLeaves.leaf(item);
                 for (auto it = leaf.beginValueOn(); it; ++it) {
                     openvdb::Vec3f d, s;
-                    evaluate(sampler, it.getCoord(), it.getCoord().asVec3d(), sums, d, s, 1.0);
+                    evaluate(sampler, emitters, it.getCoord(), it.getCoord().asVec3d(), sums, d, s, 1.0);
                     it.setValue(d);
                     sourceLeaf.setValueOnly(it.pos(), s);
                 }
@@ -359,7 +359,7 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
                 const std::size_t t = item - leafCount;
                 const openvdb::CoordBBox& box = tiles[t];
                 const openvdb::Coord centre = box.min() + openvdb::Coord(box.dim().x() / 2);
-                evaluate(sampler, centre, centre.asVec3d(), sums, tileDirect[t], tileSource[t], double(box.volume()));
+                evaluate(sampler, emitters, centre, centre.asVec3d(), sums, tileDirect[t], tileSource[t], double(box.volume()));
             }
             const std::size_t finished = ++done;
             if (interrupter && interrupter->wasInterrupted(int(100 * finished / std::max<std::size_t>(total, 1)))) {

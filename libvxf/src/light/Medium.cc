@@ -68,7 +68,6 @@ Medium::Medium(const VoxelSet& set, const Material& material)
     : mDensity(set.get<openvdb::FloatGrid>("density"))
     , mMaterial(material)
     , mActualMaterial(material)
-    , mPhaseG(material.phaseG)
 {
     // Errors name the file the set came from, when it came from one.
     const std::string file = set.path().empty() ? "" : set.path() + ": ";
@@ -93,9 +92,9 @@ Medium::Medium(const VoxelSet& set, const Material& material)
         }
     }
     mActualSigmaS = mSigmaS;
-    if (mPhaseG != 0.0) {
+    if (material.phaseG != 0.0) {
         // The transport's medium: σs' = (1 − g)·σs, σa as it is (Phase.h).
-        const double reduce = reducedScatteringFactor(mPhaseG);
+        const double reduce = reducedScatteringFactor(material.phaseG);
         mMaterial.sigmaS *= reduce;
         mMaterial.phaseG = 0.0;
         if (mSigmaS) {

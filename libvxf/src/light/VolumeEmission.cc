@@ -22,15 +22,22 @@ VolumeEmission::VolumeEmission(const Light& light)
     }
 }
 
-openvdb::Vec3d VolumeEmission::at(const openvdb::Vec3d& world) const
+VolumeEmission::Sampler::Sampler(const VolumeEmission& emission)
+    : mEmission(emission)
+{
+    if (emission.mFloat) mFloat.emplace(emission.mFloat->getConstAccessor());
+    if (emission.mVec3) mVec3.emplace(emission.mVec3->getConstAccessor());
+}
+
+openvdb::Vec3d VolumeEmission::Sampler::at(const openvdb::Vec3d& world)
 {
     openvdb::Vec3d e(0.0);
     if (mFloat) {
-        e = openvdb::Vec3d(openvdb::tools::BoxSampler::sample(mFloat->tree(), mFloat->transform().worldToIndex(world)));
+        e = openvdb::Vec3d(openvdb::tools::BoxSampler::sample(*mFloat, mEmission.mFloat->transform().worldToIndex(world)));
     } else {
-        e = openvdb::Vec3d(openvdb::tools::BoxSampler::sample(mVec3->tree(), mVec3->transform().worldToIndex(world)));
+        e = openvdb::Vec3d(openvdb::tools::BoxSampler::sample(*mVec3, mEmission.mVec3->transform().worldToIndex(world)));
     }
-    for (int c = 0; c < 3; ++c) e[c] *= mPower[c];
+    for (int c = 0; c < 3; ++c) e[c] *= mEmission.mPower[c];
     return e;
 }
 

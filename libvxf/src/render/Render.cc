@@ -60,8 +60,10 @@ public:
         , mLights(lights)
         , mOccluders(occluders)
         , mPhaseG(medium.phaseG())
-        , mEmitters(emitters && !emitters->empty() ? emitters : nullptr)
     {
+        if (emitters) {
+            for (const VolumeEmission& e : *emitters) mEmitters.emplace_back(e);
+        }
         // Camera and shadow rays cross the surface where the meshes do, as the reference's do.
         if (boundary && !boundary->empty()) {
             mSampler.snapCrossingsTo(boundary);
@@ -185,22 +187,16 @@ private:
                 depth - 1, g);
             return;
         }
-        if (mEmitters) { // seen as emitted, through the medium's own σt
+        if (!mEmitters.empty()) { // seen as emitted, through the medium's own σt
             for (int c = 0; c < 3; ++c) {
                 g.direct[c] += g.transmittance[c] * emissionIntegral(w[c], s.eStart.emitted[c], s.eMiddle.emitted[c], s.eEnd.emitted[c]);
             }
         }
-        if (!reducedSigmaT) {
-            for (int c = 0; c < 3; ++c) {
-                const double weight = g.transmittance[c];
-                g.direct[c] += weight * emissionIntegral(w[c], s.eStart.direct[c], s.eMiddle.direct[c], s.eEnd.direct[c]);
-                g.scatter[c] += weight * emissionIntegral(w[c], s.eStart.scatter[c], s.eMiddle.scatter[c], s.eEnd.scatter[c]);
-                g.transmittance[c] *= w[c].transmittance;
-            }
-            g.reducedTransmittance = g.transmittance;
-            return;
-        }
-        const std::array<EmissionWeights, 3> wReduced = emissionWeights(*reducedSigmaT, s.length);
+        // The grids' J through the reduced medium (the same weights where the phase is isotropic,
+        // so reducedTransmittance stays transmittance to the bit); the marched light through σt.
+        std::array<EmissionWeights, 3> reducedWeights;
+        if (reducedSigmaT) reducedWeights = emissionWeights(*reducedSigmaT, s.length);
+        const std::array<EmissionWeights, 3>& wReduced = reducedSigmaT ? reducedWeights : w;
         const bool directMarched = mLights != nullptr; // else read from the grid, solved in the reduced medium
         for (int c = 0; c < 3; ++c) {
             const EmissionWeights& wDirect = directMarched ? w[c] : wReduced[c];
@@ -252,9 +248,9 @@ private:
         }
         if (mDirect) e.direct = e.directExact = mDirect->sample(p);
         if (mScatter) e.scatter = mScatter->sample(p);
-        if (mEmitters) {
+        if (!mEmitters.empty()) {
             const openvdb::Vec3d world = mMedium.transform().indexToWorld(p);
-            for (const VolumeEmission& emitter : *mEmitters) e.emitted += emitter.at(world);
+            for (VolumeEmission::Sampler& emitter : mEmitters) e.emitted += emitter.at(world);
         }
         return e;
     }
@@ -305,7 +301,7 @@ private:
     double mTauCutoff;
     std::uint64_t mExtraPoint = 0; ///< the next refined point's index along the ray (after the steps' 3 per step)
     double mPhaseG;                ///< Henyey-Greenstein g (0: isotropic)
-    const std::vector<VolumeEmission>* mEmitters; ///< volume lights, or null
+    std::vector<VolumeEmission::Sampler> mEmitters; ///< volume lights (none: empty)
     openvdb::Vec3d mRayDirection;  ///< the marched ray's world direction (the phase's outgoing one)
 };
 

@@ -29,7 +29,7 @@ public:
     Medium(const VoxelSet& set, const Material& material);
 
     /// The Henyey-Greenstein g of the material (0: isotropic), whichever coefficients this holds.
-    double phaseG() const { return mPhaseG; }
+    double phaseG() const { return mActualMaterial.phaseG; }
     /// The same medium with the material's own coefficients (σs not reduced by the phase);
     /// a copy of this one when g = 0. Shares the grids and their dense copies.
     Medium actual() const;
@@ -161,7 +161,6 @@ private:
     /// The material and `sigma_s` grid as given, which actual() holds (the reduced ones above).
     Material mActualMaterial;
     openvdb::Vec3SGrid::ConstPtr mActualSigmaS;
-    double mPhaseG = 0.0;
     openvdb::CoordBBox mBounds;
 };
 
