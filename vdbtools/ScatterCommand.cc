@@ -3,6 +3,7 @@
 #include "Commands.h"
 
 #include <vxf/light/Medium.h>
+#include <vxf/light/Phase.h>
 #include <vxf/pipeline/SceneMedium.h>
 #include <vxf/scatter/Scatter.h>
 
@@ -53,7 +54,8 @@ public:
         mApp->add_option("--kernel", mKernel,
                "How a pass carries light: gather (a ray march per voxel and direction, the thesis's) or sweep "
                "(discrete ordinates: one upwind sweep over the tree per direction, O(1) per voxel and direction) "
-               "(default gather)")
+               "(default gather; sweep for a forward-scattering phase, g > 0, whose first moment only the accelerated "
+               "sweeps carry: the gather and plain passes take the similarity relation's isotropic medium)")
             ->check(CLI::IsMember({"gather", "sweep"}));
         mApp->add_flag("--no-accelerate", [this](std::int64_t) { mOptions.accelerate = false; },
             "Sweep kernel: plain source iteration, one scattering order per sweep. By default the sweep kernel solves "
@@ -77,6 +79,7 @@ public:
         VoxelSet set = readVoxelSet(mInput);
         const Material material = mScene.empty() ? recordedMaterial(set) : sceneMaterial(loadScene(mScene));
         const Medium medium(set, material);
+        if (mKernel.empty()) mKernel = transportScaling(material.phaseG).restG != 0.0 ? "sweep" : "gather";
         mOptions.pass.kernel = scatterKernelNamed(mKernel);
         const ScatterReport report = scatter(set, medium, mOptions, &progress);
         nlohmann::json params = {{"command", "scatter"}, {"input", mInput}, {"passes", mOptions.passes},
@@ -116,7 +119,7 @@ public:
     }
 
 private:
-    std::string mInput, mOutput, mScene, mKernel = "gather";
+    std::string mInput, mOutput, mScene, mKernel; ///< empty: by the phase (see --kernel)
     ScatterOptions mOptions;
     VoxelSetWriteOptions mWrite;
     bool mQuiet = false;

@@ -316,6 +316,36 @@ TEST_CASE("a directional light by sweeps: E exp(-sigma_t depth / cos) in a slab,
     }
 }
 
+TEST_CASE("an anisotropic phase: the source's mean direction is the light's direction of travel", "[light][direct][phase]")
+{
+    // The delta-Eddington transport keeps J0's first moment (Phase.h): one sun, swept or
+    // marched, gives a = its direction of travel at every lit voxel; a point light, the direction
+    // away from it. An isotropic medium writes no such grid (and drops a stale one).
+    const double dx = 0.05;
+    vxf::VoxelSet set = boxMedium(openvdb::CoordBBox(openvdb::Coord(0, -20, -20), openvdb::Coord(19, 20, 20)), dx);
+    vxf::Material m = vxf::test::greyMaterial(0.5, 1.5);
+    m.phaseG = 0.6;
+    vxf::Light sun;
+    sun.type = vxf::Light::Type::Directional;
+    sun.direction = openvdb::Vec3d(1.0, 0.5, -0.3).unit();
+    for (const bool sweep : {true, false}) {
+        vxf::DirectLightOptions options;
+        options.sweep = sweep;
+        vxf::computeDirectLight(set, vxf::Medium(set, m), {sun}, options);
+        const auto a = set.get<openvdb::Vec3SGrid>("scatter_source_anisotropy");
+        INFO("swept " << sweep);
+        for (const openvdb::Coord c : {openvdb::Coord(0, 0, 0), openvdb::Coord(10, -5, 7), openvdb::Coord(19, 3, -2)}) {
+            CHECK((openvdb::Vec3d(a->tree().getValue(c)) - sun.direction).length() < 1e-5);
+        }
+    }
+    vxf::computeDirectLight(set, vxf::Medium(set, m), {pointLight(openvdb::Vec3d(-1.0, 0.0, 0.0), 1.0)});
+    const openvdb::Coord c(10, 5, 0);
+    const openvdb::Vec3d away = (c.asVec3d() * dx - openvdb::Vec3d(-1.0, 0.0, 0.0)).unit();
+    CHECK((openvdb::Vec3d(set.get<openvdb::Vec3SGrid>("scatter_source_anisotropy")->tree().getValue(c)) - away).length() < 1e-4);
+    vxf::computeDirectLight(set, vxf::Medium(set, vxf::test::greyMaterial(0.5, 1.5)), {sun});
+    CHECK_FALSE(set.find("scatter_source_anisotropy"));
+}
+
 TEST_CASE("a directional light by sweeps: shadows cast across vacuum wider than a leaf", "[light][direct][sweep]")
 {
     // Two slabs 24 voxels apart: no leaf of the lattice lies between them, so the sweep alone

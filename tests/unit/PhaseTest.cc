@@ -29,27 +29,42 @@ TEST_CASE("Henyey-Greenstein: unit mean over the sphere, mean cosine g, 1 everyw
     CHECK(vxf::henyeyGreenstein4Pi(0.0, 0.3) == 1.0);
 }
 
-TEST_CASE("a medium of phase g holds the transport's reduced coefficients; actual() the material's", "[phase]")
+TEST_CASE("a medium of phase g holds the delta-Eddington transport; isotropic() the similarity relation's; actual() the material's", "[phase]")
 {
     vxf::Material m = vxf::test::greyMaterial(1.0, 4.0);
     m.phaseG = 0.75;
     vxf::VoxelSet set = vxf::test::uniformSphere(m, 1.0, 8);
     const vxf::Medium medium(set, m);
     const openvdb::Vec3d centre(0.0);
-    vxf::Medium::Sampler reduced(medium);
-    // σs' = (1 − g)σs = 1, σt' = σa + σs' = 2 (= σt − gσs = 5 − 3).
+    // f = g² = 0.5625 of σs kept in the beam: σs* = 1.75, σt* = 5 − 2.25 = 2.75; the rest's
+    // mean cosine g* = g/(1 + g) = 3/7, and σt* − g*σs* = 2 = σt − gσs (transport-corrected).
+    vxf::Medium::Sampler transport(medium);
+    CHECK(transport.sigmaS(centre).x() == Approx(1.75));
+    CHECK(transport.sigmaT(centre).x() == Approx(2.75));
+    CHECK(medium.material().phaseG == Approx(3.0 / 7.0));
+    CHECK(medium.material().sigmaT().x() - medium.material().phaseG * medium.material().sigmaS.x() == Approx(2.0));
+    CHECK(medium.phaseG() == 0.75);
+    // The similarity relation: σs' = (1 − g)σs = 1, σt' = σt − gσs = 2, isotropic.
+    const vxf::Medium isotropic = medium.isotropic();
+    vxf::Medium::Sampler reduced(isotropic);
     CHECK(reduced.sigmaS(centre).x() == Approx(1.0));
     CHECK(reduced.sigmaT(centre).x() == Approx(2.0));
-    CHECK(medium.material().sigmaS.x() == Approx(1.0));
-    CHECK(medium.material().phaseG == 0.0); // an isotropic medium: a copy (coarse levels) is not reduced again
-    CHECK(medium.phaseG() == 0.75);
+    CHECK(isotropic.material().phaseG == 0.0); // a medium made from it (coarse levels) is not scaled again
+    CHECK(isotropic.phaseG() == 0.75);
     const vxf::Medium actual = medium.actual();
     vxf::Medium::Sampler own(actual);
     CHECK(own.sigmaS(centre).x() == Approx(4.0));
     CHECK(own.sigmaT(centre).x() == Approx(5.0));
     CHECK(actual.phaseG() == 0.75);
+    // A back-scattering phase keeps the similarity relation: σs' = (1 − g)σs = 5.6, isotropic.
+    m.phaseG = -0.4;
+    const vxf::Medium back(set, m);
+    vxf::Medium::Sampler backSampler(back);
+    CHECK(backSampler.sigmaS(centre).x() == Approx(5.6));
+    CHECK(back.material().phaseG == 0.0);
+    m.phaseG = 0.75;
 
-    // Per-voxel sigma_s grids are reduced alike; the set's own grid is left as it is.
+    // Per-voxel sigma_s grids are scaled alike; the set's own grid is left as it is.
     auto sigmaS = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
     sigmaS->setName("sigma_s");
     sigmaS->setTransform(set.transformPtr());
@@ -57,21 +72,26 @@ TEST_CASE("a medium of phase g holds the transport's reduced coefficients; actua
     for (auto it = sigmaS->beginValueOn(); it; ++it) it.setValue(openvdb::Vec3f(8.0f));
     set.put(sigmaS);
     const vxf::Medium gridded(set, m);
-    vxf::Medium::Sampler griddedReduced(gridded);
+    vxf::Medium::Sampler griddedTransport(gridded);
+    CHECK(griddedTransport.sigmaS(centre).x() == Approx(3.5));
+    CHECK(griddedTransport.sigmaT(centre).x() == Approx(1.0 + 3.5));
+    const vxf::Medium griddedIsotropic = gridded.isotropic(), griddedActual = gridded.actual();
+    vxf::Medium::Sampler griddedReduced(griddedIsotropic);
     CHECK(griddedReduced.sigmaS(centre).x() == Approx(2.0));
-    CHECK(griddedReduced.sigmaT(centre).x() == Approx(1.0 + 2.0));
-    vxf::Medium::Sampler griddedOwn(gridded.actual());
+    vxf::Medium::Sampler griddedOwn(griddedActual);
     CHECK(griddedOwn.sigmaS(centre).x() == Approx(8.0));
     CHECK(sigmaS->tree().getValue(openvdb::Coord(0)).x() == 8.0f);
 
-    // g = 0: both are the material's, bit for bit.
-    const vxf::Medium isotropic(set, vxf::test::greyMaterial(1.0, 4.0));
-    vxf::Medium::Sampler a(isotropic);
-    const vxf::Medium isotropicActual = isotropic.actual();
-    vxf::Medium::Sampler b(isotropicActual);
+    // g = 0: all three are the material's, bit for bit.
+    const vxf::Medium plain(set, vxf::test::greyMaterial(1.0, 4.0));
+    vxf::Medium::Sampler a(plain);
+    const vxf::Medium plainActual = plain.actual(), plainIsotropic = plain.isotropic();
+    vxf::Medium::Sampler b(plainActual), c(plainIsotropic);
     const openvdb::Vec3d p(0.3, -1.2, 2.7);
     CHECK(a.sigmaT(p) == b.sigmaT(p));
     CHECK(a.sigmaS(p) == b.sigmaS(p));
+    CHECK(a.sigmaT(p) == c.sigmaT(p));
+    CHECK(a.sigmaS(p) == c.sigmaS(p));
 }
 
 TEST_CASE("the material's phase is recorded in the voxel set, and isotropic sets' records are as before", "[phase]")

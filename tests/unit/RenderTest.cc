@@ -665,6 +665,34 @@ TEST_CASE("a Henyey-Greenstein phase: the scattered light reaches the camera thr
     CHECK(image.scatter[15 * 31 + 15].x() == Approx(reducedS * phi / (4.0 * M_PI) / reducedT).epsilon(0.01));
 }
 
+TEST_CASE("a Henyey-Greenstein phase: the scattered light's first moment scatters it toward the camera", "[render][phase]")
+{
+    // The accelerated sweeps' scattered fluence φ with its mean direction a (`scatter_anisotropy`),
+    // in the delta-Eddington medium (f = g² kept in the beam, Phase.h): toward the camera
+    // J = σs*φ(1 + 3g*·a·ω)/4π, reaching it through σt* = σt − g²σs: in a thick sphere
+    // L = J/σt*. The light travelling toward the camera (a along −y, the camera at −y) is the
+    // brighter, away from it the darker.
+    const double g = 0.6, phi = 3.0;
+    vxf::Material m = vxf::test::greyMaterial(2.0, 8.0); // σt = 10
+    m.phaseG = g;
+    const double sigmaS = (1.0 - g * g) * 8.0, sigmaT = 10.0 - g * g * 8.0, rest = g / (1.0 + g);
+    for (const double toward : {0.6, -0.6}) {
+        vxf::VoxelSet set = litSphere(0.0);
+        vxf::test::putConstantFluence(set, "scatter", phi);
+        auto anisotropy = set.get<openvdb::Vec3SGrid>("scatter")->deepCopy();
+        for (auto it = anisotropy->beginValueOn(); it; ++it) it.setValue(openvdb::Vec3f(0.0f, float(-toward), 0.0f));
+        anisotropy->setName("scatter_anisotropy");
+        set.put(anisotropy);
+        const vxf::Medium medium(set, m);
+        vxf::RenderOptions options;
+        options.width = options.height = 31;
+        options.samples = 1;
+        const vxf::RenderedImage image = vxf::render(set, medium, frontView(), options);
+        INFO("a toward the camera " << toward);
+        CHECK(image.scatter[15 * 31 + 15].x() == Approx(sigmaS * phi * (1.0 + 3.0 * rest * toward) / (4.0 * M_PI) / sigmaT).epsilon(0.01));
+    }
+}
+
 TEST_CASE("a volume light: its emission x colour x intensity in J0, and seen along camera rays", "[render][light][volume]")
 {
     // A glow of E = 0.5 per unit length (a float grid on its own voxels, as a simulation's

@@ -1,5 +1,6 @@
 #include <vxf/light/DirectLight.h>
 
+#include <vxf/light/Phase.h>
 #include <vxf/light/VolumeEmission.h>
 
 #include "../scatter/SweepLattice.h"
@@ -34,7 +35,7 @@ openvdb::Vec3d sampleTransmittance(const LightSample& sample, Medium::Sampler& s
 }
 
 openvdb::Vec3d lightFluence(const LightSampler& light, Medium::Sampler& sampler, const Medium& medium,
-    const openvdb::Coord& voxel, const MarchOptions& options, const RayScene* occluders)
+    const openvdb::Coord& voxel, const MarchOptions& options, const RayScene* occluders, openvdb::Vec3d* flux)
 {
     static thread_local std::vector<LightSample> samples;
     // A rim voxel's light is its medium's, inside the surface: at its centre outside, the light
@@ -43,7 +44,11 @@ openvdb::Vec3d lightFluence(const LightSampler& light, Medium::Sampler& sampler,
     // Never divide by zero: distances below half a voxel count as half a voxel.
     light.sample(xWorld, coordKey(voxel), 0.5 * medium.voxelSize(), samples);
     openvdb::Vec3d phi(0.0);
-    for (const LightSample& s : samples) phi += s.fluence * sampleTransmittance(s, sampler, medium, xWorld, options, occluders);
+    for (const LightSample& s : samples) {
+        const openvdb::Vec3d f = s.fluence * sampleTransmittance(s, sampler, medium, xWorld, options, occluders);
+        phi += f;
+        if (flux) *flux -= greyOf(f) * s.direction; // travelling away from the light
+    }
     return phi;
 }
 
@@ -136,9 +141,10 @@ bool sweepable(const Light& light)
 /// surface there, its transmittance from the medium point, marched until the ray is clear of
 /// the surface and swept beyond. Where every channel's transmittance is
 /// below options.march.cutoff the light counts as blocked, as a march stops there; occluder
-/// meshes are still asked per voxel and sample.
+/// meshes are still asked per voxel and sample. With @a flux, also the light's grey first
+/// moment per voxel (lightFluence).
 std::vector<openvdb::Vec3f> sweepLight(const LightSampler& light, const detail::SweepLattice& lattice, const Medium& medium,
-    const Rim& rim, const DirectLightOptions& options)
+    const Rim& rim, const DirectLightOptions& options, std::vector<openvdb::Vec3f>* flux)
 {
     const openvdb::math::Transform& xform = medium.transform();
     const std::size_t count = lattice.voxelCount();
@@ -152,6 +158,7 @@ std::vector<openvdb::Vec3f> sweepLight(const LightSampler& light, const detail::
     });
     const double minDistance = 0.5 * medium.voxelSize();
     std::vector<openvdb::Vec3f> phi(count, openvdb::Vec3f(0.0f)), tau;
+    if (flux) flux->assign(count, openvdb::Vec3f(0.0f));
     const auto worldOf = [&](std::size_t i) {
         const openvdb::Coord& o = lattice.origin(i / detail::SweepLattice::kLeafVoxels);
         const int v = int(i % detail::SweepLattice::kLeafVoxels);
@@ -205,7 +212,10 @@ std::vector<openvdb::Vec3f> sweepLight(const LightSampler& light, const detail::
             for (std::size_t i = r.begin(); i != r.end(); ++i) {
                 if (rim.entry[i] >= 0 && rim.grazing(rim.entry[i], -travel)) continue;
                 const openvdb::Vec3d t = transmittanceOf(tau[i]);
-                if (t != openvdb::Vec3d(0.0) && visible(worldOf(i), s)) phi[i] += openvdb::Vec3f(s.fluence * t);
+                if (t != openvdb::Vec3d(0.0) && visible(worldOf(i), s)) {
+                    phi[i] += openvdb::Vec3f(s.fluence * t);
+                    if (flux) (*flux)[i] -= openvdb::Vec3f(greyOf(s.fluence * t) * s.direction);
+                }
             }
         });
         // The rim along the directions grazing it: marched from the medium point toward the
@@ -221,7 +231,10 @@ std::vector<openvdb::Vec3f> sweepLight(const LightSampler& light, const detail::
                     [&](const openvdb::Vec3d& at, double distance, openvdb::Vec3f& depth) {
                         return std::abs(distance) >= kRimHandOff && swept.sample(at, depth);
                     });
-                if (t != openvdb::Vec3d(0.0) && visible(xform.indexToWorld(x), s)) phi[rim.voxels[e]] += openvdb::Vec3f(s.fluence * t);
+                if (t != openvdb::Vec3d(0.0) && visible(xform.indexToWorld(x), s)) {
+                    phi[rim.voxels[e]] += openvdb::Vec3f(s.fluence * t);
+                    if (flux) (*flux)[rim.voxels[e]] -= openvdb::Vec3f(greyOf(s.fluence * t) * s.direction);
+                }
             }
         });
     }
@@ -276,10 +289,19 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
         openvdb::tools::dilateActiveValues(grid->tree(), 1, openvdb::tools::NN_FACE_EDGE_VERTEX,
             options.coarseTiles ? openvdb::tools::PRESERVE_TILES : openvdb::tools::IGNORE_TILES);
     }
+    // An anisotropic rest of the phase (Medium: delta-Eddington's g*): the source's first moment.
+    const bool anisotropic = medium.material().phaseG != 0.0;
+    openvdb::Vec3SGrid::Ptr anisotropy;
+    if (anisotropic) {
+        anisotropy = source->deepCopy(); // its values are all 0 yet
+        anisotropy->setName(kSourceAnisotropyGrid);
+    }
 
     // Work items: leaf voxels (per leaf) and active tiles (value at the tile centre).
     openvdb::tree::LeafManager<openvdb::Vec3STree> leaves(direct->tree());
     openvdb::tree::LeafManager<openvdb::Vec3STree> sourceLeaves(source->tree());
+    std::optional<openvdb::tree::LeafManager<openvdb::Vec3STree>> anisotropyLeaves;
+    if (anisotropy) anisotropyLeaves.emplace(anisotropy->tree());
     std::vector<openvdb::CoordBBox> tiles;
     for (auto it = direct->tree().cbeginValueOn(); it; ++it) {
         if (it.isTileValue()) {
@@ -291,14 +313,14 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
     const std::size_t leafCount = leaves.leafCount();
     const std::size_t total = leafCount + tiles.size();
     std::vector<std::vector<openvdb::Vec3d>> perLight(total);
-    std::vector<openvdb::Vec3f> tileDirect(tiles.size()), tileSource(tiles.size());
+    std::vector<openvdb::Vec3f> tileDirect(tiles.size()), tileSource(tiles.size()), tileAnisotropy(tiles.size());
     std::atomic<std::size_t> done{0};
     std::atomic<bool> cancelled{false};
 
     // Lights by sweeps: their fluence at every voxel centre (at the rim, from its medium point
     // along the directions that graze the surface there).
     std::optional<detail::SweepLattice> lattice;
-    std::vector<std::vector<openvdb::Vec3f>> swept(active.size());
+    std::vector<std::vector<openvdb::Vec3f>> swept(active.size()), sweptFlux(active.size());
     Rim rim;
     if (options.sweep) {
         for (std::size_t l = 0; l < active.size(); ++l) {
@@ -307,7 +329,7 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
                 lattice.emplace(medium, *direct);
                 rim = rimOf(*lattice, medium);
             }
-            swept[l] = sweepLight(active[l], *lattice, medium, rim, options);
+            swept[l] = sweepLight(active[l], *lattice, medium, rim, options, anisotropic ? &sweptFlux[l] : nullptr);
             checkInterrupt(interrupter);
         }
     }
@@ -315,19 +337,22 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
     const auto evaluate = [&](Medium::Sampler& sampler, std::vector<VolumeEmission::Sampler>& emitters,
                               const openvdb::Coord& ijk, const openvdb::Vec3d& pointIjk,
                               std::vector<openvdb::Vec3d>& sums, openvdb::Vec3f& outDirect, openvdb::Vec3f& outSource,
-                              double weight) {
-        openvdb::Vec3d phi(0.0);
+                              openvdb::Vec3f& outAnisotropy, double weight) {
+        openvdb::Vec3d phi(0.0), flux(0.0);
         // Swept lights from their sweep; the others marched (lightFluence).
         const std::int64_t index = lattice ? lattice->indexOf(ijk) : -1;
         for (std::size_t l = 0; l < active.size(); ++l) {
-            const openvdb::Vec3d f = index < 0 || swept[l].empty()
-                ? lightFluence(active[l], sampler, medium, ijk, options.march, options.occluders)
+            const bool marched = index < 0 || swept[l].empty();
+            const openvdb::Vec3d f = marched
+                ? lightFluence(active[l], sampler, medium, ijk, options.march, options.occluders, anisotropic ? &flux : nullptr)
                 : openvdb::Vec3d(swept[l][std::size_t(index)]);
+            if (anisotropic && !marched) flux += openvdb::Vec3d(sweptFlux[l][std::size_t(index)]);
             phi += f;
             sums[l] += f * weight;
         }
         // J0 = σs φ0 / 4π (+ emission of volume lights, radiance per unit length).
-        openvdb::Vec3d j = sampler.sigmaS(pointIjk) * phi / (4.0 * M_PI);
+        const openvdb::Vec3d scattered = sampler.sigmaS(pointIjk) * phi / (4.0 * M_PI);
+        openvdb::Vec3d j = scattered;
         const openvdb::Vec3d world = medium.transform().indexToWorld(pointIjk);
         for (VolumeEmission::Sampler& e : emitters) j += e.at(world);
         for (int c = 0; c < 3; ++c) {
@@ -336,6 +361,13 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
         }
         outDirect = openvdb::Vec3f(phi);
         outSource = openvdb::Vec3f(j);
+        if (anisotropic) {
+            // The scattered light's first moment F·σs/4π, the emission's none: a = F/φ of the
+            // light scattered, in the share of J0 it makes (grey).
+            const double scatteredGrey = greyOf(scattered), phiGrey = greyOf(phi), jGrey = greyOf(j);
+            outAnisotropy = phiGrey > 0.0 && jGrey > 0.0 ? openvdb::Vec3f(clampedToUnit(flux / phiGrey) * (scatteredGrey / jGrey))
+                                                         : openvdb::Vec3f(0.0f);
+        }
     };
 
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, total, 1), [&](const tbb::blocked_range<std::size_t>& range) {
@@ -349,17 +381,20 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
             if (item < leafCount) {
                 auto& leaf = leaves.leaf(item);
                 auto& sourceLeaf = sourceLeaves.leaf(item);
+                auto* anisotropyLeaf = anisotropyLeaves ? &anisotropyLeaves->leaf(item) : nullptr;
                 for (auto it = leaf.beginValueOn(); it; ++it) {
-                    openvdb::Vec3f d, s;
-                    evaluate(sampler, emitters, it.getCoord(), it.getCoord().asVec3d(), sums, d, s, 1.0);
+                    openvdb::Vec3f d, s, a;
+                    evaluate(sampler, emitters, it.getCoord(), it.getCoord().asVec3d(), sums, d, s, a, 1.0);
                     it.setValue(d);
                     sourceLeaf.setValueOnly(it.pos(), s);
+                    if (anisotropyLeaf) anisotropyLeaf->setValueOnly(it.pos(), a);
                 }
             } else {
                 const std::size_t t = item - leafCount;
                 const openvdb::CoordBBox& box = tiles[t];
                 const openvdb::Coord centre = box.min() + openvdb::Coord(box.dim().x() / 2);
-                evaluate(sampler, emitters, centre, centre.asVec3d(), sums, tileDirect[t], tileSource[t], double(box.volume()));
+                evaluate(sampler, emitters, centre, centre.asVec3d(), sums, tileDirect[t], tileSource[t], tileAnisotropy[t],
+                    double(box.volume()));
             }
             const std::size_t finished = ++done;
             if (interrupter && interrupter->wasInterrupted(int(100 * finished / std::max<std::size_t>(total, 1)))) {
@@ -371,6 +406,7 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
     for (std::size_t t = 0; t < tiles.size(); ++t) {
         direct->tree().fill(tiles[t], tileDirect[t], true);
         source->tree().fill(tiles[t], tileSource[t], true);
+        if (anisotropy) anisotropy->tree().fill(tiles[t], tileAnisotropy[t], true);
     }
 
     // Per-light energy sums in a fixed order (deterministic for any thread count).
@@ -380,6 +416,11 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
     }
     set.put(direct);
     set.put(source);
+    if (anisotropy) {
+        set.put(anisotropy);
+    } else {
+        set.remove(kSourceAnisotropyGrid); // a set lit before with another phase
+    }
     return report;
 }
 

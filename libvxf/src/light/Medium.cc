@@ -93,17 +93,9 @@ Medium::Medium(const VoxelSet& set, const Material& material)
     }
     mActualSigmaS = mSigmaS;
     if (material.phaseG != 0.0) {
-        // The transport's medium: σs' = (1 − g)·σs, σa as it is (Phase.h).
-        const double reduce = reducedScatteringFactor(material.phaseG);
-        mMaterial.sigmaS *= reduce;
-        mMaterial.phaseG = 0.0;
-        if (mSigmaS) {
-            openvdb::Vec3SGrid::Ptr reduced = mSigmaS->deepCopy();
-            openvdb::tools::foreach(reduced->beginValueAll(), [reduce](const openvdb::Vec3SGrid::ValueAllIter& it) {
-                it.setValue(openvdb::Vec3f(openvdb::Vec3d(*it) * reduce));
-            });
-            mSigmaS = reduced;
-        }
+        // The transport's medium: σs* = (1 − f)·σs, σa as it is, the rest's g* (Phase.h).
+        const PhaseScaling scaling = transportScaling(material.phaseG);
+        scaleScattering(1.0 - scaling.forward, scaling.restG);
     }
     mBounds = mDensity->evalActiveVoxelBoundingBox();
     // Trilinear lookups reach a voxel beyond the active voxels (marchBounds).
@@ -114,11 +106,33 @@ Medium::Medium(const VoxelSet& set, const Material& material)
     }
 }
 
+void Medium::scaleScattering(double factor, double restG)
+{
+    mMaterial = mActualMaterial;
+    mMaterial.sigmaS *= factor;
+    mMaterial.phaseG = restG;
+    mSigmaS = mActualSigmaS;
+    if (mSigmaS) {
+        openvdb::Vec3SGrid::Ptr scaled = mSigmaS->deepCopy();
+        openvdb::tools::foreach(scaled->beginValueAll(), [factor](const openvdb::Vec3SGrid::ValueAllIter& it) {
+            it.setValue(openvdb::Vec3f(openvdb::Vec3d(*it) * factor));
+        });
+        mSigmaS = scaled;
+    }
+}
+
 Medium Medium::actual() const
 {
     Medium m(*this);
     m.mMaterial = mActualMaterial;
     m.mSigmaS = mActualSigmaS;
+    return m;
+}
+
+Medium Medium::isotropic() const
+{
+    Medium m(*this);
+    if (mActualMaterial.phaseG != 0.0) m.scaleScattering(reducedScatteringFactor(mActualMaterial.phaseG), 0.0);
     return m;
 }
 

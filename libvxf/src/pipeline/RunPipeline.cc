@@ -111,7 +111,10 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
     }
     json lightInputs = {{"voxels", voxelHash}, {"sigma_a", vec(material.sigmaA)}, {"sigma_s", vec(material.sigmaS)},
         {"lights", lights}, {"occluders", occluders}, {"step", s.step}, {"sweep", true}};
-    if (material.phaseG != 0.0) lightInputs["phase_g"] = material.phaseG; // isotropic scenes keep their cached stages
+    if (material.phaseG != 0.0) { // isotropic scenes keep their cached stages
+        lightInputs["phase_g"] = material.phaseG;
+        lightInputs["phase_scaling"] = "delta-Eddington, first moment"; // sets lit by the similarity relation are lit again
+    }
     const std::string lightHash = hashOf(lightInputs);
     const fs::path lightFile = cache / ("light-" + lightHash + ".vdb");
     if (fs::exists(lightFile)) {

@@ -1,5 +1,7 @@
 #include <vxf/pipeline/Scene.h>
 
+#include <vxf/light/Phase.h>
+
 #include <vxf/core/Error.h>
 #include <vxf/io/JsonDocument.h>
 
@@ -246,6 +248,8 @@ Scene parseScene(const std::string& text, const std::string& path)
     SceneSettings& s = scene.settings;
     // An anisotropic phase shows in single scattering marched to the lights; the direct grid's is isotropic.
     s.directFromLights = anisotropic;
+    // A forward phase's first moment only the accelerated sweeps carry (Phase.h, Scatter.h).
+    if (anisotropic && transportScaling(firstMedium->material->phaseG).restG != 0.0) s.kernel = "sweep";
     if (document.contains("voxelize")) {
         const json& v = document["voxelize"];
         s.dim = v.value("dim", s.dim);

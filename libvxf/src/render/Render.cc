@@ -43,16 +43,19 @@ public:
     /// the passes read the lattice alone there). Either layer may be null (none).
     /// @a medium holds the material's own coefficients (Medium::actual). With a phase of g ≠ 0
     /// the light marched to the lights is scattered toward the camera by the phase through the
-    /// medium's own σt; the grids' J, solved in the transport's reduced medium, reaches the
-    /// camera through that medium's σt' = σt − g·σs (the similarity relation: the forward part
-    /// of the phase keeps light on its way; Phase.h). @a emitters (volume lights) are seen along
+    /// medium's own σt; the grids' J, solved in the transport's scaled medium, reaches the
+    /// camera through that medium's σt − @a gridForward·σs (the share of σs kept in the beam:
+    /// g² by delta-Eddington, g by the similarity relation; Phase.h). With @a scatterAnisotropy
+    /// (`scatter_anisotropy`) the scattered light's J toward the camera is
+    /// J·max(0, 1 + 3·@a restG·a·ω), its first moment. @a emitters (volume lights) are seen along
     /// the march, in the direct layer, through the medium's own σt, where the medium is.
     /// With @a boundary (the media's meshes) the marches cross the surface where the meshes
     /// do (Medium::Sampler::snapCrossingsTo): grazing rays, at silhouettes and terminators.
     Marcher(const Medium& medium, const RenderOptions& options, const InteriorField* direct,
         const SourceField* scatter,
         const std::vector<LightSampler>* lights = nullptr, const RayScene* occluders = nullptr,
-        const RayScene* boundary = nullptr, const std::vector<VolumeEmission>* emitters = nullptr)
+        const RayScene* boundary = nullptr, const std::vector<VolumeEmission>* emitters = nullptr, double gridForward = 0.0,
+        const openvdb::Vec3SGrid* scatterAnisotropy = nullptr, double restG = 0.0)
         : mMedium(medium)
         , mSampler(medium)
         , mShadowSampler(medium)
@@ -60,7 +63,10 @@ public:
         , mLights(lights)
         , mOccluders(occluders)
         , mPhaseG(medium.phaseG())
+        , mGridForward(gridForward)
+        , mRestG(restG)
     {
+        if (scatterAnisotropy && restG != 0.0) mScatterAnisotropy.emplace(scatterAnisotropy->getConstAccessor());
         if (emitters) {
             for (const VolumeEmission& e : *emitters) mEmitters.emplace_back(e);
         }
@@ -106,7 +112,7 @@ public:
         mExtraPoint = 3 * std::uint64_t(steps); // per ray: a ray traced again gets the same light picks
         mRayDirection = dir;
         openvdb::Vec3d tau(0.0), reducedTau(0.0);
-        const bool reduced = mPhaseG != 0.0;
+        const bool reduced = mGridForward != 0.0;
         InsideSteps inside(mSampler, o, d, t0, h);
         InsideStep step;
         Emission eStart, eMiddle, eEnd; // J at the step's start, middle and end
@@ -127,7 +133,7 @@ public:
             const double hWorld = step.length * mMedium.voxelSize();
             const Segment whole{step.start, step.end, hWorld, eStart, eMiddle, eEnd};
             const openvdb::Vec3d reducedSigmaT =
-                reduced ? sigmaT - mSampler.sigmaS(step.midpoint) * (mPhaseG * step.interior) : sigmaT;
+                reduced ? sigmaT - mSampler.sigmaS(step.midpoint) * (mGridForward * step.interior) : sigmaT;
             integrate(whole, sigmaT, reduced ? &reducedSigmaT : nullptr, scaleAt, key, kRefineDepth, g);
             for (int c = 0; c < 3; ++c) tau[c] += std::max(0.0, sigmaT[c]) * hWorld;
             for (int c = 0; c < 3 && reduced; ++c) reducedTau[c] += std::max(0.0, reducedSigmaT[c]) * hWorld;
@@ -248,6 +254,13 @@ private:
         }
         if (mDirect) e.direct = e.directExact = mDirect->sample(p);
         if (mScatter) e.scatter = mScatter->sample(p);
+        if (mScatterAnisotropy) {
+            // The scattered light's first moment, toward the camera (−mRayDirection).
+            openvdb::Vec3s sampled;
+            openvdb::tools::BoxSampler::sample(*mScatterAnisotropy, p, sampled); // the medium's index space
+            const openvdb::Vec3d a = clampedToUnit(openvdb::Vec3d(sampled));
+            e.scatter *= std::max(0.0, 1.0 - 3.0 * mRestG * a.dot(mRayDirection));
+        }
         if (!mEmitters.empty()) {
             const openvdb::Vec3d world = mMedium.transform().indexToWorld(p);
             for (VolumeEmission::Sampler& emitter : mEmitters) e.emitted += emitter.at(world);
@@ -301,6 +314,10 @@ private:
     double mTauCutoff;
     std::uint64_t mExtraPoint = 0; ///< the next refined point's index along the ray (after the steps' 3 per step)
     double mPhaseG;                ///< Henyey-Greenstein g (0: isotropic)
+    double mGridForward;           ///< the share of σs the grids' transport kept in the beam
+    double mRestG;                 ///< the rest's mean cosine g*, with mScatterAnisotropy
+    /// The `scatter_anisotropy` grid, read trilinearly (none: the scattered light isotropic).
+    std::optional<openvdb::Vec3SGrid::ConstAccessor> mScatterAnisotropy;
     std::vector<VolumeEmission::Sampler> mEmitters; ///< volume lights (none: empty)
     openvdb::Vec3d mRayDirection;  ///< the marched ray's world direction (the phase's outgoing one)
 };
@@ -435,6 +452,8 @@ struct RenderContext
         : set(set_)
         , medium(medium_)
         , actual(medium_.actual())
+        , firstMoment(medium_.material().phaseG != 0.0 && set_.find(kScatterAnisotropyGrid))
+        , grids(firstMoment ? medium_ : medium_.isotropic())
         , scene(scene_)
         , options(options_)
         , meshes(meshes_)
@@ -472,10 +491,11 @@ struct RenderContext
         for (const Light& l : scene.lights) {
             if (l.type == Light::Type::Volume && l.power() != openvdb::Vec3d(0.0)) emitters.emplace_back(l);
         }
-        if (!options.directFromLights && set.find("direct")) directField.emplace(medium, *set.get<openvdb::Vec3SGrid>("direct"));
+        if (!options.directFromLights && set.find("direct")) directField.emplace(grids, *set.get<openvdb::Vec3SGrid>("direct"));
         if (set.find("scatter")) {
-            scatterField.emplace(medium, *sourceFromFluence(medium, *set.get<openvdb::Vec3SGrid>("scatter")), SourceField::Near::Layers);
+            scatterField.emplace(grids, *sourceFromFluence(grids, *set.get<openvdb::Vec3SGrid>("scatter")), SourceField::Near::Layers);
         }
+        if (firstMoment) scatterAnisotropy = set.get<openvdb::Vec3SGrid>(kScatterAnisotropyGrid);
 
         const Camera& camera = scene.camera;
         forward = (camera.lookAt - camera.position).unit();
@@ -500,10 +520,18 @@ struct RenderContext
     }
 
     const VoxelSet& set;
-    /// The transport's medium (σs reduced by the phase, Medium), which the direct and scatter
-    /// grids were solved in, and the medium itself, which camera and shadow rays cross.
+    /// The transport's medium (σs scaled by the phase, Medium) and the medium itself, which
+    /// camera and shadow rays cross.
     const Medium& medium;
     const Medium actual;
+    /// The scatter solve carried the phase's first moment (it wrote `scatter_anisotropy`: the
+    /// accelerated sweeps); otherwise it took the similarity relation's isotropic medium.
+    const bool firstMoment;
+    /// The medium the grids' J is read in and reaches the camera through: the transport's
+    /// (firstMoment) or its isotropic() one. (The `direct` grid's J, read without the lights,
+    /// is taken isotropic in it either way.)
+    const Medium grids;
+    openvdb::Vec3SGrid::ConstPtr scatterAnisotropy; ///< with firstMoment
     const Scene& scene;
     const RenderOptions& options;
     const RenderMeshes& meshes;
@@ -535,7 +563,9 @@ public:
         , mIntersector(context.levelSetIntersector)
         , mMarcher(context.actual, context.options, context.directField ? &*context.directField : nullptr,
               context.scatterField ? &*context.scatterField : nullptr, context.options.directFromLights ? &context.volumeLights : nullptr,
-              context.meshes.occluders, context.meshes.media, &context.emitters)
+              context.meshes.occluders, context.meshes.media, &context.emitters,
+              context.firstMoment ? transportScaling(context.medium.phaseG()).forward : context.medium.phaseG(),
+              context.scatterAnisotropy.get(), context.grids.material().phaseG)
         , mShader(context.actual, context.surfaceLights, context.meshes.occluders)
         , mEpsilon(1e-4 * context.medium.voxelSize())
     {

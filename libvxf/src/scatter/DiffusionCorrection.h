@@ -45,8 +45,10 @@ public:
     /// The coarsening (1, 2 or 4) for @a lattice's medium.
     static int coarseningFor(const SweepLattice& lattice);
 
-    /// Over @a lattice's medium, in cells of @a coarsening³ voxels (a power of 2; others round down).
-    explicit DiffusionCorrection(const SweepLattice& lattice, int coarsening = 1);
+    /// Over @a lattice's medium, in cells of @a coarsening³ voxels (a power of 2; others round
+    /// down). With a phase of mean cosine @a restG (the transport's, Phase.h) the diffusion
+    /// coefficient is the transport-corrected 1/(3(σt − g·σs)).
+    explicit DiffusionCorrection(const SweepLattice& lattice, int coarsening = 1, double restG = 0.0);
 
     /// Unknowns (cells of the diffusion domain).
     std::size_t size() const { return mStart.empty() ? 0 : mStart.size() - 1; }

@@ -1,5 +1,7 @@
 #include <vxf/scatter/Scatter.h>
 
+#include <vxf/light/Phase.h>
+
 #include <vxf/scatter/AdaptiveBand.h>
 #include <vxf/scatter/CoarseLevel.h>
 
@@ -228,14 +230,26 @@ std::vector<openvdb::Vec3d> cycleStep(const std::vector<std::vector<openvdb::Vec
 
 } // namespace
 
-ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions& options, Interrupter* interrupter)
+ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptions& options, Interrupter* interrupter)
 {
     ScatterReport report;
+    const bool solveWhole = options.pass.kernel == ScatterKernel::Sweep && options.accelerate && options.fromPass == 0 &&
+        !options.keepPasses && options.finePasses == 0;
+    // An anisotropic rest of the phase (g* ≠ 0, Phase.h) only the accelerated sweep solve
+    // carries, as a first moment. Every other way takes the similarity relation's isotropic
+    // medium, whose once-scattered light leaves isotropically in the share 1 − g* of the
+    // lights' source (a volume light's emission scaled alike).
+    const double restG = transport.material().phaseG;
+    const Medium medium = solveWhole ? transport : transport.isotropic();
+    const float sourceScale = solveWhole ? 1.0f : float(1.0 - restG);
     openvdb::Vec3SGrid::Ptr sum, j;
     int k = options.fromPass;
     if (k == 0) {
         j = set.get<openvdb::Vec3SGrid>("scatter_source");
-        if (options.band > 0.0) j = j->deepCopy(); // the file's scatter_source stays as it was
+        if (options.band > 0.0 || sourceScale != 1.0f) j = j->deepCopy(); // the file's scatter_source stays as it was
+        if (sourceScale != 1.0f) {
+            openvdb::tools::foreach(j->beginValueAll(), [sourceScale](const openvdb::Vec3SGrid::ValueAllIter& it) { it.setValue(*it * sourceScale); });
+        }
         report.band = coarsenBeyondBand(*j, medium.density(), options.band);
         sum = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
         sum->setTransform(j->transformPtr());
@@ -255,8 +269,7 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
         throw UsageError(fmt::format("coarse factor must be 2, 4 or 8, got {}", options.coarseFactor));
     }
     double previous = 0.0;
-    const bool solveWhole = options.pass.kernel == ScatterKernel::Sweep && options.accelerate && options.fromPass == 0 &&
-        !options.keepPasses && options.finePasses == 0;
+    SweepMoments moments; // of an anisotropic rest
     if (!scatters) {
         report.stopReason = "the medium does not scatter (sigma_s = 0)";
     } else if (solveWhole) {
@@ -266,7 +279,8 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
         solve.tolerance = options.tolerance > 0.0 ? options.tolerance : 1e-6;
         solve.directions = options.pass.directions;
         SweepSolveReport solved;
-        sum = sweepSolve(medium, *j, solve, solved, interrupter);
+        moments.source = set.find(kSourceAnisotropyGrid) ? set.get<openvdb::Vec3SGrid>(kSourceAnisotropyGrid).get() : nullptr;
+        sum = sweepSolve(medium, *j, solve, solved, interrupter, &moments);
         for (const auto& it : solved.iterations) {
             ScatterReport::Pass info;
             info.index = it.index;
@@ -572,6 +586,11 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
 
     sum->setName("scatter");
     set.put(sum);
+    if (moments.scattered) {
+        set.put(moments.scattered);
+    } else {
+        set.remove(kScatterAnisotropyGrid); // isotropic now
+    }
     if (auto direct = set.find("direct")) {
         auto illumination = openvdb::gridPtrCast<openvdb::Vec3SGrid>(direct)->deepCopy();
         auto addend = sum->deepCopy();

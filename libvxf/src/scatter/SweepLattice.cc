@@ -406,7 +406,8 @@ void SweepLattice::inUpwindOrder(const openvdb::Vec3d& omega, const std::vector<
 }
 
 void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::vector<openvdb::Vec3d>& directions, double weight,
-    std::vector<openvdb::Vec3f>& fluence, std::vector<openvdb::Vec3f>* skinFluence, Interrupter* interrupter) const
+    std::vector<openvdb::Vec3f>& fluence, std::vector<openvdb::Vec3f>* skinFluence, Interrupter* interrupter,
+    const FirstMoment* moment) const
 {
     if (skinFluence) skinFluence->assign(mSkin.size(), openvdb::Vec3f(0.0f));
     const bool skins = skinFluence && !mSkin.empty();
@@ -415,16 +416,32 @@ void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::v
     }
     std::vector<openvdb::Vec3f> psi(voxelCount()); // ψ of the direction being swept
     const float w = float(weight);
+    if (moment && (moment->worldDirections.size() != directions.size() || !moment->sourceAnisotropy ||
+                      moment->sourceAnisotropy->size() != source.size() || !moment->flux || moment->flux->size() != voxelCount())) {
+        throw Error("sweep: the first moment's arrays do not match the lattice");
+    }
+    std::vector<openvdb::Vec3f> toward; // with a moment, the source toward the direction being swept (padded)
+    if (moment) toward.resize(source.size());
 
     for (std::size_t d = 0; d < directions.size(); ++d) {
         const openvdb::Vec3d& omega = directions[d];
+        const std::vector<openvdb::Vec3f>& sourceHere = moment ? toward : source;
+        openvdb::Vec3f worldOmega(0.0f);
+        if (moment) {
+            worldOmega = openvdb::Vec3f(moment->worldDirections[d]);
+            const std::vector<openvdb::Vec3f>& b = *moment->sourceAnisotropy;
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, source.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+                for (std::size_t i = r.begin(); i != r.end(); ++i) toward[i] = source[i] * std::max(0.0f, 1.0f + b[i].dot(worldOmega));
+            });
+        }
+        std::vector<openvdb::Vec3f>* flux = moment ? moment->flux : nullptr;
         const Characteristic path = characteristic(omega);
         const float* wt = path.weight;
         const int* off = path.offset;
         const double len = mVoxelSize * path.length;
         inUpwindOrder(omega, psi, [&](std::size_t n, openvdb::Vec3f* buffer, int x, int y, int z) {
             const openvdb::Vec3f* st = &mSigmaT[n * kPaddedVoxels];
-            const openvdb::Vec3f* j = &source[n * kPaddedVoxels];
+            const openvdb::Vec3f* j = &sourceHere[n * kPaddedVoxels];
             const float* distance = &mDistance[n * kPaddedVoxels];
             openvdb::Vec3f* out = &psi[n * kLeafVoxels];
             openvdb::Vec3f* phi = &fluence[n * kLeafVoxels];
@@ -449,6 +466,7 @@ void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::v
                 const int v = localIndex(x, y, z);
                 out[v] = result;
                 phi[v] += w * result;
+                if (flux) (*flux)[n * kLeafVoxels + v] += (w * (result[0] + result[1] + result[2]) / 3.0f) * worldOmega;
                 return;
             }
             const bool deep = mDeep[n] != 0; // no surface within reach: every step whole, no skin
@@ -511,6 +529,7 @@ void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::v
             const int v = localIndex(x, y, z);
             out[v] = result;
             phi[v] += w * result;
+            if (flux) (*flux)[n * kLeafVoxels + v] += (w * (result[0] + result[1] + result[2]) / 3.0f) * worldOmega;
             const std::int32_t s = skins && !deep ? mSkinIndex[n * kLeafVoxels + v] : -1;
             if (s >= 0) {
                 // On from the centre to the surface along ω, if ω leaves it.

@@ -85,9 +85,21 @@ public:
     /// voxel, at the voxels' centres). @a source: from sweepSource. Upwind order leaf by leaf
     /// (see SweepPass.h). With @a skinFluence (skinCount() values), also the fluence of each
     /// skin voxel on the surface (see withSkin).
+    ///
+    /// With @a moment, the source is anisotropic to first order and the sweep adds up the
+    /// fluence's first moment too (an anisotropic rest of the phase, Phase.h): direction i
+    /// sweeps the source J·max(0, 1 + b·ω_i) (b per voxel, padded as @a source; |b| ≤ 3|g*|, so
+    /// for g* ≤ 1/3 the clamp never bites, beyond only where the light is near collimated), and flux += Σ_i weight·grey(ψ_i)·ω_i
+    /// (per voxel). ω_i and b are in world space (worldDirections: @a directions carried to it).
+    struct FirstMoment
+    {
+        const std::vector<openvdb::Vec3f>* sourceAnisotropy = nullptr; ///< b, padded
+        std::vector<openvdb::Vec3d> worldDirections;                  ///< one per sweep direction, unit
+        std::vector<openvdb::Vec3f>* flux = nullptr;                   ///< per voxel, added to
+    };
     void sweep(const std::vector<openvdb::Vec3f>& source, const std::vector<openvdb::Vec3d>& directions, double weight,
         std::vector<openvdb::Vec3f>& fluence, std::vector<openvdb::Vec3f>* skinFluence = nullptr,
-        Interrupter* interrupter = nullptr) const;
+        Interrupter* interrupter = nullptr, const FirstMoment* moment = nullptr) const;
 
     /// Optical depth τ = ∫ σt ds (per channel, world σt × world length) of light crossing the
     /// lattice, at every voxel centre (per voxel), by one upwind sweep: a voxel's τ is the

@@ -3,6 +3,7 @@
 #include "DiffusionCorrection.h"
 #include "SweepLattice.h"
 
+#include <vxf/light/Phase.h>
 #include <vxf/scatter/SweepPass.h>
 
 #include <fmt/format.h>
@@ -57,17 +58,18 @@ double l1Max(const std::vector<openvdb::Vec3f>& values)
 } // namespace
 
 openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGrid& source, const SweepSolveOptions& options,
-    SweepSolveReport& report, Interrupter* interrupter)
+    SweepSolveReport& report, Interrupter* interrupter, SweepMoments* moments)
 {
     InterruptStep step(interrupter, "sweeping");
     auto start = std::chrono::steady_clock::now();
+    const double restG = medium.material().phaseG; // the transport's rest of the phase (Phase.h)
     detail::SweepLattice lattice(medium, source);
     const std::size_t count = lattice.voxelCount();
     report.voxels = count;
     std::optional<detail::DiffusionCorrection> diffusion;
     if (options.accelerate) {
-        diffusion.emplace(lattice, options.diffusionCoarsening > 0 ? options.diffusionCoarsening
-                                                                   : detail::DiffusionCorrection::coarseningFor(lattice));
+        diffusion.emplace(lattice,
+            options.diffusionCoarsening > 0 ? options.diffusionCoarsening : detail::DiffusionCorrection::coarseningFor(lattice), restG);
         report.diffusionUnknowns = diffusion->size();
         report.diffusionCoarsening = diffusion->coarsening();
         lattice.releaseSigmaT(); // the matrices are built
@@ -79,6 +81,21 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
     const std::vector<openvdb::Vec3f>& sigmaS = lattice.sigmaS();
     const std::vector<openvdb::Vec3d> directions = sweepDirections(std::max(options.directions, 1), options.rotationSeed);
     const double weight = 4.0 * M_PI / double(directions.size());
+    // The first moment (restG ≠ 0): J0's anisotropy b0 = 3g*·a0, per voxel; the directions in world space.
+    std::optional<detail::SweepLattice::FirstMoment> moment;
+    std::vector<openvdb::Vec3f> b0, flux, b;
+    if (restG != 0.0) {
+        moment.emplace();
+        for (const openvdb::Vec3d& d : directions) {
+            moment->worldDirections.push_back(medium.transform().baseMap()->applyJacobian(d).unit());
+        }
+        if (moments && moments->source) {
+            b0 = lattice.read(*moments->source);
+            for (openvdb::Vec3f& v : b0) v = openvdb::Vec3f(clampedToUnit(openvdb::Vec3d(v)) * (3.0 * restG));
+        } else {
+            b0.assign(count, openvdb::Vec3f(0.0f));
+        }
+    }
     // Per voxel: what the iteration keeps (the sweep's own arrays and J come and go, so that at
     // most six such arrays and the padded source live at once: 950 MB at dim 256, 4.5M voxels).
     std::vector<openvdb::Vec3f> phi(count, openvdb::Vec3f(0.0f)), next, skin;
@@ -97,10 +114,33 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
                 for (int ch = 0; ch < 3; ++ch) j[v][ch] = j0[v][ch] + sigmaS[v][ch] * phi[v][ch] * float(1.0 / (4.0 * M_PI));
             }
         });
+        if (moment) {
+            // One anisotropy for the sum: its parts' b weighted by their grey J, the scattered
+            // light's b = 3g*·F/φ.
+            b.resize(count);
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
+                for (std::size_t v = r.begin(); v != r.end(); ++v) {
+                    const double total = greyOf(openvdb::Vec3d(j[v])), own = greyOf(openvdb::Vec3d(j0[v]));
+                    const double phiGrey = greyOf(openvdb::Vec3d(phi[v]));
+                    openvdb::Vec3d sum = own * openvdb::Vec3d(b0[v]);
+                    if (phiGrey > 0.0 && !flux.empty()) {
+                        sum += (total - own) * 3.0 * restG * clampedToUnit(openvdb::Vec3d(flux[v]) / phiGrey);
+                    }
+                    b[v] = total > 0.0 ? openvdb::Vec3f(sum / total) : openvdb::Vec3f(0.0f);
+                }
+            });
+            moment->sourceAnisotropy = nullptr;
+        }
+        const std::vector<openvdb::Vec3f> paddedB = moment ? lattice.padded(b) : std::vector<openvdb::Vec3f>();
+        if (moment) {
+            moment->sourceAnisotropy = &paddedB;
+            flux.assign(count, openvdb::Vec3f(0.0f));
+            moment->flux = &flux;
+        }
         next.assign(count, openvdb::Vec3f(0.0f));
         SweepSolveReport::Iteration it;
         const auto sweepStart = std::chrono::steady_clock::now();
-        lattice.sweep(lattice.sweepSource(std::move(j)), directions, weight, next, &skin, nullptr);
+        lattice.sweep(lattice.sweepSource(std::move(j)), directions, weight, next, &skin, nullptr, moment ? &*moment : nullptr);
         it.sweepSeconds = secondsSince(sweepStart);
         corrected = false;
         it.index = l;
@@ -183,6 +223,18 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
     if (corrected) {
         shift.assign(count, openvdb::Vec3f(0.0f));
         diffusion->addTo(shift, damping);
+    }
+    if (moment && moments) {
+        // a = F/φ at the centres (the skin's too: the correction is isotropic, F the last sweep's).
+        std::vector<openvdb::Vec3f> a(count);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t v = r.begin(); v != r.end(); ++v) {
+                const double phiGrey = greyOf(openvdb::Vec3d(phi[v]));
+                a[v] = phiGrey > 0.0 ? openvdb::Vec3f(clampedToUnit(openvdb::Vec3d(flux[v]) / phiGrey)) : openvdb::Vec3f(0.0f);
+            }
+        });
+        moments->scattered = lattice.write(a, source);
+        moments->scattered->setName(kScatterAnisotropyGrid);
     }
     auto grid = lattice.write(lattice.withSkin(phi, skin, corrected ? &shift : nullptr), source);
     grid->setName("scatter");

@@ -1,5 +1,7 @@
 #include <vxf/view/ViewSession.h>
 
+#include <vxf/light/Phase.h>
+
 #include <vxf/core/GridStats.h>
 #include <vxf/io/AtomicFile.h>
 #include <vxf/io/VoxelSetFile.h>
@@ -384,7 +386,7 @@ ViewSession::Rendered ViewSession::render(const std::string& scenePath, int widt
     std::lock_guard<std::mutex> lock(mMutex);
     const auto start = std::chrono::steady_clock::now();
     Rendered result;
-    static const std::set<std::string> upstream = {"surface", "density", "direct", "scatter_source"};
+    static const std::set<std::string> upstream = {"surface", "density", "direct", "scatter_source", kSourceAnisotropyGrid};
     bool scatterInputEdited = false;
     nlohmann::json steps = nlohmann::json::array();
     for (const Step& s : mSteps) {

@@ -68,16 +68,21 @@ openvdb::Vec3d sampleTransmittance(const LightSample& sample, Medium::Sampler& s
 /// only through the medium went from +12.4% / +6.1% to +7.9% / +3.9% against Mitsuba, the
 /// whole image 2.41% / 1.82% → 2.30% / 1.78%; thick bunny dim 96 rung 2.376% → 2.334%.
 /// Volume lights add no fluence (they are a source; see computeDirectLight). Never NaN: a
-/// voxel at a point light's position gets the value of a point half a voxel away.
+/// voxel at a point light's position gets the value of a point half a voxel away. With
+/// @a flux, adds the light's grey first moment there, Σ grey(fluence)·(direction of travel).
 openvdb::Vec3d lightFluence(const LightSampler& light, Medium::Sampler& sampler, const Medium& medium,
-    const openvdb::Coord& voxel, const MarchOptions& options, const RayScene* occluders = nullptr);
+    const openvdb::Coord& voxel, const MarchOptions& options, const RayScene* occluders = nullptr,
+    openvdb::Vec3d* flux = nullptr);
 
 /// The light stage. Adds to @a set:
 /// - `direct` (Vec3f): φ0 = Σ lights, at every active voxel of `density` (active tiles are
 ///   voxelized, or with coarseTiles evaluated once at their centre), and one voxel beyond
 ///   (so trilinear lookups at the surface blend real values);
 /// - `scatter_source` (Vec3f): J0 = σs·φ0/(4π) + the emission of volume lights, same topology
-///   (0 outside the medium, where σs is 0).
+///   (0 outside the medium, where σs is 0);
+/// - with an anisotropic rest of the phase (medium.material().phaseG ≠ 0),
+///   `scatter_source_anisotropy` (Vec3f, Phase.h): J0's mean direction, J0(ω) = J0·(1 + 3g*·a·ω);
+///   without, a set's old one is removed.
 /// Lights with zero power are skipped and reported. Parallel over leaf nodes (TBB);
 /// each voxel is computed on its own, so results do not depend on the number of threads.
 /// Throws vxf::InputError for an unreadable volume light or environment map.

@@ -16,11 +16,14 @@ class UniformBricks;
 /// σa(x) = density(x)·σa, σs(x) = density(x)·σs from the material, unless the voxel set
 /// has per-voxel `sigma_a` / `sigma_s` (Vec3f) grids, which replace them. Lookups are
 /// trilinear. Read-only and cheap to copy; give each thread its own Sampler.
-/// A material of Henyey-Greenstein g ≠ 0 gives the transport's coefficients: σs reduced to
-/// (1 − g)·σs, σt to σt − g·σs (the similarity relation, Phase.h), which the light stage, the
-/// scatter passes and their diffusion correction take with an isotropic phase; actual() is the
-/// medium of the material's own coefficients, for the camera's transmittance and its single
-/// scattering with the phase. With g = 0 both are the material's, bit for bit.
+/// A material of Henyey-Greenstein g ≠ 0 gives the transport's coefficients (transportScaling,
+/// Phase.h): σs* = (1 − f)·σs, σt* = σt − f·σs, and the rest of the phase of mean cosine g*
+/// (material().phaseG; for g > 0 delta-Eddington, f = g², g* = g/(1 + g); for g < 0 the
+/// similarity relation, f = g, g* = 0), which the light stage, the accelerated sweeps and the
+/// camera's read of their light take; isotropic() is the similarity relation's medium (σs(1 − g),
+/// isotropic) for the transport that carries no angular moment; actual() the material's own
+/// coefficients, for the camera's transmittance and its single scattering with the phase. With
+/// g = 0 all three are the material's, bit for bit.
 class Medium
 {
 public:
@@ -33,14 +36,19 @@ public:
     /// The same medium with the material's own coefficients (σs not reduced by the phase);
     /// a copy of this one when g = 0. Shares the grids and their dense copies.
     Medium actual() const;
+    /// The same medium by the similarity relation: σs' = (1 − g)·σs, σt' = σt − g·σs and an
+    /// isotropic phase (Phase.h), the transport of this one's for kernels that carry no angular
+    /// moment; a copy of this one when g = 0.
+    Medium isotropic() const;
 
     const openvdb::math::Transform& transform() const { return mDensity->transform(); }
     double voxelSize() const { return mDensity->voxelSize()[0]; }
     /// Index-space bounds of the medium (active density), empty when there is none.
     const openvdb::CoordBBox& activeBounds() const { return mBounds; }
     const openvdb::FloatGrid& density() const { return *mDensity; }
-    /// The material of the coefficients held: the transport's, σs reduced by the phase and g 0
-    /// (an isotropic medium of the same diffuse transport), or actual()'s, the material itself.
+    /// The material of the coefficients held: the transport's (delta-Eddington: σs*, and as
+    /// phaseG the rest's mean cosine g*), isotropic()'s (σs', g 0) or actual()'s, the material
+    /// itself. A Medium made from it takes it as a material of its own.
     const Material& material() const { return mMaterial; }
     /// The per-voxel coefficient grids, or null when the material's constants apply.
     const openvdb::Vec3SGrid* sigmaAGrid() const { return mSigmaA.get(); }
@@ -151,6 +159,9 @@ public:
     static constexpr double kSnapReach = 2.0;
 
 private:
+    /// Hold the material's σs (and a `sigma_s` grid's) times @a factor, with phase g @a restG.
+    void scaleScattering(double factor, double restG);
+
     openvdb::FloatGrid::ConstPtr mDensity;
     openvdb::Vec3SGrid::ConstPtr mSigmaA, mSigmaS;
     openvdb::FloatGrid::ConstPtr mSurface;
@@ -158,7 +169,7 @@ private:
     std::shared_ptr<const DenseCopy<openvdb::FloatGrid>> mDensityDense, mSurfaceDense;
     std::shared_ptr<const UniformBricks> mUniform;
     Material mMaterial;
-    /// The material and `sigma_s` grid as given, which actual() holds (the reduced ones above).
+    /// The material and `sigma_s` grid as given, which actual() holds (the scaled ones above).
     Material mActualMaterial;
     openvdb::Vec3SGrid::ConstPtr mActualSigmaS;
     openvdb::CoordBBox mBounds;

@@ -67,7 +67,19 @@ struct SweepSolveReport
 /// or 4³ voxels where those stay within a mean free path (coarse-mesh DSA, see
 /// SweepSolveOptions::diffusionCoarsening). Output: a Vec3f grid named "scatter" on @a source's
 /// topology; finite. Results do not depend on the thread count.
+///
+/// An anisotropic rest of the phase (medium.material().phaseG = g* ≠ 0, Phase.h) is carried as
+/// a first angular moment: each sweep's source is J0·(1 + 3g*·a0·ω) + (σs/4π)(φ_l + 3g*·F_l·ω)
+/// (one anisotropy vector for the channels, SweepLattice::FirstMoment), F_l the last sweep's
+/// first moment; the diffusion correction takes 1/(3(σt − g*σs)) and corrects φ alone.
+/// @a moments: a0 as a grid (`scatter_source_anisotropy`; null: J0 isotropic), and out the
+/// scattered fluence's anisotropy a = F/φ (`scatter_anisotropy`, source's topology).
+struct SweepMoments
+{
+    const openvdb::Vec3SGrid* source = nullptr;
+    openvdb::Vec3SGrid::Ptr scattered;
+};
 openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGrid& source, const SweepSolveOptions& options,
-    SweepSolveReport& report, Interrupter* interrupter = nullptr);
+    SweepSolveReport& report, Interrupter* interrupter = nullptr, SweepMoments* moments = nullptr);
 
 } // namespace vxf

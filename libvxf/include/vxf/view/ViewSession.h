@@ -116,7 +116,7 @@ public:
 
     /// Render the edited set with @a scenePath's camera and lights (the `render` operator,
     /// @a width x @a height) into @a folder, first re-running the `scatter` operator where a
-    /// recorded step edited a grid it reads (surface, density, direct, scatter_source) and the
+    /// recorded step edited a grid it reads (surface, density, direct, scatter_source, scatter_source_anisotropy) and the
     /// set holds a `scatter` to replace: with the parameters the file's scatter stage recorded,
     /// else accelerated sweeps. The re-scattered set is kept until the steps change, so renders
     /// of the same edits scatter once (as `vxf run`'s cache reuses unchanged stages).
