@@ -189,7 +189,7 @@ vxf::VoxelSet uniformSphere(const vxf::Material& m, double phi0, int cells)
                 if (c.asVec3d().length() * dx > 1.0) continue;
                 density->tree().setValueOn(c, 1.0f);
                 direct->tree().setValueOn(c, openvdb::Vec3f(float(phi0)));
-                source->tree().setValueOn(c, openvdb::Vec3f(m.sigmaS * ((1.0 - vxf::transportScaling(m.phaseG).forward) * phi0 / (4.0 * M_PI))));
+                source->tree().setValueOn(c, openvdb::Vec3f(m.sigmaS * (vxf::reducedScatteringFactor(m.phaseG) * phi0 / (4.0 * M_PI))));
             }
     set.put(density);
     set.put(direct);

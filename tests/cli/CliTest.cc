@@ -30,6 +30,17 @@ namespace fs = std::filesystem;
 namespace {
 std::string quoted(const std::string& s) { return "'" + s + "'"; }
 
+/// The file `vxf run` cached for a stage (@a prefix: "voxelize-", "light-", "scatter-") in
+/// @a cache, or empty for none.
+std::string cachedStage(const std::string& cache, const std::string& prefix)
+{
+    std::string found;
+    for (const auto& e : fs::directory_iterator(cache)) {
+        if (e.path().filename().string().rfind(prefix, 0) == 0) found = e.path().string();
+    }
+    return found;
+}
+
 std::string trimmed(std::string s)
 {
     while (!s.empty() && (s.back() == '\n' || s.back() == '\r')) s.pop_back();
@@ -715,10 +726,7 @@ TEST_CASE("vxf run lights and renders a fog volume made by vdb_tool (a volume ob
     REQUIRE(result.status == 0);
     CHECK(result.out.find("scatter   ran") != std::string::npos);
     // The voxel set is the grid itself: its density, no surface.
-    std::string voxelFile;
-    for (const auto& e : fs::directory_iterator(dir.path("out/cache"))) {
-        if (e.path().filename().string().rfind("voxelize-", 0) == 0) voxelFile = e.path().string();
-    }
+    const std::string voxelFile = cachedStage(dir.path("out/cache"), "voxelize-");
     REQUIRE_FALSE(voxelFile.empty());
     const vxf::VoxelSet voxels = vxf::readVoxelSet(voxelFile);
     CHECK_FALSE(voxels.find("surface"));
@@ -757,13 +765,21 @@ TEST_CASE("vxf run lights a noise density made with OpenVDB (scripts/make-smoke)
                "material": {{"albedo": 0.95, "mean_free_path": 0.05, "phase": {{"g": {}}}}}}}],
   "lights": [{{"type": "directional", "direction": [0, -1, 0], "intensity": 2}}, {{"type": "environment", "intensity": 0.1, "samples": 8}}],
   "camera": {{"position": [0, -2, 0], "look_at": [0, 0, 0], "fov": 40}},
-  "scatter": {{"directions": 8, "kernel": "sweep"}},
+  "scatter": {{"directions": 8}},
   "render": {{"width": 32, "height": 24, "samples": 1}}
 }})", g));
+        fs::remove_all(dir.path("out/cache")); // one stage file of each kind below
         const auto result = run(fmt::format("{} run {} --out {}", binary("vxf"), dir.path("smoke.json"), dir.path("out")));
         INFO(result.out << result.err);
         REQUIRE(result.status == 0);
-        CHECK(result.out.find("light     ran") != std::string::npos); // g is among the light stage's inputs
+        CHECK(result.out.find("light     ran") != std::string::npos);
+        // A forward phase's first moment: the light stage's and the accelerated sweeps' (the
+        // scene's kernel then by default); a backward phase goes by the similarity relation.
+        const std::string scattered = cachedStage(dir.path("out/cache"), "scatter-");
+        REQUIRE_FALSE(scattered.empty());
+        const vxf::VoxelSet set = vxf::readVoxelSet(scattered);
+        CHECK(bool(set.find("scatter_source_anisotropy")) == (g > 0.0));
+        CHECK(bool(set.find("scatter_anisotropy")) == (g > 0.0));
         return vxf::readExr(dir.path("out/smoke.exr")); // refuses NaN and negative values
     };
     const vxf::RgbImage forward = render(0.6), backward = render(-0.6);
@@ -776,10 +792,7 @@ TEST_CASE("vxf run lights a noise density made with OpenVDB (scripts/make-smoke)
     // background shows through both alike.)
     CHECK(forwardSum > 1.3 * backwardSum);
     // The phase is recorded with the material in the lit set, so vxf render and vxf op read it.
-    std::string litFile;
-    for (const auto& e : fs::directory_iterator(dir.path("out/cache"))) {
-        if (e.path().filename().string().rfind("light-", 0) == 0) litFile = e.path().string();
-    }
+    const std::string litFile = cachedStage(dir.path("out/cache"), "light-");
     REQUIRE_FALSE(litFile.empty());
     CHECK(vxf::recordedMaterial(vxf::readVoxelSet(litFile)).phaseG != 0.0);
 }

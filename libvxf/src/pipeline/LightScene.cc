@@ -16,7 +16,8 @@ DirectLightReport lightScene(VoxelSet& set, const Scene& scene, DirectLightOptio
                                      "voxelize them together (vxf run, or the graph's voxelize with this scene)",
             scene.path, mediaCount(scene)));
     }
-    const Medium medium(set, material);
+    const Medium transport(set, material);
+    const Medium medium = options.similarity ? transport.isotropic() : transport;
     const RayScene occluders = sceneGeometry(scene, SceneObject::Role::Occluder);
     options.occluders = occluders.empty() ? nullptr : &occluders;
     const RayScene boundary = sceneGeometry(scene, SceneObject::Role::Medium);

@@ -111,9 +111,12 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
     }
     json lightInputs = {{"voxels", voxelHash}, {"sigma_a", vec(material.sigmaA)}, {"sigma_s", vec(material.sigmaS)},
         {"lights", lights}, {"occluders", occluders}, {"step", s.step}, {"sweep", true}};
+    // A forward phase's first moment is carried by the accelerated sweeps alone (Scatter.h);
+    // for any other scatter the light stage lights the similarity relation's medium too.
+    const bool carriesMoment = s.kernel == "sweep" && s.accelerate && !wants("scatter_passes") && s.finePasses == 0;
     if (material.phaseG != 0.0) { // isotropic scenes keep their cached stages
         lightInputs["phase_g"] = material.phaseG;
-        lightInputs["phase_scaling"] = "delta-Eddington, first moment"; // sets lit by the similarity relation are lit again
+        lightInputs["phase_scaling"] = carriesMoment ? "delta-Eddington, first moment" : "similarity";
     }
     const std::string lightHash = hashOf(lightInputs);
     const fs::path lightFile = cache / ("light-" + lightHash + ".vdb");
@@ -124,6 +127,7 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
             if (set.empty()) set = readVoxelSet(voxelFile.string());
             DirectLightOptions options;
             options.march.step = s.step;
+            options.similarity = !carriesMoment;
             lightScene(set, scene, options, interrupter);
             set.setProvenance("light", lightInputs.dump());
             writeVoxelSet(lightFile.string(), set);

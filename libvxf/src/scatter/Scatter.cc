@@ -236,12 +236,15 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
     const bool solveWhole = options.pass.kernel == ScatterKernel::Sweep && options.accelerate && options.fromPass == 0 &&
         !options.keepPasses && options.finePasses == 0;
     // An anisotropic rest of the phase (g* ≠ 0, Phase.h) only the accelerated sweep solve
-    // carries, as a first moment. Every other way takes the similarity relation's isotropic
-    // medium, whose once-scattered light leaves isotropically in the share 1 − g* of the
-    // lights' source (a volume light's emission scaled alike).
+    // carries, as a first moment, from a source lit with it (`scatter_source_anisotropy`). Every
+    // other way takes the similarity relation's isotropic medium: a source lit so as it is; one
+    // lit with the moment in the share 1 − g* that leaves isotropically under the relation (a
+    // volume light's emission scaled alike).
     const double restG = transport.material().phaseG;
-    const Medium medium = solveWhole ? transport : transport.isotropic();
-    const float sourceScale = solveWhole ? 1.0f : float(1.0 - restG);
+    const bool litWithMoment = restG != 0.0 && set.find(kSourceAnisotropyGrid);
+    const bool carriesMoment = solveWhole && litWithMoment;
+    const Medium medium = carriesMoment ? transport : transport.isotropic();
+    const float sourceScale = litWithMoment && !carriesMoment ? float(1.0 - restG) : 1.0f;
     openvdb::Vec3SGrid::Ptr sum, j;
     int k = options.fromPass;
     if (k == 0) {
@@ -279,7 +282,7 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
         solve.tolerance = options.tolerance > 0.0 ? options.tolerance : 1e-6;
         solve.directions = options.pass.directions;
         SweepSolveReport solved;
-        moments.source = set.find(kSourceAnisotropyGrid) ? set.get<openvdb::Vec3SGrid>(kSourceAnisotropyGrid).get() : nullptr;
+        moments.source = carriesMoment ? set.get<openvdb::Vec3SGrid>(kSourceAnisotropyGrid).get() : nullptr;
         sum = sweepSolve(medium, *j, solve, solved, interrupter, &moments);
         for (const auto& it : solved.iterations) {
             ScatterReport::Pass info;

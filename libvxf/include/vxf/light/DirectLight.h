@@ -33,6 +33,11 @@ struct DirectLightOptions
     /// Off: every light marched (the reference). Bunny dim 128, a 16-direction sky: 18.4 s
     /// marched, 2.1 s swept.
     bool sweep = true;
+    /// Light the similarity relation's isotropic medium (Medium::isotropic()) rather than the
+    /// transport's: for a scatter that will carry no angular moment (the gather kernel, plain
+    /// or kept passes), whose forward phase is then the similarity relation's throughout, as
+    /// vxf run arranges (lightScene).
+    bool similarity = false;
     /// Meshes that block the light entirely (the scene's occluders); null: none.
     const RayScene* occluders = nullptr;
     /// The meshes the medium's level set was made from: shadow rays take their crossings of

@@ -9,7 +9,8 @@ namespace vxf {
 /// Light @a set with @a scene: attach the material's coefficient grids (if it names any),
 /// check that several media come with per-voxel sigma grids (voxelizeMedia), build the
 /// occluders' Embree scene, run computeDirectLight and record the material in the set's
-/// metadata (so scatter and render read it from the file). @a options.occluders is set here.
+/// metadata (so scatter and render read it from the file). @a options.occluders is set here;
+/// with @a options.similarity the medium lit is the similarity relation's (Medium::isotropic()).
 /// Throws vxf::UsageError naming the scene for a multi-media scene on a single-medium set.
 DirectLightReport lightScene(VoxelSet& set, const Scene& scene, DirectLightOptions options = {}, Interrupter* interrupter = nullptr);
 
