@@ -690,6 +690,10 @@ TEST_CASE("a Henyey-Greenstein phase: the scattered light's first moment scatter
         const vxf::RenderedImage image = vxf::render(set, medium, frontView(), options);
         INFO("a toward the camera " << toward);
         CHECK(image.scatter[15 * 31 + 15].x() == Approx(sigmaS * phi * (1.0 + 3.0 * rest * toward) / (4.0 * M_PI) / sigmaT).epsilon(0.01));
+        // Read in the medium's index space: a grid on other voxels is refused, not misread.
+        anisotropy->setTransform(openvdb::math::Transform::createLinearTransform(0.5));
+        CHECK_THROWS_WITH(vxf::render(set, medium, frontView(), options),
+            "grid 'scatter_anisotropy' does not share the transform of 'density'");
     }
 }
 

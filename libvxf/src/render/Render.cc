@@ -495,7 +495,12 @@ struct RenderContext
         if (set.find("scatter")) {
             scatterField.emplace(grids, *sourceFromFluence(grids, *set.get<openvdb::Vec3SGrid>("scatter")), SourceField::Near::Layers);
         }
-        if (firstMoment) scatterAnisotropy = set.get<openvdb::Vec3SGrid>(kScatterAnisotropyGrid);
+        if (firstMoment) {
+            scatterAnisotropy = set.get<openvdb::Vec3SGrid>(kScatterAnisotropyGrid);
+            if (scatterAnisotropy->transform() != medium.transform()) { // read in the medium's index space
+                throw Error(fmt::format("grid '{}' does not share the transform of 'density'", kScatterAnisotropyGrid));
+            }
+        }
 
         const Camera& camera = scene.camera;
         forward = (camera.lookAt - camera.position).unit();

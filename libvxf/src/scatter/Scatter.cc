@@ -282,7 +282,12 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
         solve.tolerance = options.tolerance > 0.0 ? options.tolerance : 1e-6;
         solve.directions = options.pass.directions;
         SweepSolveReport solved;
-        moments.source = carriesMoment ? set.get<openvdb::Vec3SGrid>(kSourceAnisotropyGrid).get() : nullptr;
+        if (carriesMoment) {
+            moments.source = set.get<openvdb::Vec3SGrid>(kSourceAnisotropyGrid).get();
+            if (moments.source->transform() != j->transform()) { // read on the source's voxels
+                throw Error(fmt::format("grid '{}' does not share the transform of 'scatter_source'", kSourceAnisotropyGrid));
+            }
+        }
         sum = sweepSolve(medium, *j, solve, solved, interrupter, &moments);
         for (const auto& it : solved.iterations) {
             ScatterReport::Pass info;

@@ -97,7 +97,8 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
         }
     }
     // Per voxel: what the iteration keeps (the sweep's own arrays and J come and go, so that at
-    // most six such arrays and the padded source live at once: 950 MB at dim 256, 4.5M voxels).
+    // most six such arrays and the padded source live at once: 950 MB at dim 256, 4.5M voxels;
+    // a first moment adds b0, b, F and two padded arrays, b's and the source toward a direction).
     std::vector<openvdb::Vec3f> phi(count, openvdb::Vec3f(0.0f)), next, skin;
     bool corrected = false; // the last sweep added the diffusion correction (it holds it)
     double previousChange = 0.0;
@@ -129,7 +130,6 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
                     b[v] = total > 0.0 ? openvdb::Vec3f(sum / total) : openvdb::Vec3f(0.0f);
                 }
             });
-            moment->sourceAnisotropy = nullptr;
         }
         const std::vector<openvdb::Vec3f> paddedB = moment ? lattice.padded(b) : std::vector<openvdb::Vec3f>();
         if (moment) {
