@@ -58,10 +58,10 @@ public:
                "sweeps carry: the gather and plain passes take the similarity relation's isotropic medium)")
             ->check(CLI::IsMember({"gather", "sweep"}));
         mApp->add_flag("--no-accelerate", [this](std::int64_t) { mOptions.accelerate = false; },
-            "Sweep kernel: plain source iteration, one scattering order per sweep. By default the sweep kernel solves "
-            "the whole sum with diffusion synthetic acceleration, where a sweep (reported as a pass) corrects the whole "
-            "sum and is no longer one scattering order; --keep-passes, --from-pass and --fine-passes need the orders "
-            "and imply this");
+            "Plain source iteration, one scattering order per pass. By default either kernel solves the whole sum "
+            "with diffusion synthetic acceleration, where a pass (a sweep of every direction, or a gather) corrects "
+            "the whole sum and is no longer one scattering order; --keep-passes, --from-pass and --fine-passes need "
+            "the orders and imply this");
         mApp->add_flag("--keep-passes", mOptions.keepPasses, "Keep each pass as scatter_pass_K");
         mApp->add_option("--from-pass", mOptions.fromPass, "Continue from scatter_pass_K (as edited) instead of scatter_source")
             ->check(CLI::Range(1, 10000));
@@ -98,10 +98,12 @@ public:
                 mOptions.band, report.band.fineVoxels, report.band.coarseVoxels, report.band.leafTiles, report.band.internalTiles);
         }
         if (report.accelerated) {
-            std::cout << fmt::format("  {} voxels swept per direction ({} directions), {} diffusion unknowns (cells of {}^3 voxels), "
-                "setup {:.3f} s\n", report.sweptVoxels, mOptions.pass.directions, report.diffusionUnknowns, report.diffusionCoarsening,
-                report.setupSeconds);
-            std::cout << "  sweep  energy of the sum (over voxels, r g b)             change  rate    diffusion CG   seconds  (sweep, ns/voxel/direction)\n";
+            const bool sweeps = mOptions.pass.kernel == ScatterKernel::Sweep;
+            std::cout << fmt::format("  {} voxels {} per direction ({} directions), {} diffusion unknowns (cells of {}^3 voxels), "
+                "setup {:.3f} s\n", report.sweptVoxels, sweeps ? "swept" : "in the lattice", mOptions.pass.directions,
+                report.diffusionUnknowns, report.diffusionCoarsening, report.setupSeconds);
+            std::cout << fmt::format("  {}  energy of the sum (over voxels, r g b)             change  rate    diffusion CG   seconds  ({}, "
+                "ns/voxel/direction)\n", sweeps ? "sweep" : " pass", sweeps ? "sweep" : "gather");
             for (const auto& p : report.passes) {
                 const double ns = 1e9 * p.sweepSeconds / std::max(1.0, double(report.sweptVoxels) * mOptions.pass.directions);
                 std::cout << fmt::format("  {:>4}   {:>12.5g} {:>12.5g} {:>12.5g}   {:>7.1e} {:>7.4f} {:>8}   {:>7.3f}  ({:.3f}, {:.1f})\n", p.index,

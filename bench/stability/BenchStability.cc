@@ -104,6 +104,7 @@ vxf::ScatterOptions plainPasses(int passes)
     o.passes = passes;
     o.tolerance = 1e-3;
     o.pass.directions = 16;
+    o.accelerate = false;
     return o;
 }
 
@@ -120,6 +121,14 @@ vxf::ScatterOptions acceleratedSweeps()
 {
     vxf::ScatterOptions o = plainPasses(40);
     o.pass.kernel = vxf::ScatterKernel::Sweep;
+    o.accelerate = true;
+    return o;
+}
+
+/// The gather solving the whole sum with diffusion synthetic acceleration (at most 40 gathers).
+vxf::ScatterOptions acceleratedGathers()
+{
+    vxf::ScatterOptions o = plainPasses(40);
     o.accelerate = true;
     return o;
 }
@@ -163,12 +172,15 @@ int main(int argc, char** argv)
         print(runChain(fmt::format("albedo {}, sigma_t 50, plain passes (at most 300)", albedo), sphere, m, 48, plainPasses(300)));
         print(runChain(fmt::format("albedo {}, sigma_t 50, 4 fine passes then 4x coarser", albedo), sphere, m, 48, coarsePasses()));
         print(runChain(fmt::format("albedo {}, sigma_t 50, accelerated sweeps", albedo), sphere, m, 48, acceleratedSweeps()));
+        print(runChain(fmt::format("albedo {}, sigma_t 50, accelerated gathers", albedo), sphere, m, 48, acceleratedGathers()));
     }
     // Extinction over twelve decades.
     for (double sigmaT : {1e-6, 1e-3, 1.0, 1e3, 1e6}) {
         print(runChain(fmt::format("sigma_t {:g} per unit, albedo 0.9", sigmaT), sphere, albedoMaterial(sigmaT, 0.9), 64, coarsePasses()));
         print(runChain(fmt::format("sigma_t {:g} per unit, albedo 0.9, accelerated sweeps", sigmaT), sphere, albedoMaterial(sigmaT, 0.9), 64,
             acceleratedSweeps()));
+        print(runChain(fmt::format("sigma_t {:g} per unit, albedo 0.9, accelerated gathers", sigmaT), sphere, albedoMaterial(sigmaT, 0.9), 64,
+            acceleratedGathers()));
     }
     // Geometry.
     // Voxel size 1/32: shells one and half a voxel thick (too thin for the level set to place

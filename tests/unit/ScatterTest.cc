@@ -46,6 +46,7 @@ TEST_CASE("albedo near 1 stays finite and bounded; tolerance stops the passes", 
     vxf::ScatterOptions options;
     options.passes = 6;
     options.tolerance = 0.2;
+    options.accelerate = false; // plain source iteration (accelerated: SweepSolveTest)
     options.pass.directions = 24;
     const auto report = vxf::scatter(set, medium, options);
     // Each pass keeps most of the light (ratio near 1), so the rest of the series, φ_K·r/(1−r),
@@ -124,6 +125,7 @@ TEST_CASE("extrapolating the geometric tail reaches the converged sum in few pas
     options.passes = 4;
     options.tolerance = 0.0;
     options.extrapolateTail = true;
+    options.accelerate = false; // the tail of plain source iteration
     options.pass.directions = 32;
     const auto report = vxf::scatter(set, vxf::Medium(set, m), options);
     CHECK(report.tailFactor > 5.0); // the global ratio is below 0.9: the boundary leaks
@@ -145,6 +147,7 @@ TEST_CASE("a settled pass ratio ends the series early, with its rest added", "[s
         vxf::ScatterOptions options;
         options.passes = passes;
         options.tolerance = tolerance;
+        options.accelerate = false; // plain source iteration, whose rest is a geometric series
         options.pass.directions = 16;
         const auto report = vxf::scatter(set, vxf::Medium(set, m), options);
         return std::make_pair(report, vxf::gridEnergy(*set.get<openvdb::Vec3SGrid>("scatter"))[0]);
@@ -175,6 +178,7 @@ TEST_CASE("a march cut off at the transmittance cutoff adds the light beyond it"
         vxf::ScatterOptions options;
         options.passes = 1;
         options.tolerance = 0.0;
+        options.accelerate = false; // one pass: the first order alone
         options.pass.directions = 32;
         options.pass.cutoff = cutoff;
         vxf::scatter(set, vxf::Medium(set, m), options);

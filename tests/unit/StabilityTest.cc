@@ -29,6 +29,7 @@ vxf::ScatterOptions fewPassesWithTail()
     options.passes = 4;
     options.pass.directions = 16;
     options.extrapolateTail = true;
+    options.accelerate = false; // plain passes and their tail (accelerated gathers: SweepSolveTest)
     return options;
 }
 

@@ -233,8 +233,8 @@ std::vector<openvdb::Vec3d> cycleStep(const std::vector<std::vector<openvdb::Vec
 ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptions& options, Interrupter* interrupter)
 {
     ScatterReport report;
-    const bool solveWhole = options.pass.kernel == ScatterKernel::Sweep && options.accelerate && options.fromPass == 0 &&
-        !options.keepPasses && options.finePasses == 0;
+    const bool solveWhole = options.accelerate && options.fromPass == 0 && !options.keepPasses && options.finePasses == 0;
+    const bool sweeps = options.pass.kernel == ScatterKernel::Sweep;
     // An anisotropic rest of the phase (g* ≠ 0, Phase.h) only the accelerated sweep solve
     // carries, as a first moment, from a source lit with it (`scatter_source_anisotropy`). Every
     // other way takes the similarity relation's isotropic medium: a source lit so as it is; one
@@ -242,7 +242,7 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
     // volume light's emission scaled alike).
     const double restG = transport.material().phaseG;
     const bool litWithMoment = restG != 0.0 && set.find(kSourceAnisotropyGrid);
-    const bool carriesMoment = solveWhole && litWithMoment;
+    const bool carriesMoment = solveWhole && sweeps && litWithMoment;
     const Medium medium = carriesMoment ? transport : transport.isotropic();
     const float sourceScale = litWithMoment && !carriesMoment ? float(1.0 - restG) : 1.0f;
     openvdb::Vec3SGrid::Ptr sum, j;
@@ -276,11 +276,13 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
     if (!scatters) {
         report.stopReason = "the medium does not scatter (sigma_s = 0)";
     } else if (solveWhole) {
-        // The whole sum at once: sweeps with diffusion synthetic acceleration.
+        // The whole sum at once: sweeps or gathers with diffusion synthetic acceleration.
         SweepSolveOptions solve;
         solve.maxSweeps = options.passes;
         solve.tolerance = options.tolerance > 0.0 ? options.tolerance : 1e-6;
         solve.directions = options.pass.directions;
+        solve.kernel = options.pass.kernel;
+        solve.gather = options.pass;
         SweepSolveReport solved;
         if (carriesMoment) {
             moments.source = set.get<openvdb::Vec3SGrid>(kSourceAnisotropyGrid).get();
@@ -305,8 +307,10 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
         report.diffusionUnknowns = solved.diffusionUnknowns;
         report.diffusionCoarsening = solved.diffusionCoarsening;
         report.setupSeconds = solved.setupSeconds;
-        report.stopReason = fmt::format("accelerated sweeps (each sweep corrects the whole sum; it is not one scattering order): {}",
-            solved.stopReason);
+        report.stopReason = sweeps ? fmt::format("accelerated sweeps (each sweep corrects the whole sum; it is not one scattering order): {}",
+                                         solved.stopReason)
+                                   : fmt::format("accelerated gathers (each pass corrects the whole sum; it is not one scattering order): {}",
+                                         solved.stopReason);
     } else {
         // The lattice the passes run on: the voxel set's, or after options.finePasses a coarse one.
         const Medium* levelMedium = &medium;

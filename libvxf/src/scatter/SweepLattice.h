@@ -142,6 +142,8 @@ public:
     /// centre to the surface, ψ e^{−τ'} + S(1 − e^{−τ'}) over the depth d/(ω·n) (none for a
     /// centre outside), and drops those entering (no light comes from outside).
     std::size_t skinCount() const { return mSkin.size(); }
+    /// Whether voxel @a voxel (per-voxel index) is a skin voxel.
+    bool isSkin(std::size_t voxel) const { return !mSkinIndex.empty() && mSkinIndex[voxel] >= 0; }
     /// @a fluence (per voxel) with its skin voxels' values replaced by @a skinFluence plus
     /// @a shift at the voxel (e.g. a diffusion correction; null: none).
     std::vector<openvdb::Vec3f> withSkin(const std::vector<openvdb::Vec3f>& fluence, const std::vector<openvdb::Vec3f>& skinFluence,

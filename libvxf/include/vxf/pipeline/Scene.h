@@ -100,7 +100,7 @@ struct SceneSettings
     double scatterBand = 0.0; ///< 0: full resolution everywhere
     int finePasses = 0, coarseFactor = 4; ///< passes after finePasses on a coarser lattice (0: none)
     std::string kernel = "gather"; ///< the scatter kernel by name (scatterKernelNamed)
-    bool accelerate = true;        ///< sweep kernel: diffusion-accelerated sweeps (ScatterOptions::accelerate)
+    bool accelerate = true;        ///< diffusion-accelerated sweeps or gathers (ScatterOptions::accelerate)
     int width = 640, height = 360, samples = 4, gatherDirections = 64;
     int maxSamples = 0;       ///< adaptive sampling up to this many rays per pixel (≤ samples: off)
     double noiseLevel = 0.02; ///< refine pixels whose mean luminance has a larger relative standard error

@@ -39,10 +39,10 @@ struct ScatterOptions
     /// Adaptive narrow band (world units): full resolution within this distance of the
     /// surface, 8³ and 128³ tiles deeper (see coarsenBeyondBand). 0: full resolution everywhere.
     double band = 0.0;
-    /// With the sweep kernel (pass.kernel): solve for the whole sum at once by sweeps with
-    /// diffusion synthetic acceleration (sweepSolve), whose iterations are not scattering
-    /// orders. Not with keepPasses, fromPass or finePasses, which need the orders: those
-    /// run plain source iteration, one sweep per pass.
+    /// Solve for the whole sum at once by passes of either kernel (pass.kernel: sweeps or
+    /// gathers) with diffusion synthetic acceleration (sweepSolve), whose iterations are not
+    /// scattering orders. Not with keepPasses, fromPass or finePasses, which need the orders:
+    /// those run plain source iteration, one order per pass.
     bool accelerate = true;
     ScatterPassOptions pass;
 };
@@ -69,7 +69,7 @@ struct ScatterReport
     double fineGatherSeconds = 0.0; ///< after coarse passes: the fine gathers and the correction cycle
     int correctionPasses = 0;       ///< coarse passes of the correction cycles
     int correctionCycles = 0;       ///< how many correction cycles ran
-    bool accelerated = false;       ///< the sum was solved by accelerated sweeps (passes are iterations)
+    bool accelerated = false;       ///< the sum was solved by accelerated sweeps or gathers (passes are iterations)
     std::size_t sweptVoxels = 0;    ///< accelerated sweeps: voxels swept per direction (the touched leaves')
     std::size_t diffusionUnknowns = 0; ///< accelerated sweeps: cells of the diffusion correction
     int diffusionCoarsening = 1;       ///< accelerated sweeps: those cells are blocks of this many voxels cubed
@@ -92,7 +92,10 @@ openvdb::Vec3d gridEnergy(const openvdb::Vec3SGrid& grid);
 /// (the share of the once-scattered light that leaves isotropically under it; a volume light's
 /// emission alike), and drops a stale `scatter_anisotropy`. Writes `scatter` = Σ_{k≥1} φ_k and,
 /// when the set has `direct`, `illumination` = direct + scatter; with keepPasses also
-/// `scatter_pass_K`. With fromPass = K the iteration restarts from `scatter_pass_K` (as edited)
+/// `scatter_pass_K`. With options.accelerate (and no keepPasses, fromPass or finePasses) the
+/// sum is solved whole by accelerated sweeps or gathers (sweepSolve), at most options.passes
+/// of them, to the tolerance, nothing extrapolated. Otherwise, plain source iteration: with
+/// fromPass = K the iteration restarts from `scatter_pass_K` (as edited)
 /// and the sum from `scatter_pass_1..K`. Stops after options.passes, or when the rest
 /// of the series is known to within the tolerance (and adds it), or at once when the medium does not scatter (σs = 0: `scatter`
 /// is 0). Topology: that of `scatter_source`, with the deep interior made tiles when options.band > 0

@@ -1,4 +1,4 @@
-// vxf — the whole scattered light by sweeps, accelerated by a diffusion correction (DSA).
+// vxf — the whole scattered light by sweeps or gathers, accelerated by a diffusion correction (DSA).
 #pragma once
 
 #include <vxf/core/Interrupter.h>
@@ -24,6 +24,12 @@ struct SweepSolveOptions
     /// The diffusion correction's cells: blocks of 1, 2 or 4 voxels a side; 0: the largest whose
     /// mean optical thickness is at most 1 (coarse-mesh DSA, see DiffusionCorrection).
     int diffusionCoarsening = 0;
+    /// The transport of an iteration: the sweep kernel (SweepLattice::sweep, `directions` and
+    /// `rotationSeed` above), or the gather (scatterPass with `gather`'s options, its kernel,
+    /// rotation and source read set here: the lights' source read fraction-weighted once, the
+    /// scattered light's continued, SourceField).
+    ScatterKernel kernel = ScatterKernel::Sweep;
+    ScatterPassOptions gather;
 };
 
 struct SweepSolveReport
@@ -51,7 +57,8 @@ struct SweepSolveReport
 };
 
 /// The scattered fluence Σ_{k≥1} φ_k of the source J0 = @a source, solved as a whole:
-/// φ = K(J0 + Sφ) (K: the sweep kernel, sweepPass; S = σs/4π) by the iteration
+/// φ = K(J0 + Sφ) (K: the sweep kernel, sweepPass, or the gather, scatterPass, as
+/// options.kernel says; S = σs/4π) by the iteration
 /// φ_{l+½} = K(J0 + Sφ_l), then with options.accelerate φ_{l+1} = φ_{l+½} + δ, δ the diffusion
 /// correction −∇·(D∇δ) + σa δ = σs(φ_{l+½} − φ_l) (Larsen's DSA: the error source iteration
 /// leaves is smooth and nearly isotropic, which diffusion captures). An iteration is then no
@@ -68,10 +75,16 @@ struct SweepSolveReport
 /// SweepSolveOptions::diffusionCoarsening). Output: a Vec3f grid named "scatter" on @a source's
 /// topology; finite. Results do not depend on the thread count.
 ///
+/// With the gather an iteration costs one gather pass (the first the lights' J0 alone, kept: it
+/// is the same each time), and its fluence holds the skin voxels' light on the surface, as
+/// the gathers give it; the diffusion correction is the same (not the gather's discretisation
+/// either: it preconditions, the gathers set the answer).
+///
 /// An anisotropic rest of the phase (medium.material().phaseG = g* ≠ 0, Phase.h) is carried as
 /// a first angular moment: each sweep's source is J0·(1 + 3g*·a0·ω) + (σs/4π)(φ_l + 3g*·F_l·ω)
 /// (one anisotropy vector for the channels, SweepLattice::FirstMoment), F_l the last sweep's
-/// first moment; the diffusion correction takes 1/(3(σt − g*σs)) and corrects φ alone.
+/// first moment; the diffusion correction takes 1/(3(σt − g*σs)) and corrects φ alone. The
+/// sweeps only: with the gather the medium must be isotropic (Medium::isotropic; UsageError).
 /// @a moments: a0 as a grid (`scatter_source_anisotropy`; null: J0 isotropic), and out the
 /// scattered fluence's anisotropy a = F/φ (`scatter_anisotropy`, source's topology).
 struct SweepMoments
