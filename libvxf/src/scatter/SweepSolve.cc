@@ -49,7 +49,6 @@ constexpr int kDampAfter = 5;
 /// free paths per voxel, albedo 0.9, 0.99, 0.9999) 8, 12, 14 with 0.25 and 9, 14, 16 with 0.5.
 constexpr double kGatherNumericalDiffusion = 0.25;
 
-
 /// Σ |v| per channel, in a fixed order (the same for every thread count).
 openvdb::Vec3d l1(const std::vector<openvdb::Vec3f>& values)
 {
