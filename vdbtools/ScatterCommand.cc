@@ -36,7 +36,7 @@ public:
             ->check(AboveZero)
             ->check(CLI::Range(0.0, 0.5));
         mApp->add_option("--tolerance", mOptions.tolerance,
-               "Stop when the rest of the series, estimated as phi_K r/(1-r), is known to within this fraction of the sum (the passes have settled into their slowest mode), and add it (default 1e-3; 0: never)")
+               "Stop when the rest of the series, estimated as phi_K r/(1-r), is known to within this fraction of the sum (the passes have settled into their slowest mode), and add it; accelerated, when the sum's estimated error (its last change times r/(1-r)) is below it (default 1e-3; 0: never, accelerated 1e-6)")
             ->check(CLI::Range(0.0, 1.0));
         mApp->add_flag("--extrapolate", mOptions.extrapolateTail,
             "After the last pass add the geometric tail phi_K r/(1-r), r = phi_K/phi_(K-1) per voxel");
