@@ -307,10 +307,8 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
         report.diffusionUnknowns = solved.diffusionUnknowns;
         report.diffusionCoarsening = solved.diffusionCoarsening;
         report.setupSeconds = solved.setupSeconds;
-        report.stopReason = sweeps ? fmt::format("accelerated sweeps (each sweep corrects the whole sum; it is not one scattering order): {}",
-                                         solved.stopReason)
-                                   : fmt::format("accelerated gathers (each pass corrects the whole sum; it is not one scattering order): {}",
-                                         solved.stopReason);
+        report.stopReason = fmt::format("accelerated {} (each {} corrects the whole sum; it is not one scattering order): {}",
+            sweeps ? "sweeps" : "gathers", sweeps ? "sweep" : "pass", solved.stopReason);
     } else {
         // The lattice the passes run on: the voxel set's, or after options.finePasses a coarse one.
         const Medium* levelMedium = &medium;

@@ -89,7 +89,7 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
     report.accelerated = options.accelerate;
     report.setupSeconds = secondsSince(start);
 
-    const std::vector<openvdb::Vec3f> j0 = lattice.read(source);
+    const std::vector<openvdb::Vec3f> j0 = gather ? std::vector<openvdb::Vec3f>() : lattice.read(source); // (the gather reads the grid)
     const std::vector<openvdb::Vec3f>& sigmaS = lattice.sigmaS();
     const std::vector<openvdb::Vec3d> directions = sweepDirections(std::max(options.directions, 1), options.rotationSeed);
     const double weight = 4.0 * M_PI / double(directions.size());
