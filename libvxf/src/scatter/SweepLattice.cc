@@ -6,6 +6,7 @@
 #include <openvdb/tree/LeafManager.h>
 
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -19,11 +20,33 @@ namespace vxf::detail {
 namespace {
 
 /// A padded cell a sweep reads from a neighbouring leaf: its index in the padded block, the
-/// neighbour (0…26 as in SweepLattice::neighbour) and the voxel there.
+/// neighbour (0…26 as in SweepLattice::neighbour), the voxel there, and that voxel's place
+/// among the neighbour's downwind faces (downwindFaces).
 struct Ghost
 {
-    int padded, slot, local;
+    int padded, slot, local, face;
 };
+
+/// The cells of a leaf's downwind faces along @a octant, as padded indices: per axis a, the 64
+/// voxels of its last layer along the sweep, the other two axes (a + 1, a + 2 mod 3) by 8 and
+/// by 1 (edges and the corner held twice or thrice). All a sweep's next leaves read of a leaf.
+std::array<std::int16_t, SweepLattice::kFaceVoxels> downwindFaces(int octant)
+{
+    std::array<std::int16_t, SweepLattice::kFaceVoxels> cells;
+    for (int a = 0; a < 3; ++a) {
+        const int b = (a + 1) % 3, c = (a + 2) % 3;
+        for (int i = 0; i < 8; ++i) {
+            for (int j = 0; j < 8; ++j) {
+                int x[3];
+                x[a] = (octant >> a) & 1 ? 0 : 7;
+                x[b] = i;
+                x[c] = j;
+                cells[std::size_t(a * 64 + i * 8 + j)] = std::int16_t(SweepLattice::paddedIndex(x[0], x[1], x[2]));
+            }
+        }
+    }
+    return cells;
+}
 
 /// The cells upwind of a leaf along octant @a octant: one layer on each upwind face, edge and
 /// corner (9³ − 8³ = 217), in no particular order.
@@ -48,8 +71,10 @@ std::vector<Ghost> upwindGhosts(int octant)
                     inside = inside && d[a] == 0;
                 }
                 if (inside) continue;
+                // The neighbour's voxel lies on its downwind face across the first axis it is off along.
+                const int a = d[0] != 0 ? 0 : (d[1] != 0 ? 1 : 2), b = (a + 1) % 3, c = (a + 2) % 3;
                 ghosts.push_back({SweepLattice::paddedIndex(i, j, k), (d[0] + 1) * 9 + (d[1] + 1) * 3 + (d[2] + 1),
-                    SweepLattice::localIndex(l[0], l[1], l[2])});
+                    SweepLattice::localIndex(l[0], l[1], l[2]), a * 64 + l[b] * 8 + l[c]});
             }
         }
     }
@@ -426,13 +451,27 @@ const std::array<SweepLattice::UpwindVoxel, SweepLattice::kLeafVoxels>& SweepLat
 }
 
 template <typename Visit>
+void SweepLattice::leavesInUpwindOrder(int octant, const Visit& visit) const
+{
+    const std::vector<std::int32_t>& order = mOrder[octant];
+    const std::vector<std::size_t>& fronts = mWavefronts[octant];
+    for (std::size_t f = 0; f + 1 < fronts.size(); ++f) {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(fronts[f], fronts[f + 1], 1), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t k = r.begin(); k != r.end(); ++k) visit(std::size_t(order[k]));
+        });
+    }
+}
+
+template <typename Visit>
 void SweepLattice::inUpwindOrder(const openvdb::Vec3d& omega, const std::vector<openvdb::Vec3f>& values, const Visit& visit,
     const EnteringDepth& outside) const
 {
     const int octant = octantOf(omega);
     const std::vector<Ghost> upwind = upwindGhosts(octant);
     const std::array<UpwindVoxel, kLeafVoxels>& voxels = upwindVoxels(octant, dominantAxis(omega));
-    const auto sweepLeaf = [&](std::size_t n, openvdb::Vec3f* buffer) {
+    tbb::enumerable_thread_specific<std::vector<openvdb::Vec3f>> buffers(kPaddedVoxels, openvdb::Vec3f(0.0f));
+    leavesInUpwindOrder(octant, [&](std::size_t n) {
+        openvdb::Vec3f* buffer = buffers.local().data();
         std::optional<SweptSoFar> swept; // (for `outside`, made at the leaf's first ghost without a leaf)
         for (const Ghost& g : upwind) {
             const int leaf = mNeighbours[n * 27 + g.slot];
@@ -446,15 +485,7 @@ void SweepLattice::inUpwindOrder(const openvdb::Vec3d& omega, const std::vector<
             }
         }
         visit(n, buffer, voxels.data());
-    };
-    const std::vector<std::int32_t>& order = mOrder[octant];
-    const std::vector<std::size_t>& fronts = mWavefronts[octant];
-    for (std::size_t f = 0; f + 1 < fronts.size(); ++f) {
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(fronts[f], fronts[f + 1], 1), [&](const tbb::blocked_range<std::size_t>& r) {
-            std::vector<openvdb::Vec3f> buffer(kPaddedVoxels, openvdb::Vec3f(0.0f));
-            for (std::size_t k = r.begin(); k != r.end(); ++k) sweepLeaf(std::size_t(order[k]), buffer.data());
-        });
-    }
+    });
 }
 
 void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::vector<openvdb::Vec3d>& directions, double weight,
@@ -466,144 +497,184 @@ void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::v
     if (source.size() != mOrigins.size() * kPaddedVoxels || fluence.size() != voxelCount()) {
         throw Error("sweep: source or fluence does not match the lattice");
     }
-    std::vector<openvdb::Vec3f> psi(voxelCount()); // ψ of the direction being swept
     const float w = float(weight);
     if (moment && (moment->worldDirections.size() != directions.size() || !moment->sourceAnisotropy ||
                       moment->sourceAnisotropy->size() != source.size() || !moment->flux || moment->flux->size() != voxelCount())) {
         throw Error("sweep: the first moment's arrays do not match the lattice");
     }
-    std::vector<openvdb::Vec3f> toward; // with a moment, the source toward the direction being swept (padded)
-    if (moment) toward.resize(source.size());
+    std::vector<openvdb::Vec3f>* flux = moment ? moment->flux : nullptr;
 
-    for (std::size_t d = 0; d < directions.size(); ++d) {
-        const openvdb::Vec3d& omega = directions[d];
-        const std::vector<openvdb::Vec3f>& sourceHere = moment ? toward : source;
-        openvdb::Vec3f worldOmega(0.0f);
-        if (moment) {
-            worldOmega = openvdb::Vec3f(moment->worldDirections[d]);
-            const std::vector<openvdb::Vec3f>& b = *moment->sourceAnisotropy;
-            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, source.size()), [&](const tbb::blocked_range<std::size_t>& r) {
-                for (std::size_t i = r.begin(); i != r.end(); ++i) toward[i] = source[i] * std::max(0.0f, 1.0f + b[i].dot(worldOmega));
-            });
+    // The directions in batches of one octant, at most kSweepBatch each (in the order given
+    // within an octant): a batch's directions visit a leaf one after another while its source
+    // and fluence are in cache, and each keeps of a leaf only its downwind faces, all that the
+    // next leaves read.
+    std::vector<std::vector<std::size_t>> batches;
+    for (int o = 0; o < 8; ++o) {
+        std::vector<std::size_t> inOctant;
+        for (std::size_t d = 0; d < directions.size(); ++d) {
+            if (octantOf(directions[d]) == o) inOctant.push_back(d);
         }
-        std::vector<openvdb::Vec3f>* flux = moment ? moment->flux : nullptr;
-        const Characteristic path = characteristic(omega);
-        const float* wt = path.weight;
-        const int* off = path.offset;
-        const double len = mVoxelSize * path.length;
-        inUpwindOrder(omega, psi, [&](std::size_t n, openvdb::Vec3f* buffer, const UpwindVoxel* voxels) {
-            const openvdb::Vec3f* st = &mSigmaT[n * kPaddedVoxels];
-            const openvdb::Vec3f* j = &sourceHere[n * kPaddedVoxels];
-            const float* distance = &mDistance[n * kPaddedVoxels];
-            openvdb::Vec3f* out = &psi[n * kLeafVoxels];
-            openvdb::Vec3f* phi = &fluence[n * kLeafVoxels];
-            openvdb::Vec3f* fluxHere = flux ? &(*flux)[n * kLeafVoxels] : nullptr;
-            // Per channel, the last step's weights (uniformWeights).
-            UniformWeights uw[3];
-            if (mUniform[n]) {
-                // The short path of a deep leaf of one σt: what the general path below computes
-                // there (every step whole, σt the same at both ends, no skin), to the bit, without
-                // its tests, the step's weights once a leaf. The thick bunny at dim 256 (about
-                // half its leaves so): 27 → 24 ns per voxel and direction with the tests hoisted
-                // out of the voxel (means of four interleaved runs each).
-                const openvdb::Vec3f sigmaT = st[0]; // the leaf's one σt: its padded block is not streamed
-                for (int ch = 0; ch < 3; ++ch) uniformWeights(sigmaT[ch], len, uw[ch]);
-                const openvdb::Vec3f transmittance(uw[0].transmittance, uw[1].transmittance, uw[2].transmittance),
-                    in(uw[0].in, uw[1].in, uw[2].in), own(uw[0].own, uw[1].own, uw[2].own);
-                for (int k = 0; k < kLeafVoxels; ++k) {
-                    const int p = voxels[k].padded, v = voxels[k].local;
-                    openvdb::Vec3f psiIn(0.0f), jIn(0.0f);
-                    for (int i = 0; i < 4; ++i) {
-                        psiIn += wt[i] * buffer[p + off[i]];
-                        jIn += wt[i] * j[p + off[i]];
-                    }
-                    openvdb::Vec3f result;
-                    for (int ch = 0; ch < 3; ++ch) result[ch] = transmittance[ch] * psiIn[ch] + in[ch] * jIn[ch] + own[ch] * j[p][ch];
-                    buffer[p] = result;
-                    out[v] = result;
-                    phi[v] += w * result;
-                    if (fluxHere) fluxHere[v] += (w * (result[0] + result[1] + result[2]) / 3.0f) * worldOmega;
+        for (std::size_t i = 0; i < inOctant.size(); i += kSweepBatch) {
+            batches.emplace_back(inOctant.begin() + std::ptrdiff_t(i),
+                inOctant.begin() + std::ptrdiff_t(std::min(inOctant.size(), i + kSweepBatch)));
+        }
+    }
+    const std::size_t leaves = mOrigins.size();
+    std::size_t largest = 0;
+    for (const std::vector<std::size_t>& batch : batches) largest = std::max(largest, batch.size());
+    std::vector<openvdb::Vec3f> faces(largest * leaves * kFaceVoxels);
+    struct Scratch
+    {
+        std::vector<openvdb::Vec3f> buffer, toward;
+    };
+    tbb::enumerable_thread_specific<Scratch> scratches([] {
+        return Scratch{std::vector<openvdb::Vec3f>(kPaddedVoxels, openvdb::Vec3f(0.0f)), std::vector<openvdb::Vec3f>(kPaddedVoxels)};
+    });
+    std::size_t swept = 0;
+    for (const std::vector<std::size_t>& batch : batches) {
+        const int octant = octantOf(directions[batch.front()]);
+        const std::vector<Ghost> upwind = upwindGhosts(octant);
+        const std::array<std::int16_t, kFaceVoxels> downwind = downwindFaces(octant);
+        leavesInUpwindOrder(octant, [&](std::size_t n) {
+            Scratch& scratch = scratches.local();
+            openvdb::Vec3f* buffer = scratch.buffer.data();
+            for (std::size_t slot = 0; slot < batch.size(); ++slot) {
+                const std::size_t d = batch[slot];
+                const openvdb::Vec3d& omega = directions[d];
+                const openvdb::Vec3f* ownFaces = &faces[slot * leaves * kFaceVoxels];
+                for (const Ghost& g : upwind) {
+                    const int leaf = mNeighbours[n * 27 + g.slot];
+                    buffer[g.padded] = leaf >= 0 ? ownFaces[std::size_t(leaf) * kFaceVoxels + std::size_t(g.face)] : openvdb::Vec3f(0.0f);
                 }
-                return;
-            }
-            const bool deep = mDeep[n] != 0; // no surface within reach: every step whole, no skin
-            const std::int32_t* skinIndex = skins && !deep ? &mSkinIndex[n * kLeafVoxels] : nullptr;
-            for (int k = 0; k < kLeafVoxels; ++k) {
-                const int p = voxels[k].padded, v = voxels[k].local;
-                openvdb::Vec3f psiIn(0.0f), jIn(0.0f), stIn(0.0f);
-                float dIn = -1.0f;
-                bool uniform = true; // σt the same upwind as here: then exactly so, and the step's weights repeat
-                for (int i = 0; i < 4; ++i) {
-                    psiIn += wt[i] * buffer[p + off[i]];
-                    jIn += wt[i] * j[p + off[i]];
-                    stIn += wt[i] * st[p + off[i]];
-                    uniform = uniform && st[p + off[i]] == st[p];
+                // With a moment, the source toward ω: J·max(0, 1 + b·ω) over the leaf's padded block.
+                const openvdb::Vec3f* j = &source[n * kPaddedVoxels];
+                openvdb::Vec3f worldOmega(0.0f);
+                if (moment) {
+                    worldOmega = openvdb::Vec3f(moment->worldDirections[d]);
+                    const openvdb::Vec3f* b = &(*moment->sourceAnisotropy)[n * kPaddedVoxels];
+                    for (int q = 0; q < kPaddedVoxels; ++q) scratch.toward[std::size_t(q)] = j[q] * std::max(0.0f, 1.0f + b[q].dot(worldOmega));
+                    j = scratch.toward.data();
                 }
-                if (!deep) {
-                    dIn = 0.0f;
-                    for (int i = 0; i < 4; ++i) dIn += wt[i] * distance[p + off[i]];
-                }
-                if (uniform) stIn = st[p];
-                // The step's part inside the surface (signed distance linear along it):
-                // all of it, none, or the part next to the end inside, whose σt and J
-                // then hold over that part.
-                const InsidePart part = deep ? InsidePart{} : insidePart(dIn, distance[p]);
-                const double inside = part.fraction;
-                openvdb::Vec3f sigmaStart = stIn, sigmaEnd = st[p], jStart = jIn, jEnd = j[p];
-                if (part.endOutside) {
-                    sigmaEnd = stIn;
-                    jEnd = jIn;
-                } else if (part.startOutside) {
-                    sigmaStart = st[p];
-                    jStart = j[p];
-                }
-                openvdb::Vec3f result = psiIn;
-                if (inside > 0.0) {
-                    const double h = len * inside;
-                    for (int ch = 0; ch < 3; ++ch) {
-                        const double sa = sigmaStart[ch], sb = sigmaEnd[ch];
-                        // No extinction, or the common case inside, σt the same at both ends (S linear
-                        // is J linear, no division).
-                        if ((sa <= 0.0 && sb <= 0.0) || sa == sb) {
-                            result[ch] = uniformStep(psiIn[ch], jStart[ch], jEnd[ch], std::max(sa, sb), h, uw[ch]);
-                            continue;
-                        }
-                        // dψ/dτ = −ψ + S with the source function S = J/σt linear in the
-                        // optical depth τ = ½(σa + σb)·h: ψ = e^{−τ}ψ_in + τ(in·S_a + own·S_b),
-                        // exact for those, and S_b where the step is optically thick (the
-                        // local equilibrium J/σt, whatever σt does along the step). An end
-                        // without medium (σt = 0) takes the other end's S.
-                        double Sa = sa > 0.0 ? double(jStart[ch]) / sa : 0.0, Sb = sb > 0.0 ? double(jEnd[ch]) / sb : 0.0;
-                        if (sa <= 0.0) Sa = Sb;
-                        if (sb <= 0.0) Sb = Sa;
-                        const double tau = 0.5 * (sa + sb) * h;
-                        const StepWeights sw = stepWeights(tau);
-                        result[ch] = float(sw.transmittance * psiIn[ch] + tau * (sw.in * Sa + sw.own * Sb));
-                    }
-                }
-                buffer[p] = result;
-                out[v] = result;
-                phi[v] += w * result;
-                if (fluxHere) fluxHere[v] += (w * (result[0] + result[1] + result[2]) / 3.0f) * worldOmega;
-                const std::int32_t s = skinIndex ? skinIndex[v] : -1;
-                if (s >= 0) {
-                    // On from the centre to the surface along ω, if ω leaves it.
-                    const Skin& sk = mSkin[std::size_t(s)];
-                    const double cosine = double(sk.normal.dot(openvdb::Vec3f(omega)));
-                    if (cosine > 0.0) {
-                        const double path = double(sk.depth) / std::max(cosine, 0.05);
-                        openvdb::Vec3f onSurface;
-                        for (int ch = 0; ch < 3; ++ch) {
-                            const double sigma = st[p][ch], tau = sigma * path;
-                            onSurface[ch] = sigma > 0.0 ? float(result[ch] * std::exp(-tau) - double(j[p][ch]) / sigma * std::expm1(-tau))
-                                                        : float(result[ch] + double(j[p][ch]) * path);
-                        }
-                        (*skinFluence)[std::size_t(s)] += w * onSurface;
-                    }
-                }
+                sweepLeaf(n, omega, upwindVoxels(octant, dominantAxis(omega)).data(), j, buffer, w, &fluence[n * kLeafVoxels],
+                    flux ? &(*flux)[n * kLeafVoxels] : nullptr, worldOmega, skins ? skinFluence : nullptr);
+                openvdb::Vec3f* leafFaces = &faces[(slot * leaves + n) * kFaceVoxels];
+                for (int k = 0; k < kFaceVoxels; ++k) leafFaces[k] = buffer[downwind[std::size_t(k)]];
             }
         });
-        if (interrupter && interrupter->wasInterrupted(int(100 * (d + 1) / directions.size()))) throw Interrupted();
+        swept += batch.size();
+        if (interrupter && interrupter->wasInterrupted(int(100 * swept / directions.size()))) throw Interrupted();
+    }
+}
+
+void SweepLattice::sweepLeaf(std::size_t n, const openvdb::Vec3d& omega, const UpwindVoxel* voxels, const openvdb::Vec3f* j,
+    openvdb::Vec3f* buffer, float w, openvdb::Vec3f* phi, openvdb::Vec3f* fluxHere, const openvdb::Vec3f& worldOmega,
+    std::vector<openvdb::Vec3f>* skinFluence) const
+{
+    const Characteristic path = characteristic(omega);
+    const float* wt = path.weight;
+    const int* off = path.offset;
+    const double len = mVoxelSize * path.length;
+    const openvdb::Vec3f* st = &mSigmaT[n * kPaddedVoxels];
+    const float* distance = &mDistance[n * kPaddedVoxels];
+    // Per channel, the last step's weights (uniformWeights).
+    UniformWeights uw[3];
+    if (mUniform[n]) {
+        // The short path of a deep leaf of one σt (about half the thick bunny's leaves at dim
+        // 256): what the general path below computes there (every step whole, σt the same at
+        // both ends, no skin), to the bit, without its tests, the step's weights once a leaf.
+        const openvdb::Vec3f sigmaT = st[0]; // the leaf's one σt: its padded block is not streamed
+        for (int ch = 0; ch < 3; ++ch) uniformWeights(sigmaT[ch], len, uw[ch]);
+        const openvdb::Vec3f transmittance(uw[0].transmittance, uw[1].transmittance, uw[2].transmittance),
+            in(uw[0].in, uw[1].in, uw[2].in), own(uw[0].own, uw[1].own, uw[2].own);
+        for (int k = 0; k < kLeafVoxels; ++k) {
+            const int p = voxels[k].padded, v = voxels[k].local;
+            openvdb::Vec3f psiIn(0.0f), jIn(0.0f);
+            for (int i = 0; i < 4; ++i) {
+                psiIn += wt[i] * buffer[p + off[i]];
+                jIn += wt[i] * j[p + off[i]];
+            }
+            openvdb::Vec3f result;
+            for (int ch = 0; ch < 3; ++ch) result[ch] = transmittance[ch] * psiIn[ch] + in[ch] * jIn[ch] + own[ch] * j[p][ch];
+            buffer[p] = result;
+            phi[v] += w * result;
+            if (fluxHere) fluxHere[v] += (w * (result[0] + result[1] + result[2]) / 3.0f) * worldOmega;
+        }
+        return;
+    }
+    const bool deep = mDeep[n] != 0; // no surface within reach: every step whole, no skin
+    const std::int32_t* skinIndex = skinFluence && !deep ? &mSkinIndex[n * kLeafVoxels] : nullptr;
+    for (int k = 0; k < kLeafVoxels; ++k) {
+        const int p = voxels[k].padded, v = voxels[k].local;
+        openvdb::Vec3f psiIn(0.0f), jIn(0.0f), stIn(0.0f);
+        float dIn = -1.0f;
+        bool uniform = true; // σt the same upwind as here: then exactly so, and the step's weights repeat
+        for (int i = 0; i < 4; ++i) {
+            psiIn += wt[i] * buffer[p + off[i]];
+            jIn += wt[i] * j[p + off[i]];
+            stIn += wt[i] * st[p + off[i]];
+            uniform = uniform && st[p + off[i]] == st[p];
+        }
+        if (!deep) {
+            dIn = 0.0f;
+            for (int i = 0; i < 4; ++i) dIn += wt[i] * distance[p + off[i]];
+        }
+        if (uniform) stIn = st[p];
+        // The step's part inside the surface (signed distance linear along it):
+        // all of it, none, or the part next to the end inside, whose σt and J
+        // then hold over that part.
+        const InsidePart part = deep ? InsidePart{} : insidePart(dIn, distance[p]);
+        const double inside = part.fraction;
+        openvdb::Vec3f sigmaStart = stIn, sigmaEnd = st[p], jStart = jIn, jEnd = j[p];
+        if (part.endOutside) {
+            sigmaEnd = stIn;
+            jEnd = jIn;
+        } else if (part.startOutside) {
+            sigmaStart = st[p];
+            jStart = j[p];
+        }
+        openvdb::Vec3f result = psiIn;
+        if (inside > 0.0) {
+            const double h = len * inside;
+            for (int ch = 0; ch < 3; ++ch) {
+                const double sa = sigmaStart[ch], sb = sigmaEnd[ch];
+                // No extinction, or the common case inside, σt the same at both ends (S linear
+                // is J linear, no division).
+                if ((sa <= 0.0 && sb <= 0.0) || sa == sb) {
+                    result[ch] = uniformStep(psiIn[ch], jStart[ch], jEnd[ch], std::max(sa, sb), h, uw[ch]);
+                    continue;
+                }
+                // dψ/dτ = −ψ + S with the source function S = J/σt linear in the
+                // optical depth τ = ½(σa + σb)·h: ψ = e^{−τ}ψ_in + τ(in·S_a + own·S_b),
+                // exact for those, and S_b where the step is optically thick (the
+                // local equilibrium J/σt, whatever σt does along the step). An end
+                // without medium (σt = 0) takes the other end's S.
+                double Sa = sa > 0.0 ? double(jStart[ch]) / sa : 0.0, Sb = sb > 0.0 ? double(jEnd[ch]) / sb : 0.0;
+                if (sa <= 0.0) Sa = Sb;
+                if (sb <= 0.0) Sb = Sa;
+                const double tau = 0.5 * (sa + sb) * h;
+                const StepWeights sw = stepWeights(tau);
+                result[ch] = float(sw.transmittance * psiIn[ch] + tau * (sw.in * Sa + sw.own * Sb));
+            }
+        }
+        buffer[p] = result;
+        phi[v] += w * result;
+        if (fluxHere) fluxHere[v] += (w * (result[0] + result[1] + result[2]) / 3.0f) * worldOmega;
+        const std::int32_t s = skinIndex ? skinIndex[v] : -1;
+        if (s >= 0) {
+            // On from the centre to the surface along ω, if ω leaves it.
+            const Skin& sk = mSkin[std::size_t(s)];
+            const double cosine = double(sk.normal.dot(openvdb::Vec3f(omega)));
+            if (cosine > 0.0) {
+                const double path = double(sk.depth) / std::max(cosine, 0.05);
+                openvdb::Vec3f onSurface;
+                for (int ch = 0; ch < 3; ++ch) {
+                    const double sigma = st[p][ch], tau = sigma * path;
+                    onSurface[ch] = sigma > 0.0 ? float(result[ch] * std::exp(-tau) - double(j[p][ch]) / sigma * std::expm1(-tau))
+                                                : float(result[ch] + double(j[p][ch]) * path);
+                }
+                (*skinFluence)[std::size_t(s)] += w * onSurface;
+            }
+        }
     }
 }
 

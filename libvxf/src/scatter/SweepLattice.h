@@ -37,6 +37,15 @@ class SweepLattice
 {
 public:
     static constexpr int kLeafVoxels = 512, kPaddedVoxels = 1000;
+    /// Voxels of a leaf's three downwind faces (64 each) along an octant: what a sweep keeps of a leaf.
+    static constexpr int kFaceVoxels = 192;
+    /// At most this many directions of one octant sweep a leaf in turn (sweep), keeping
+    /// kFaceVoxels values per leaf and direction. The thick bunny, 16 directions, 2 cores: a
+    /// voxel per direction at a time, the whole ψ kept, 25-30 ns per voxel and direction at dim
+    /// 256 (26-27 at 128); a leaf at a time across the dominant axis, 22-24 at 128; batches and
+    /// faces, 17-20 at 256 and 19 at 128 (interleaved runs; single runs here spread ±20%).
+    /// Batches of 4 were no faster at 16 directions and took 40 MiB more at dim 256.
+    static constexpr std::size_t kSweepBatch = 2;
 
     /// The lattice over @a medium's active density and @a topology's active values.
     SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topology);
@@ -171,9 +180,8 @@ private:
     /// layer by layer across axis @a major (0…2) and in each layer the next axis, then the third:
     /// every voxel after the voxels it reads. With @a major the direction's dominant axis, whose
     /// previous layer a short characteristic reads, the 64 voxels of a layer depend on none of
-    /// each other, and the processor overlaps them: the thick bunny's sweeps at dim 128 took 27
-    /// ns per voxel and direction in x-y-z order for every direction (a third of the directions
-    /// then waiting on the voxel just before), X ns so (interleaved runs).
+    /// each other, and the processor overlaps them (in x-y-z order for every direction, a third
+    /// of the directions waited on the voxel just before).
     static const std::array<UpwindVoxel, kLeafVoxels>& upwindVoxels(int octant, int major);
 
     /// The leaves in upwind order along @a omega's octant (a wavefront's leaves in parallel),
@@ -185,6 +193,16 @@ private:
     template <typename Visit>
     void inUpwindOrder(const openvdb::Vec3d& omega, const std::vector<openvdb::Vec3f>& values, const Visit& visit,
         const EnteringDepth& outside = {}) const;
+    /// visit(leaf) for the leaves in upwind order along @a octant, a wavefront's in parallel.
+    template <typename Visit>
+    void leavesInUpwindOrder(int octant, const Visit& visit) const;
+    /// One leaf of a transport sweep along @a omega (sweep): its voxels in the order @a voxels,
+    /// the upwind ghosts already in @a buffer (padded), the source @a j (padded, the leaf's);
+    /// each voxel's ψ into @a buffer, @a weight·ψ added to @a phi (the leaf's, per voxel) and, with
+    /// @a flux, @a weight·grey(ψ)·@a worldOmega to it; with @a skinFluence, the skin's too.
+    void sweepLeaf(std::size_t leaf, const openvdb::Vec3d& omega, const UpwindVoxel* voxels, const openvdb::Vec3f* j,
+        openvdb::Vec3f* buffer, float weight, openvdb::Vec3f* phi, openvdb::Vec3f* flux, const openvdb::Vec3f& worldOmega,
+        std::vector<openvdb::Vec3f>* skinFluence) const;
 
     double mVoxelSize = 1.0;
     std::vector<openvdb::Coord> mOrigins;
