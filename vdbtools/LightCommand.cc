@@ -32,7 +32,8 @@ public:
         mApp->add_flag("--march", mMarch,
             "Every light by a march per voxel and sample (the reference; slow). By default directional and environment lights "
             "take their transmittance from one optical-depth sweep over the medium per direction (the surface's rim is marched "
-            "only along directions that graze it, and point, spot and area lights are marched either way)");
+            "only along directions that graze it); point and spot lights from one sweep around the light, the voxels within "
+            "3 of the surface marched; area lights are marched either way");
         mApp->add_flag("--half", mWrite.half, "Store floats as 16-bit halves");
         mApp->add_flag("-q,--quiet", mQuiet, "No summary");
     }

@@ -241,6 +241,135 @@ std::vector<openvdb::Vec3f> sweepLight(const LightSampler& light, const detail::
     return phi;
 }
 
+/// Whether sweepPointLight handles @a light: one point whose light every voxel sees along its
+/// own ray (point and spot lights; an area light's samples are many points).
+bool sweepableFromPoint(const Light& light)
+{
+    return light.type == Light::Type::Point || light.type == Light::Type::Spot;
+}
+
+/// A point light's voxels within this many voxels of the surface (either side) are marched to
+/// the light (handing off to the sweep's depth once 2 voxels from the surface, kRimHandOff),
+/// the others swept (SweepLattice::opticalDepthFrom), their depth blended from voxels nearer the
+/// light. Near the surface the light falls steeply, and in a thick medium almost all of it is
+/// there: the thick bunny at dim 64 came out 6.1% off the reference swept whole, 3.9% marched.
+constexpr double kPointMarchedBand = 3.0;
+
+/// A march from a point light's band voxel that has left the medium hands off to the depths of
+/// marched voxels only where their eight spread over at most this: across a shadow's edge
+/// (another part of the medium between the light and some of them) it marches on.
+constexpr float kVacuumSpread = 0.05f;
+
+/// The fluence of a point or spot light at every voxel of @a lattice (per voxel), at its
+/// medium point (Medium::Sampler::mediumPoint), as lightFluence gives it, the transmittance from
+/// one optical-depth sweep around the light (SweepLattice::opticalDepthFrom): voxels within
+/// kPointMarchedBand of the surface, and those the sweep cannot blend, marched to the light,
+/// handing the rest of the way to the sweep kRimHandOff voxels from the surface; the rim marched
+/// from its medium point the same way. Without a surface (a density grid's medium) every voxel
+/// the sweep can blend is swept. With @a flux, also the light's grey first moment per voxel.
+std::vector<openvdb::Vec3f> sweepPointLight(const LightSampler& light, const detail::SweepLattice& lattice,
+    const Medium& medium, const Rim& rim, const DirectLightOptions& options, std::vector<openvdb::Vec3f>* flux)
+{
+    using detail::SweepLattice;
+    const openvdb::math::Transform& xform = medium.transform();
+    const double tauCutoff = -std::log(std::max(options.march.cutoff, std::numeric_limits<double>::min()));
+    const float blocked = float(std::max(2.0 * tauCutoff, 50.0)); // a march stopped at the cutoff: beyond it
+    const bool surface = medium.surface() != nullptr;
+    tbb::enumerable_thread_specific<Medium::Sampler> samplers([&] {
+        Medium::Sampler sampler(medium);
+        sampler.snapCrossingsTo(options.boundary);
+        return sampler;
+    });
+    const openvdb::Vec3d lightIjk = xform.worldToIndex(light.light().position);
+    // How far (index units) the segment from @a fromIjk to the light runs before it meets one of
+    // the medium's meshes: +∞ when it meets none (then it crosses no medium), −1 without meshes.
+    const auto clearRun = [&](const openvdb::Vec3d& fromIjk) {
+        if (!options.boundary) return -1.0;
+        const openvdb::Vec3d world = xform.indexToWorld(fromIjk);
+        const openvdb::Vec3d toLight = light.light().position - world;
+        const double length = toLight.length();
+        const auto hit = length > 0.0 ? options.boundary->intersect(world, toLight / length, 0.0, length) : std::nullopt;
+        if (!hit) return std::numeric_limits<double>::infinity();
+        return (xform.worldToIndex(world + toLight * (hit->distance / length)) - fromIjk).length();
+    };
+    // τ from @a from to the light, marched until kRimHandOff voxels from the surface and read
+    // from what @a swept holds there on: inside the medium whatever it holds, outside only the
+    // depths of marched voxels (or zeros) that agree to kVacuumSpread. The sweep smears the
+    // shadows other parts of the medium cast across vacuum (τ is constant along a ray there, and
+    // a blend of upwind depths widens its edges a little at every step); read from blended
+    // voxels, a march that left the bunny near a silhouette at dim 256 came out 20-fold dark.
+    const auto marchedDepth = [&](const openvdb::Vec3d& from, const SweepLattice::SweptSoFar& swept) {
+        bool askedMeshes = false;
+        const openvdb::Vec3d t = transmittance(samplers.local(), medium, from, lightIjk, options.march,
+            [&](const openvdb::Vec3d& at, double distance, openvdb::Vec3f& depth) {
+                if (!surface) return swept.sample(at, depth);
+                if (std::abs(distance) < kRimHandOff) return false;
+                if (distance < 0.0) return swept.sample(at, depth);
+                if (swept.sample(at, depth, true, kVacuumSpread)) return true;
+                // Outside, where the sweep holds nothing to read (beyond the lattice, or across a
+                // shadow's edge): the meshes say whether any medium lies ahead, once a march.
+                if (askedMeshes) return false;
+                askedMeshes = true;
+                if (clearRun(at) < std::numeric_limits<double>::infinity()) return false;
+                depth = openvdb::Vec3f(0.0f);
+                return true;
+            });
+        openvdb::Vec3f depth;
+        for (int c = 0; c < 3; ++c) depth[c] = t[c] > 0.0 ? float(-std::log(t[c])) : blocked;
+        return depth;
+    };
+    std::vector<openvdb::Vec3f> tau;
+    std::vector<std::uint8_t> state;
+    lattice.opticalDepthFrom(lightIjk, tau, state,
+        [&](const openvdb::Coord& ijk, float distance, bool mustMarch, const SweepLattice::SweptSoFar& swept, openvdb::Vec3f& depth) {
+            const bool band = surface && std::abs(distance) < kPointMarchedBand;
+            if (!mustMarch && !band) return false;
+            openvdb::Vec3d from = ijk.asVec3d();
+            if (!band && distance > 0.0f) {
+                // Light reaching the lattice across vacuum (no leaf upwind): it crossed no medium
+                // before the first mesh toward the light, and is marched from two voxels before it.
+                const double run = clearRun(from);
+                if (run == std::numeric_limits<double>::infinity()) {
+                    depth = openvdb::Vec3f(0.0f);
+                    return true;
+                }
+                if (run > 2.0) from += (lightIjk - from).unit() * (run - 2.0);
+            }
+            depth = marchedDepth(from, swept);
+            return true;
+        });
+    const SweepLattice::SweptSoFar done(lattice, tau, &state);
+
+    const double minDistance = 0.5 * medium.voxelSize();
+    std::vector<openvdb::Vec3f> phi(lattice.voxelCount(), openvdb::Vec3f(0.0f));
+    if (flux) flux->assign(lattice.voxelCount(), openvdb::Vec3f(0.0f));
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lattice.leafCount()), [&](const tbb::blocked_range<std::size_t>& r) {
+        std::vector<LightSample> samples;
+        for (std::size_t n = r.begin(); n != r.end(); ++n) {
+            for (int v = 0; v < SweepLattice::kLeafVoxels; ++v) {
+                const std::size_t i = n * SweepLattice::kLeafVoxels + std::size_t(v);
+                const openvdb::Coord ijk = lattice.origin(n).offsetBy(v >> 6, (v >> 3) & 7, v & 7);
+                const std::int32_t e = rim.entry[i];
+                const openvdb::Vec3d point = e >= 0 ? rim.points[std::size_t(e)] : ijk.asVec3d();
+                const openvdb::Vec3f depth = e >= 0 ? marchedDepth(point, done) : tau[i];
+                if (std::min({depth[0], depth[1], depth[2]}) > tauCutoff) continue; // a march stops there
+                const openvdb::Vec3d t(std::exp(-double(depth[0])), std::exp(-double(depth[1])), std::exp(-double(depth[2])));
+                const openvdb::Vec3d xWorld = xform.indexToWorld(point);
+                light.sample(xWorld, coordKey(ijk), minDistance, samples);
+                for (const LightSample& s : samples) {
+                    if (options.occluders && options.occluders->occluded(xWorld, s.direction, 1e-4 * medium.voxelSize(), s.distance)) {
+                        continue;
+                    }
+                    const openvdb::Vec3d f = s.fluence * t;
+                    phi[i] += openvdb::Vec3f(f);
+                    if (flux) (*flux)[i] -= openvdb::Vec3f(greyOf(f) * s.direction);
+                }
+            }
+        }
+    });
+    return phi;
+}
+
 } // namespace
 
 DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const std::vector<Light>& lights,
@@ -324,12 +453,15 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
     Rim rim;
     if (options.sweep) {
         for (std::size_t l = 0; l < active.size(); ++l) {
-            if (!sweepable(active[l].light())) continue;
+            const bool fromPoint = sweepableFromPoint(active[l].light());
+            if (!sweepable(active[l].light()) && !fromPoint) continue;
             if (!lattice) {
                 lattice.emplace(medium, *direct);
                 rim = rimOf(*lattice, medium);
             }
-            swept[l] = sweepLight(active[l], *lattice, medium, rim, options, anisotropic ? &sweptFlux[l] : nullptr);
+            std::vector<openvdb::Vec3f>* flux = anisotropic ? &sweptFlux[l] : nullptr;
+            swept[l] = fromPoint ? sweepPointLight(active[l], *lattice, medium, rim, options, flux)
+                                 : sweepLight(active[l], *lattice, medium, rim, options, flux);
             checkInterrupt(interrupter);
         }
     }

@@ -108,6 +108,15 @@ openvdb::Vec3d transmittance(Medium::Sampler& sampler, const Medium& medium, con
     return march(sampler, medium, fromIjk, d / length, 0.0, length, options);
 }
 
+openvdb::Vec3d transmittance(Medium::Sampler& sampler, const Medium& medium, const openvdb::Vec3d& fromIjk,
+    const openvdb::Vec3d& toIjk, const MarchOptions& options, const MarchHandOff& handOff)
+{
+    const openvdb::Vec3d d = toIjk - fromIjk;
+    const double length = d.length();
+    if (!(length > 0.0)) return openvdb::Vec3d(1.0);
+    return march(sampler, medium, fromIjk, d / length, 0.0, length, options, handOff ? &handOff : nullptr);
+}
+
 openvdb::Vec3d transmittanceToBoundary(Medium::Sampler& sampler, const Medium& medium, const openvdb::Vec3d& fromIjk,
     const openvdb::Vec3d& direction, const MarchOptions& options)
 {

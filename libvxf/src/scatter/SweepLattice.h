@@ -8,6 +8,7 @@
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Interpolation.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <functional>
@@ -130,6 +131,32 @@ public:
     using EnteringDepth = std::function<openvdb::Vec3f(const openvdb::Coord&, const SweptSoFar&)>;
     void opticalDepthAlong(const openvdb::Vec3d& direction, std::vector<openvdb::Vec3f>& tau,
         const EnteringDepth& entering = {}) const;
+
+    /// Optical depth τ from a point light at @a point (index space) to every voxel centre (per
+    /// voxel), by one upwind sweep per octant around it (octant by octant, bit a set for voxels
+    /// below the point along axis a): a voxel's τ is the blend of its four upwind voxels' at the
+    /// crossing of its own short characteristic (the ray from the point, a direction per voxel)
+    /// with the previous layer of centres, plus the step's own, as in opticalDepthAlong (the
+    /// surface's kink continued the same way). The result does not depend on the thread count.
+    ///
+    /// Each voxel is first offered to @a marched(ijk, signedDistance, mustMarch, swept, depth):
+    /// true with @a depth τ from the point to the voxel's centre takes that instead (e.g. a march,
+    /// for voxels near the surface, where a blend of upwind depths smears the light's steep
+    /// fall). With mustMarch the sweep has nothing to blend and @a marched must give the depth:
+    /// voxels within a voxel of the point (no upwind layer), and voxels with an upwind voxel in
+    /// no leaf (light across vacuum) or across one of the point's planes in an octant not swept
+    /// yet. @a swept reads what is final so far (SweptSoFar), e.g. for a march that hands off.
+    /// @a state (per voxel): kMarched where @a marched gave the depth, kBlended where the sweep
+    /// did (SweptSoFar::sample reads only marched ones where asked).
+    using MarchedDepth = std::function<bool(const openvdb::Coord& ijk, float signedDistance, bool mustMarch,
+        const SweptSoFar& swept, openvdb::Vec3f& depth)>;
+    void opticalDepthFrom(const openvdb::Vec3d& point, std::vector<openvdb::Vec3f>& tau, std::vector<std::uint8_t>& state,
+        const MarchedDepth& marched) const;
+    /// opticalDepthFrom's states of a voxel: not yet swept, blended from upwind, marched.
+    static constexpr std::uint8_t kPending = 0, kBlended = 1, kMarched = 2;
+    /// The octant around @a point voxel @a ijk lies in (bit a set: ijk[a] < point[a]).
+    static int octantAround(const openvdb::Coord& ijk, const openvdb::Vec3d& point);
+
     /// The per-voxel index of voxel @a ijk, or −1 when no leaf of the lattice holds it.
     std::int64_t indexOf(const openvdb::Coord& ijk) const
     {
@@ -196,6 +223,11 @@ private:
     /// visit(leaf) for the leaves in upwind order along @a octant, a wavefront's in parallel.
     template <typename Visit>
     void leavesInUpwindOrder(int octant, const Visit& visit) const;
+    /// τ at voxel @a p (padded index in leaf @a leaf) from its four upwind voxels' @a tauUpwind
+    /// (bilinear @a weight at padded @a offset, the step @a length voxels along unit @a omega):
+    /// the step of opticalDepthAlong and opticalDepthFrom.
+    openvdb::Vec3f depthStep(std::size_t leaf, int p, const openvdb::Vec3d& omega, const float (&weight)[4],
+        const int (&offset)[4], double length, const openvdb::Vec3f (&tauUpwind)[4]) const;
     /// One leaf of a transport sweep along @a omega (sweep): its voxels in the order @a voxels,
     /// the upwind ghosts already in @a buffer (padded), the source @a j (padded, the leaf's);
     /// each voxel's ψ into @a buffer, @a weight·ψ added to @a phi (the leaf's, per voxel) and, with
@@ -228,9 +260,10 @@ private:
     std::vector<std::int32_t> mSkinIndex; ///< per voxel, its entry in mSkin or −1
 };
 
-/// What a sweep in progress has finished, as an EnteringDepth sees it while a leaf is swept:
-/// the values of the leaves of earlier wavefronts, final whatever the thread count (later
-/// ones, the current wavefront's included, may be half done and are never read).
+/// What a sweep in progress has finished, as an EnteringDepth or MarchedDepth sees it while a
+/// leaf is swept: the values of the leaves of earlier wavefronts (and, around a point, of the
+/// octants swept before), final whatever the thread count (later ones, the current
+/// wavefront's included, may be half done and are never read).
 class SweepLattice::SweptSoFar
 {
 public:
@@ -238,27 +271,60 @@ public:
         : mLattice(lattice), mValues(values), mOctant(octant), mKey(key)
     {
     }
-    /// A finished sweep's @a values (per voxel): every leaf.
-    SweptSoFar(const SweepLattice& lattice, const std::vector<openvdb::Vec3f>& values)
-        : mLattice(lattice), mValues(values), mOctant(0), mKey(std::numeric_limits<long long>::max())
+    /// A sweep around @a point (opticalDepthFrom) in @a octant while it sweeps @a leaf (at
+    /// wavefront @a key), the voxels' @a state: the leaf's own voxels swept so far are final too
+    /// (one thread writes them, in an order that takes every voxel after those upwind of it).
+    SweptSoFar(const SweepLattice& lattice, const std::vector<openvdb::Vec3f>& values, int octant, std::size_t leaf,
+        long long key, const openvdb::Vec3d& point, const std::vector<std::uint8_t>* state)
+        : mLattice(lattice), mValues(values), mOctant(octant), mKey(key), mAroundPoint(true), mLeaf(leaf), mPoint(point)
+        , mState(state)
+    {
+    }
+    /// A finished sweep's @a values (per voxel): every leaf; with @a state, opticalDepthFrom's.
+    SweptSoFar(const SweepLattice& lattice, const std::vector<openvdb::Vec3f>& values,
+        const std::vector<std::uint8_t>* state = nullptr)
+        : mLattice(lattice), mValues(values), mOctant(0), mKey(std::numeric_limits<long long>::max()), mState(state)
     {
     }
 
     /// Trilinear interpolation of the swept values at index-space point @a ijk (voxel centres at
     /// integer coordinates); false (@a value untouched) where one of the eight voxels it reads
-    /// lies in no leaf or in a leaf not yet finished.
-    bool sample(const openvdb::Vec3d& ijk, openvdb::Vec3f& value) const
+    /// lies in no leaf or is not final yet, or with @a marchedOnly, was neither marched nor 0
+    /// (opticalDepthFrom's blends of zeros are exactly 0), or where the eight values spread over
+    /// more than @a maxSpread (any channel).
+    bool sample(const openvdb::Vec3d& ijk, openvdb::Vec3f& value, bool marchedOnly = false,
+        float maxSpread = std::numeric_limits<float>::infinity()) const
     {
         const openvdb::Coord base = openvdb::Coord::floor(ijk);
         openvdb::Vec3f corner[2][2][2];
         for (int i = 0; i < 2; ++i) {
             for (int j = 0; j < 2; ++j) {
                 for (int k = 0; k < 2; ++k) {
-                    const std::int64_t at = mLattice.indexOf(base.offsetBy(i, j, k));
-                    if (at < 0 || mLattice.frontKey(std::size_t(at) / kLeafVoxels, mOctant) >= mKey) return false;
+                    const openvdb::Coord c = base.offsetBy(i, j, k);
+                    const std::int64_t at = mLattice.indexOf(c);
+                    if (at < 0) return false;
+                    const std::size_t leaf = std::size_t(at) / kLeafVoxels;
+                    if (mAroundPoint && leaf == mLeaf) {
+                        if ((*mState)[std::size_t(at)] == kPending) return false;
+                    } else {
+                        const int octant = mAroundPoint ? octantAround(c, mPoint) : mOctant;
+                        if (octant > mOctant) return false;
+                        if (octant == mOctant && mLattice.frontKey(leaf, mOctant) >= mKey) return false;
+                    }
                     corner[i][j][k] = mValues[std::size_t(at)];
+                    if (marchedOnly && (!mState || (*mState)[std::size_t(at)] != kMarched) && corner[i][j][k] != openvdb::Vec3f(0.0f)) {
+                        return false;
+                    }
                 }
             }
+        }
+        if (maxSpread < std::numeric_limits<float>::infinity()) {
+            openvdb::Vec3f lo = corner[0][0][0], hi = corner[0][0][0];
+            for (int c = 1; c < 8; ++c) {
+                lo = openvdb::math::minComponent(lo, corner[c >> 2][(c >> 1) & 1][c & 1]);
+                hi = openvdb::math::maxComponent(hi, corner[c >> 2][(c >> 1) & 1][c & 1]);
+            }
+            if (std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]}) > maxSpread) return false;
         }
         value = openvdb::tools::BoxSampler::trilinearInterpolation(corner, ijk - base.asVec3d());
         return true;
@@ -269,6 +335,10 @@ private:
     const std::vector<openvdb::Vec3f>& mValues;
     int mOctant;
     long long mKey;
+    bool mAroundPoint = false;
+    std::size_t mLeaf = 0;
+    openvdb::Vec3d mPoint{0.0};
+    const std::vector<std::uint8_t>* mState = nullptr;
 };
 
 } // namespace vxf::detail

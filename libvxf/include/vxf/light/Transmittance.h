@@ -250,6 +250,10 @@ openvdb::Vec3d transmittanceToBoundary(Medium::Sampler& sampler, const Medium& m
 /// region crossed at once); true with @a depth, the optical depth from there on.
 using MarchHandOff = std::function<bool(const openvdb::Vec3d& pointIjk, double signedDistance, openvdb::Vec3f& depth)>;
 
+/// transmittance from @a fromIjk to @a toIjk, handing the rest of the way to @a handOff where it takes it.
+openvdb::Vec3d transmittance(Medium::Sampler& sampler, const Medium& medium, const openvdb::Vec3d& fromIjk,
+    const openvdb::Vec3d& toIjk, const MarchOptions& options, const MarchHandOff& handOff);
+
 /// transmittanceToBoundary, handing the rest of the way to @a handOff where it takes it.
 openvdb::Vec3d transmittanceToBoundary(Medium::Sampler& sampler, const Medium& medium, const openvdb::Vec3d& fromIjk,
     const openvdb::Vec3d& direction, const MarchOptions& options, const MarchHandOff& handOff);
