@@ -20,12 +20,20 @@
 
 namespace vxf {
 
+namespace {
+
+/// Whether none of @a occluders (may be null) blocks sample @a s seen from world point @a x.
+bool unoccluded(const RayScene* occluders, const Medium& medium, const openvdb::Vec3d& x, const LightSample& s)
+{
+    return !occluders || !occluders->occluded(x, s.direction, 1e-4 * medium.voxelSize(), s.distance);
+}
+
+} // namespace
+
 openvdb::Vec3d sampleTransmittance(const LightSample& sample, Medium::Sampler& sampler, const Medium& medium,
     const openvdb::Vec3d& xWorld, const MarchOptions& options, const RayScene* occluders)
 {
-    if (occluders && occluders->occluded(xWorld, sample.direction, 1e-4 * medium.voxelSize(), sample.distance)) {
-        return openvdb::Vec3d(0.0);
-    }
+    if (!unoccluded(occluders, medium, xWorld, sample)) return openvdb::Vec3d(0.0);
     const openvdb::math::Transform& xform = medium.transform();
     const openvdb::Vec3d xIjk = xform.worldToIndex(xWorld);
     if (std::isfinite(sample.distance)) {
@@ -129,6 +137,40 @@ constexpr double kSweptReadBack = 4.0, kSweptReadOff = 1.0;
 /// light within 0.58% (L1) of the whole marches at 2 voxels, 1.1% at 1; 21.3 → 18.9 s (17.6 s at 1).
 constexpr double kRimHandOff = 2.0;
 
+/// Optical depths in place of a march's transmittance, and back: a march stops (T = 0) where
+/// every channel's depth passes the cutoff's, which a depth then stands for by `blocked`.
+struct MarchedDepths
+{
+    explicit MarchedDepths(const MarchOptions& march)
+        : cutoff(-std::log(std::max(march.cutoff, std::numeric_limits<double>::min())))
+        , blocked(float(std::max(2.0 * cutoff, 50.0)))
+    {
+    }
+    /// The optical depth of a march's transmittance @a t (a march stopped at the cutoff: beyond it).
+    openvdb::Vec3f depthOf(const openvdb::Vec3d& t) const
+    {
+        openvdb::Vec3f depth;
+        for (int c = 0; c < 3; ++c) depth[c] = t[c] > 0.0 ? float(-std::log(t[c])) : blocked;
+        return depth;
+    }
+    /// The transmittance of optical depth @a tau, 0 where a march would have stopped.
+    openvdb::Vec3d transmittanceOf(const openvdb::Vec3f& tau) const
+    {
+        if (std::min({tau[0], tau[1], tau[2]}) > cutoff) return openvdb::Vec3d(0.0);
+        return openvdb::Vec3d(std::exp(-double(tau[0])), std::exp(-double(tau[1])), std::exp(-double(tau[2])));
+    }
+    double cutoff;
+    float blocked;
+};
+
+/// A sampler of @a medium whose marches take the surface's crossings on options.boundary.
+Medium::Sampler lightStageSampler(const Medium& medium, const DirectLightOptions& options)
+{
+    Medium::Sampler sampler(medium);
+    sampler.snapCrossingsTo(options.boundary);
+    return sampler;
+}
+
 /// Whether sweepLight handles @a light (the others are marched voxel by voxel).
 bool sweepable(const Light& light)
 {
@@ -148,14 +190,9 @@ std::vector<openvdb::Vec3f> sweepLight(const LightSampler& light, const detail::
 {
     const openvdb::math::Transform& xform = medium.transform();
     const std::size_t count = lattice.voxelCount();
-    const double tauCutoff = -std::log(std::max(options.march.cutoff, std::numeric_limits<double>::min()));
-    const float blocked = float(std::max(2.0 * tauCutoff, 50.0)); // a march stopped at the cutoff: beyond it
+    const MarchedDepths depths(options.march);
     // One sampler per thread for the entering depths' marches (a sampler registers accessors).
-    tbb::enumerable_thread_specific<Medium::Sampler> samplers([&] {
-        Medium::Sampler sampler(medium);
-        sampler.snapCrossingsTo(options.boundary);
-        return sampler;
-    });
+    tbb::enumerable_thread_specific<Medium::Sampler> samplers([&] { return lightStageSampler(medium, options); });
     const double minDistance = 0.5 * medium.voxelSize();
     std::vector<openvdb::Vec3f> phi(count, openvdb::Vec3f(0.0f)), tau;
     if (flux) flux->assign(count, openvdb::Vec3f(0.0f));
@@ -163,13 +200,6 @@ std::vector<openvdb::Vec3f> sweepLight(const LightSampler& light, const detail::
         const openvdb::Coord& o = lattice.origin(i / detail::SweepLattice::kLeafVoxels);
         const int v = int(i % detail::SweepLattice::kLeafVoxels);
         return xform.indexToWorld(o.offsetBy(v >> 6, (v >> 3) & 7, v & 7));
-    };
-    const auto transmittanceOf = [&](const openvdb::Vec3f& t) {
-        if (std::min({t[0], t[1], t[2]}) > tauCutoff) return openvdb::Vec3d(0.0);
-        return openvdb::Vec3d(std::exp(-double(t[0])), std::exp(-double(t[1])), std::exp(-double(t[2])));
-    };
-    const auto visible = [&](const openvdb::Vec3d& x, const LightSample& s) {
-        return !options.occluders || !options.occluders->occluded(x, s.direction, 1e-4 * medium.voxelSize(), s.distance);
     };
     const openvdb::Vec3d anywhere = xform.indexToWorld(medium.activeBounds().getCenter());
 
@@ -203,16 +233,13 @@ std::vector<openvdb::Vec3f> sweepLight(const LightSampler& light, const detail::
                 const double ahead = distance - 2.0;
                 if (ahead > 0.0) from -= travel * ahead;
             }
-            const openvdb::Vec3d t = transmittanceToBoundary(samplers.local(), medium, from, -travel, options.march);
-            openvdb::Vec3f depth;
-            for (int c = 0; c < 3; ++c) depth[c] = t[c] > 0.0 ? float(-std::log(t[c])) : blocked;
-            return depth;
+            return depths.depthOf(transmittanceToBoundary(samplers.local(), medium, from, -travel, options.march));
         });
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
             for (std::size_t i = r.begin(); i != r.end(); ++i) {
                 if (rim.entry[i] >= 0 && rim.grazing(rim.entry[i], -travel)) continue;
-                const openvdb::Vec3d t = transmittanceOf(tau[i]);
-                if (t != openvdb::Vec3d(0.0) && visible(worldOf(i), s)) {
+                const openvdb::Vec3d t = depths.transmittanceOf(tau[i]);
+                if (t != openvdb::Vec3d(0.0) && unoccluded(options.occluders, medium, worldOf(i), s)) {
                     phi[i] += openvdb::Vec3f(s.fluence * t);
                     if (flux) (*flux)[i] -= openvdb::Vec3f(greyOf(s.fluence * t) * s.direction);
                 }
@@ -231,7 +258,7 @@ std::vector<openvdb::Vec3f> sweepLight(const LightSampler& light, const detail::
                     [&](const openvdb::Vec3d& at, double distance, openvdb::Vec3f& depth) {
                         return std::abs(distance) >= kRimHandOff && swept.sample(at, depth);
                     });
-                if (t != openvdb::Vec3d(0.0) && visible(xform.indexToWorld(x), s)) {
+                if (t != openvdb::Vec3d(0.0) && unoccluded(options.occluders, medium, xform.indexToWorld(x), s)) {
                     phi[rim.voxels[e]] += openvdb::Vec3f(s.fluence * t);
                     if (flux) (*flux)[rim.voxels[e]] -= openvdb::Vec3f(greyOf(s.fluence * t) * s.direction);
                 }
@@ -272,14 +299,9 @@ std::vector<openvdb::Vec3f> sweepPointLight(const LightSampler& light, const det
 {
     using detail::SweepLattice;
     const openvdb::math::Transform& xform = medium.transform();
-    const double tauCutoff = -std::log(std::max(options.march.cutoff, std::numeric_limits<double>::min()));
-    const float blocked = float(std::max(2.0 * tauCutoff, 50.0)); // a march stopped at the cutoff: beyond it
+    const MarchedDepths depths(options.march);
     const bool surface = medium.surface() != nullptr;
-    tbb::enumerable_thread_specific<Medium::Sampler> samplers([&] {
-        Medium::Sampler sampler(medium);
-        sampler.snapCrossingsTo(options.boundary);
-        return sampler;
-    });
+    tbb::enumerable_thread_specific<Medium::Sampler> samplers([&] { return lightStageSampler(medium, options); });
     const openvdb::Vec3d lightIjk = xform.worldToIndex(light.light().position);
     // How far (index units) the segment from @a fromIjk to the light runs before it meets one of
     // the medium's meshes: +∞ when it meets none (then it crosses no medium), −1 without meshes.
@@ -314,9 +336,7 @@ std::vector<openvdb::Vec3f> sweepPointLight(const LightSampler& light, const det
                 depth = openvdb::Vec3f(0.0f);
                 return true;
             });
-        openvdb::Vec3f depth;
-        for (int c = 0; c < 3; ++c) depth[c] = t[c] > 0.0 ? float(-std::log(t[c])) : blocked;
-        return depth;
+        return depths.depthOf(t);
     };
     std::vector<openvdb::Vec3f> tau;
     std::vector<std::uint8_t> state;
@@ -352,14 +372,12 @@ std::vector<openvdb::Vec3f> sweepPointLight(const LightSampler& light, const det
                 const std::int32_t e = rim.entry[i];
                 const openvdb::Vec3d point = e >= 0 ? rim.points[std::size_t(e)] : ijk.asVec3d();
                 const openvdb::Vec3f depth = e >= 0 ? marchedDepth(point, done) : tau[i];
-                if (std::min({depth[0], depth[1], depth[2]}) > tauCutoff) continue; // a march stops there
-                const openvdb::Vec3d t(std::exp(-double(depth[0])), std::exp(-double(depth[1])), std::exp(-double(depth[2])));
+                const openvdb::Vec3d t = depths.transmittanceOf(depth);
+                if (t == openvdb::Vec3d(0.0)) continue;
                 const openvdb::Vec3d xWorld = xform.indexToWorld(point);
                 light.sample(xWorld, coordKey(ijk), minDistance, samples);
                 for (const LightSample& s : samples) {
-                    if (options.occluders && options.occluders->occluded(xWorld, s.direction, 1e-4 * medium.voxelSize(), s.distance)) {
-                        continue;
-                    }
+                    if (!unoccluded(options.occluders, medium, xWorld, s)) continue;
                     const openvdb::Vec3d f = s.fluence * t;
                     phi[i] += openvdb::Vec3f(f);
                     if (flux) (*flux)[i] -= openvdb::Vec3f(greyOf(f) * s.direction);
@@ -503,8 +521,7 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
     };
 
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, total, 1), [&](const tbb::blocked_range<std::size_t>& range) {
-        Medium::Sampler sampler(medium);
-        sampler.snapCrossingsTo(options.boundary);
+        Medium::Sampler sampler = lightStageSampler(medium, options);
         std::vector<VolumeEmission::Sampler> emitters(emission.begin(), emission.end());
         for (std::size_t item = range.begin(); item != range.end(); ++item) {
             if (cancelled) return;

@@ -102,10 +102,7 @@ openvdb::Vec3d march(Medium::Sampler& sampler, const Medium& medium, const openv
 openvdb::Vec3d transmittance(Medium::Sampler& sampler, const Medium& medium, const openvdb::Vec3d& fromIjk,
     const openvdb::Vec3d& toIjk, const MarchOptions& options)
 {
-    const openvdb::Vec3d d = toIjk - fromIjk;
-    const double length = d.length();
-    if (!(length > 0.0)) return openvdb::Vec3d(1.0);
-    return march(sampler, medium, fromIjk, d / length, 0.0, length, options);
+    return transmittance(sampler, medium, fromIjk, toIjk, options, MarchHandOff());
 }
 
 openvdb::Vec3d transmittance(Medium::Sampler& sampler, const Medium& medium, const openvdb::Vec3d& fromIjk,
@@ -120,9 +117,7 @@ openvdb::Vec3d transmittance(Medium::Sampler& sampler, const Medium& medium, con
 openvdb::Vec3d transmittanceToBoundary(Medium::Sampler& sampler, const Medium& medium, const openvdb::Vec3d& fromIjk,
     const openvdb::Vec3d& direction, const MarchOptions& options)
 {
-    const double length = direction.length();
-    if (!(length > 0.0)) return openvdb::Vec3d(1.0);
-    return march(sampler, medium, fromIjk, direction / length, 0.0, std::numeric_limits<double>::max(), options);
+    return transmittanceToBoundary(sampler, medium, fromIjk, direction, options, MarchHandOff());
 }
 
 openvdb::Vec3d transmittanceToBoundary(Medium::Sampler& sampler, const Medium& medium, const openvdb::Vec3d& fromIjk,
