@@ -59,9 +59,9 @@ public:
             ->check(CLI::IsMember({"gather", "sweep"}));
         mApp->add_flag("--no-accelerate", [this](std::int64_t) { mOptions.accelerate = false; },
             "Plain source iteration, one scattering order per pass. By default either kernel solves the whole sum "
-            "with diffusion synthetic acceleration, where a pass (a sweep of every direction, or a gather) corrects "
-            "the whole sum and is no longer one scattering order; --keep-passes, --from-pass and --fine-passes need "
-            "the orders and imply this");
+            "with acceleration, where a pass (a sweep of every direction, or a gather) corrects the whole sum and is "
+            "no longer one scattering order: each sweep by a diffusion correction, each gather by the sweeps' own "
+            "accelerated solve of its change; --keep-passes, --from-pass and --fine-passes need the orders and imply this");
         mApp->add_flag("--keep-passes", mOptions.keepPasses, "Keep each pass as scatter_pass_K");
         mApp->add_option("--from-pass", mOptions.fromPass, "Continue from scatter_pass_K (as edited) instead of scatter_source")
             ->check(CLI::Range(1, 10000));
@@ -99,15 +99,20 @@ public:
         }
         if (report.accelerated) {
             const bool sweeps = mOptions.pass.kernel == ScatterKernel::Sweep;
-            std::cout << fmt::format("  {} voxels {} per direction ({} directions), {} diffusion unknowns (cells of {}^3 voxels), "
-                "setup {:.3f} s\n", report.sweptVoxels, sweeps ? "swept" : "in the lattice", mOptions.pass.directions,
-                report.diffusionUnknowns, report.diffusionCoarsening, report.setupSeconds);
-            std::cout << fmt::format("  {}  energy of the sum (over voxels, r g b)             change  rate    diffusion CG   seconds  ({}, "
-                "ns/voxel/direction)\n", sweeps ? "sweep" : " pass", sweeps ? "sweep" : "gather");
+            if (sweeps) {
+                std::cout << fmt::format("  {} voxels swept per direction ({} directions), {} diffusion unknowns (cells of {}^3 voxels), "
+                    "setup {:.3f} s\n", report.sweptVoxels, mOptions.pass.directions, report.diffusionUnknowns, report.diffusionCoarsening,
+                    report.setupSeconds);
+            } else {
+                std::cout << fmt::format("  {} voxels in the lattice per direction ({} directions), each gather corrected by accelerated "
+                    "sweeps, setup {:.3f} s\n", report.sweptVoxels, mOptions.pass.directions, report.setupSeconds);
+            }
+            std::cout << fmt::format("  {}  energy of the sum (over voxels, r g b)             change  rate    {}   seconds  ({}, "
+                "ns/voxel/direction)\n", sweeps ? "sweep" : " pass", sweeps ? "diffusion CG" : "corr. sweeps", sweeps ? "sweep" : "gather");
             for (const auto& p : report.passes) {
                 const double ns = 1e9 * p.sweepSeconds / std::max(1.0, double(report.sweptVoxels) * mOptions.pass.directions);
                 std::cout << fmt::format("  {:>4}   {:>12.5g} {:>12.5g} {:>12.5g}   {:>7.1e} {:>7.4f} {:>8}   {:>7.3f}  ({:.3f}, {:.1f})\n", p.index,
-                    p.energy[0], p.energy[1], p.energy[2], p.change, p.ratio, p.diffusionIterations, p.seconds, p.sweepSeconds, ns);
+                    p.energy[0], p.energy[1], p.energy[2], p.change, p.ratio, sweeps ? p.diffusionIterations : p.correctionSweeps, p.seconds, p.sweepSeconds, ns);
             }
             std::cout << fmt::format("  seconds total {:.3f}\n", secondsSince(start));
             return;

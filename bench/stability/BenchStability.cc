@@ -30,6 +30,7 @@ struct Row
     std::size_t passes = 0;
     std::string stop;
     double seconds = 0.0;
+    bool skipped = false; ///< not among the cases asked for (gOnly)
 };
 
 vxf::Material albedoMaterial(double sigmaT, double albedo)
@@ -56,12 +57,19 @@ using Edit = std::function<void(vxf::VoxelSet&)>;
 
 /// The whole chain on @a mesh: a point light 1.5 longest sides above its centre (intensity 1),
 /// @a edit applied after the light stage (an artist's change), then scatter and a small render.
+/// Only the cases whose name holds this (bench_stability's second argument; empty: every case).
+std::string gOnly;
+
 Row runChain(const std::string& name, const vxf::TriangleMesh& mesh, const vxf::Material& m, int dim,
     const vxf::ScatterOptions& scatter, const Edit& edit = {})
 {
     const auto start = std::chrono::steady_clock::now();
     Row row;
     row.name = name;
+    if (name.find(gOnly) == std::string::npos) {
+        row.skipped = true;
+        return row;
+    }
     vxf::VoxelizeOptions voxelize;
     voxelize.dim = dim;
     vxf::VoxelSet set = vxf::voxelize(mesh, voxelize);
@@ -125,7 +133,7 @@ vxf::ScatterOptions acceleratedSweeps()
     return o;
 }
 
-/// The gather solving the whole sum with diffusion synthetic acceleration (at most 40 gathers).
+/// The gather solving the whole sum, each gather corrected by accelerated sweeps (at most 40 gathers).
 vxf::ScatterOptions acceleratedGathers()
 {
     vxf::ScatterOptions o = plainPasses(40);
@@ -154,17 +162,20 @@ std::string row(const Row& r)
 
 int main(int argc, char** argv)
 {
-    if (argc != 2) {
-        std::cerr << "usage: bench_stability MESH_DIR\n";
+    if (argc != 2 && argc != 3) {
+        std::cerr << "usage: bench_stability MESH_DIR [ONLY]  (ONLY: run just the cases whose name holds it)\n";
         return 2;
     }
+    if (argc == 3) gOnly = argv[2];
     openvdb::initialize();
     const std::string meshes = argv[1];
     const auto sphere = vxf::makeSphere(openvdb::Vec3d(0.0), 1.0, 64, 128);
     std::cout << "| case | finite | max | min | last pass ratio | passes | stopped because | seconds |\n"
                  "|---|---|---|---|---|---|---|---|\n";
     std::cout.flush();
-    const auto print = [](const Row& r) { std::cout << row(r) << "\n" << std::flush; };
+    const auto print = [](const Row& r) {
+        if (!r.skipped) std::cout << row(r) << "\n" << std::flush;
+    };
 
     // Albedo near 1: the plain iteration (at most 300 passes) against coarse passes.
     for (double albedo : {0.9, 0.99, 0.999, 0.9999}) {
@@ -228,6 +239,7 @@ int main(int argc, char** argv)
         scan(*zero, r);
         r.stop = "(no passes)";
         r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        r.skipped = r.name.find(gOnly) == std::string::npos;
         print(r);
     }
     return 0;

@@ -53,15 +53,15 @@ double relativeL1(const openvdb::Vec3SGrid& a, const openvdb::Vec3SGrid& b)
 }
 
 /// @a kernel's accelerated solve on the sphere reaches plain source iteration's sum (to
-/// @a plainTolerance; the sphere leaks enough for it to converge, slowly) in at most 20 passes.
-void checkAcceleratedReachesPlain(double albedo, vxf::ScatterKernel kernel, double sigmaT, double plainTolerance)
+/// @a plainTolerance; the sphere leaks enough for it to converge, slowly) in at most @a most passes.
+void checkAcceleratedReachesPlain(double albedo, vxf::ScatterKernel kernel, double sigmaT, double plainTolerance, std::size_t most = 20)
 {
     const Solved fast = solveSphere(albedo, true, 1e-3, 20, kernel, sigmaT);
     INFO(fast.report.stopReason);
     CHECK(fast.report.converged);
     CHECK(fast.report.accelerated);
     CHECK(fast.report.stopReason.find(kernel == vxf::ScatterKernel::Gather ? "gathers" : "sweeps") != std::string::npos);
-    CHECK(fast.report.iterations.size() <= 20);
+    CHECK(fast.report.iterations.size() <= most);
     const Solved plain = solveSphere(albedo, false, plainTolerance, 3000, kernel, sigmaT);
     REQUIRE(plain.report.converged);
     INFO("passes: accelerated " << fast.report.iterations.size() << ", plain " << plain.report.iterations.size());
@@ -80,14 +80,16 @@ TEST_CASE("diffusion-accelerated sweeps reach plain source iteration's sum in at
     }
 }
 
-TEST_CASE("diffusion-accelerated gathers reach plain gathers' sum in at most 20 passes, also two mean free paths per voxel", "[scatter][dsa]")
+TEST_CASE("gathers corrected by accelerated sweeps reach plain gathers' sum in at most 5 passes, from 1 to 100 mean free paths per voxel",
+    "[scatter][dsa]")
 {
-    // A gather's skin voxels hold the light on the surface; left in the correction's right-hand
-    // side they made it overshoot at 2 mean free paths per voxel (dropped by the third pass).
-    for (const double sigmaT : {8.0, 16.0}) {
+    // The diffusion-corrected gathers took 7-16 here (and at 100 mean free paths per voxel their
+    // correction diverged); the sweeps' solve differs from the gather's by a few percent.
+    for (const double sigmaT : {8.0, 16.0, 800.0}) {
         for (const double albedo : {0.9, 0.9999}) {
+            if (sigmaT > 100.0 && albedo > 0.99) continue; // plain gathers would take ~1e5 passes
             INFO("sigma_t R " << sigmaT << ", albedo " << albedo);
-            checkAcceleratedReachesPlain(albedo, vxf::ScatterKernel::Gather, sigmaT, 1e-6);
+            checkAcceleratedReachesPlain(albedo, vxf::ScatterKernel::Gather, sigmaT, 1e-6, 5);
         }
     }
 }

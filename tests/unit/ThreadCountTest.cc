@@ -24,6 +24,7 @@ std::vector<std::pair<std::string, json>> everyOperator(const std::string& scene
         {"light", {{"scene", scene}}},
         {"scatter", {{"passes", 3}, {"directions", 8}, {"fine_passes", 1}, {"coarse_factor", 2}, {"tolerance", 0.0}}},
         {"scatter", {{"directions", 8}, {"kernel", "sweep"}, {"tolerance", 1e-3}}},
+        {"scatter", {{"directions", 8}, {"kernel", "gather"}, {"fine_passes", 0}, {"tolerance", 1e-3}}}, // corrected by sweeps
         {"render", {{"scene", scene}, {"image", image}, {"width", 24}, {"height", 16}, {"samples", 2}, {"max_samples", 8}}},
         {"gradient", {{"kind", "surface_distance"}, {"distance", 0.3}, {"colors", json::array({json::array({1, 0, 0}), json::array({0, 0, 1})})}}},
         {"add", {{"grid", "density"}, {"value", 0.25}, {"out", "d1"}}},

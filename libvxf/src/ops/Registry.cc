@@ -634,7 +634,7 @@ std::vector<Operator> makeRegistry()
             integer("fine_passes", "passes at full resolution before the rest run on a coarser lattice (0: all)", 0, 0, 10000),
             integer("coarse_factor", "how much coarser (2, 4 or 8)", 4, 2, 8),
             choice("kernel", "gather (a march per voxel and direction) or sweep (one upwind sweep over the tree per direction)", {"gather", "sweep"}, "gather"),
-            flag("no_accelerate", "plain source iteration (one scattering order per pass) instead of diffusion-accelerated sweeps or gathers")},
+            flag("no_accelerate", "plain source iteration (one scattering order per pass) instead of accelerated sweeps (a diffusion correction) or gathers (corrected by accelerated sweeps)")},
         [](OpContext& ctx) {
             ScatterOptions o;
             o.pass.kernel = scatterKernelNamed(ctx.args.text("kernel"));

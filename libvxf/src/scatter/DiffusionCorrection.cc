@@ -30,7 +30,7 @@ int DiffusionCorrection::coarseningFor(const SweepLattice& lattice)
     return factor;
 }
 
-DiffusionCorrection::DiffusionCorrection(const SweepLattice& lattice, int coarsening, double restG, double numericalDiffusion)
+DiffusionCorrection::DiffusionCorrection(const SweepLattice& lattice, int coarsening, double restG)
     : mLattice(lattice)
     , mFactor(std::max(coarsening, 1))
 {
@@ -78,12 +78,7 @@ DiffusionCorrection::DiffusionCorrection(const SweepLattice& lattice, int coarse
         for (std::size_t c = r.begin(); c != r.end(); ++c) {
             for (std::uint32_t k = mStart[c]; k < mStart[c + 1]; ++k) {
                 const openvdb::Vec3d t(sigmaT[mMembers[k]]), s(sigmaS[mMembers[k]]);
-                // The transport's σtr (D = 1/3σtr), its numerical diffusion D·c·σt·dx taken off.
-                openvdb::Vec3d tr = restG != 0.0 ? t - restG * s : t;
-                if (numericalDiffusion > 0.0) {
-                    for (int ch = 0; ch < 3; ++ch) tr[ch] /= 1.0 + numericalDiffusion * t[ch] * lattice.voxelSize();
-                }
-                cellSigmaT[c] += tr;
+                cellSigmaT[c] += restG != 0.0 ? t - restG * s : t; // the transport's σtr (D = 1/3σtr)
                 for (int ch = 0; ch < 3; ++ch) cellSigmaA[c][ch] += std::max(0.0, t[ch] - s[ch]);
             }
             const double count = double(mStart[c + 1] - mStart[c]);

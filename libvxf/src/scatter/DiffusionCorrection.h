@@ -47,13 +47,8 @@ public:
 
     /// Over @a lattice's medium, in cells of @a coarsening³ voxels (a power of 2; others round
     /// down). With a phase of mean cosine @a restG (the transport's, Phase.h) the diffusion
-    /// coefficient is the transport-corrected 1/(3(σt − g·σs)). A transport whose own
-    /// discretisation diffuses (@a numericalDiffusion = c) takes D·(1 + c·σt·dx), σt·dx a
-    /// voxel's optical thickness: a gather reads its source trilinearly between voxel centres,
-    /// whose chords lie above a curved source by up to dx²/8 of its curvature, which a ray
-    /// that sees only a voxel or two (optically thick voxels) takes for diffusion of the order
-    /// of D·σt·dx/2 (the value SweepSolve uses is measured there).
-    explicit DiffusionCorrection(const SweepLattice& lattice, int coarsening = 1, double restG = 0.0, double numericalDiffusion = 0.0);
+    /// coefficient is the transport-corrected 1/(3(σt − g·σs)).
+    explicit DiffusionCorrection(const SweepLattice& lattice, int coarsening = 1, double restG = 0.0);
 
     /// Unknowns (cells of the diffusion domain).
     std::size_t size() const { return mStart.empty() ? 0 : mStart.size() - 1; }

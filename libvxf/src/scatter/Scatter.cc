@@ -299,6 +299,7 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
             info.seconds = it.seconds;
             info.change = it.change;
             info.diffusionIterations = it.diffusionIterations;
+            info.correctionSweeps = it.correctionSweeps;
             info.sweepSeconds = it.sweepSeconds;
             report.passes.push_back(info);
         }

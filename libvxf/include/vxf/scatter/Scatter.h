@@ -60,6 +60,7 @@ struct ScatterReport
         /// `energy` is then the whole sum's, not one order's.
         double change = 0.0;
         int diffusionIterations = 0;  ///< accelerated sweeps: conjugate-gradient iterations of the correction
+        int correctionSweeps = 0;     ///< accelerated gathers: sweeps of the correction (SweepSolveReport)
         double sweepSeconds = 0.0;    ///< accelerated sweeps: of `seconds`, the transport sweep
     };
     std::vector<Pass> passes;
