@@ -46,6 +46,20 @@ openvdb::Mat3d surfaceRotation(const openvdb::Coord& c, const openvdb::Vec3d& no
     return r;
 }
 
+/// The scattered light's J at a step's middle from the parabola through its values at the
+/// previous step's start (@a jBefore, @a a voxels before the step) and this step's ends (@a
+/// jStart, @a jEnd, @a b voxels apart): Lagrange weights at b/2, (−b², (2a + b)(a + b),
+/// (2a + b)·a) / 4a(a + b); (−1, 6, 3)/8 for equal steps.
+openvdb::Vec3d parabolaMiddle(const openvdb::Vec3d& jBefore, const openvdb::Vec3d& jStart, const openvdb::Vec3d& jEnd, double a, double b)
+{
+    const double scale = 1.0 / (4.0 * a * (a + b));
+    return jBefore * (-b * b * scale) + jStart * ((2.0 * a + b) * (a + b) * scale) + jEnd * ((2.0 * a + b) * a * scale);
+}
+
+/// The previous step must be at least this long, relative to the step, for parabolaMiddle: its
+/// weight on J before grows as b/a (a step clipped short by the surface would amplify J's noise).
+constexpr double kJoinedFraction = 0.5;
+
 } // namespace
 
 ScatterKernel scatterKernelNamed(const std::string& name)
@@ -101,19 +115,32 @@ openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGr
             InsideSteps inside(sampler, x, d, 0.0, hStep);
             InsideStep step;
             openvdb::Vec3d jStart(0.0), jEnd(0.0); // J at the step's ends
+            openvdb::Vec3d jBefore(0.0);            // J at the previous step's start
+            double lengthBefore = 0.0;              // the previous step's length, when this one joins it
             const auto sourceAt = [&](const openvdb::Vec3d& p, double interior) {
                 return field ? field->sample(p) : openvdb::Vec3d(grid.sampleTrilinear(p)) * interior;
             };
             for (int i = 0; i < steps; ++i) {
                 // Only the part of each step inside the surface holds medium (sharp boundary).
-                if (!inside.next(step)) continue;
-                const openvdb::Vec3d jMiddle = sourceAt(step.midpoint, step.interior);
+                if (!inside.next(step)) {
+                    lengthBefore = 0.0;
+                    continue;
+                }
+                openvdb::Vec3d jMiddle;
                 if (quadratic) {
                     const auto interiorAt = [&](const openvdb::Vec3d& p) { return field ? 1.0 : sampler.interiorScale(p, step.distanceBound); };
+                    if (!step.joined) lengthBefore = 0.0;
                     jStart = step.joined ? jEnd : sourceAt(step.start, interiorAt(step.start));
                     jEnd = sourceAt(step.end, interiorAt(step.end));
+                    if (field && lengthBefore >= kJoinedFraction * step.length) {
+                        jMiddle = parabolaMiddle(jBefore, jStart, jEnd, lengthBefore, step.length);
+                    } else {
+                        jMiddle = sourceAt(step.midpoint, step.interior);
+                    }
+                    jBefore = jStart;
+                    lengthBefore = step.length;
                 } else {
-                    jStart = jEnd = jMiddle;
+                    jStart = jEnd = jMiddle = sourceAt(step.midpoint, step.interior);
                 }
                 const double hWorld = step.length * dx;
                 const openvdb::Vec3d sigmaT = sampler.sigmaT(step.midpoint) * step.interior;
