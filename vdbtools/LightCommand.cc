@@ -26,7 +26,9 @@ public:
         mApp->add_option("input", mInput, "Voxel set with `density` (from vxf voxelize)")->required();
         mApp->add_option("--scene", mScene, "Scene file (schemas/scene.schema.json): material and lights")->required();
         mApp->add_option("-o,--output", mOutput, "Output .vdb (all input grids + direct + scatter_source)")->required();
-        mApp->add_option("--step", mOptions.march.step, "March step in voxels (default 0.5)")->check(CLI::Range(0.01, 64.0));
+        mStep = mApp->add_option("--step", mOptions.march.step,
+                        "March step in voxels (default: the scene's scatter.step, 1, as vxf run lights it)")
+                    ->check(CLI::Range(0.01, 64.0));
         mApp->add_option("--cutoff", mOptions.march.cutoff, "Stop marching below this transmittance (default 1e-4)")
             ->check(CLI::Range(0.0, 0.5));
         mApp->add_flag("--march", mMarch,
@@ -44,6 +46,7 @@ public:
         const auto start = std::chrono::steady_clock::now();
         mOptions.sweep = !mMarch;
         const Scene scene = loadScene(mScene);
+        if (mStep->count() == 0) mOptions.march.step = scene.settings.step;
         VoxelSet set = readVoxelSet(mInput);
         const DirectLightReport report = lightScene(set, scene, mOptions, &progress);
         nlohmann::json params = {{"command", "light"}, {"input", mInput}, {"scene", mScene}, {"step", mOptions.march.step},
@@ -69,6 +72,7 @@ private:
     std::string mInput, mScene, mOutput;
     DirectLightOptions mOptions;
     VoxelSetWriteOptions mWrite;
+    CLI::Option* mStep = nullptr;
     bool mQuiet = false;
     bool mMarch = false;
 };

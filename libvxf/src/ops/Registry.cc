@@ -611,16 +611,18 @@ std::vector<Operator> makeRegistry()
     ops.push_back(voxelizeStage);
 
     ops.push_back({"light", "the light stage: `direct` and `scatter_source` from a scene's lights, material and occluders",
-        {text("scene", "scene file (schemas/scene.schema.json)"), number("step", "march step, voxels", 0.5, 0.01, 64.0),
+        {text("scene", "scene file (schemas/scene.schema.json)"),
+            number("step", "march step, voxels (0: the scene's scatter.step, 1 unless set there, as vxf run lights it)", 0.0, 0.0, 64.0),
             number("cutoff", "stop marching below this transmittance", 1e-4, 0.0, 0.5),
             flag("march", "every light by a march per voxel and sample (the reference; slow) instead of one optical-depth sweep "
                           "per direction for directional and environment lights")},
         [](OpContext& ctx) {
+            const Scene scene = loadScene(ctx.args.text("scene"));
             DirectLightOptions o;
-            o.march.step = ctx.args.number("step");
+            o.march.step = ctx.args.number("step") > 0.0 ? ctx.args.number("step") : scene.settings.step;
             o.march.cutoff = ctx.args.number("cutoff");
             o.sweep = !ctx.args.flag("march");
-            const auto report = lightScene(ctx.set, loadScene(ctx.args.text("scene")), o, ctx.interrupter);
+            const auto report = lightScene(ctx.set, scene, o, ctx.interrupter);
             return fmt::format("lit by {} lights", report.lights.size());
         }});
 

@@ -302,12 +302,16 @@ public:
         float maxSpread = std::numeric_limits<float>::infinity()) const
     {
         const openvdb::Coord base = openvdb::Coord::floor(ijk);
+        // The eight in one leaf (base not on its upper face along any axis): one leaf lookup.
+        const bool oneLeaf = (base[0] & 7) != 7 && (base[1] & 7) != 7 && (base[2] & 7) != 7;
+        const std::int64_t first = oneLeaf ? mLattice.indexOf(base) : -1;
+        if (oneLeaf && first < 0) return false;
         openvdb::Vec3f corner[2][2][2];
         for (int i = 0; i < 2; ++i) {
             for (int j = 0; j < 2; ++j) {
                 for (int k = 0; k < 2; ++k) {
                     const openvdb::Coord c = base.offsetBy(i, j, k);
-                    const std::int64_t at = mLattice.indexOf(c);
+                    const std::int64_t at = oneLeaf ? first + localIndex(i, j, k) : mLattice.indexOf(c);
                     if (at < 0) return false;
                     const std::size_t leaf = std::size_t(at) / kLeafVoxels;
                     if (mAroundPoint && leaf == mLeaf) {
