@@ -164,7 +164,8 @@ struct MarchedDepths
     openvdb::Vec3d transmittanceOf(const openvdb::Vec3f& tau) const
     {
         if (std::min({tau[0], tau[1], tau[2]}) > cutoff) return openvdb::Vec3d(0.0);
-        return openvdb::Vec3d(std::exp(-double(tau[0])), std::exp(-double(tau[1])), std::exp(-double(tau[2])));
+        // In float, as τ is held (a sweep's every voxel and direction asks).
+        return openvdb::Vec3d(std::exp(-tau[0]), std::exp(-tau[1]), std::exp(-tau[2]));
     }
     double cutoff;
     float blocked;
@@ -246,7 +247,7 @@ std::vector<openvdb::Vec3f> sweepLight(const LightSampler& light, const detail::
             for (std::size_t i = r.begin(); i != r.end(); ++i) {
                 if (rim.entry[i] >= 0 && rim.grazing(rim.entry[i], -travel)) continue;
                 const openvdb::Vec3d t = depths.transmittanceOf(tau[i]);
-                if (t != openvdb::Vec3d(0.0) && unoccluded(options.occluders, medium, worldOf(i), s)) {
+                if (t != openvdb::Vec3d(0.0) && (!options.occluders || unoccluded(options.occluders, medium, worldOf(i), s))) {
                     phi[i] += openvdb::Vec3f(s.fluence * t);
                     if (flux) (*flux)[i] -= openvdb::Vec3f(greyOf(s.fluence * t) * s.direction);
                 }
