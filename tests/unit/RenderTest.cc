@@ -329,6 +329,70 @@ TEST_CASE("surface term: Lambert + normalized Blinn-Phong in closed form, occlud
     CHECK(plain.alpha[lit] == 1.0f);
 }
 
+TEST_CASE("surface term shadowed by a medium: Beer-Lambert along the chord, the vacuum before it skipped with the media's meshes", "[render][rayscene]")
+{
+    // A wall (front face y = 1.5, kd = 0.5) behind a unit sphere of medium (σt = 1), lit by a
+    // directional light of irradiance E = 2 travelling along (0, 1, −1)/√2, seen by camera rays
+    // that pass below and above the sphere (|z| = 1.26). Below, the wall's shadow ray crosses the
+    // sphere along a chord c: E cosθ kd/π · e^{−σt c}; above, it misses it: E cosθ kd/π. With the
+    // sphere's mesh as RenderMeshes::media the shadow ray marches only from 2 voxels before the
+    // mesh (none met: nothing marched), without it the whole way; the two agree.
+    const double dx = 0.05, sigmaT = 1.0, irradiance = 2.0, kd = 0.5;
+    const vxf::TriangleMesh ballMesh = vxf::makeSphere(openvdb::Vec3d(0.0), 1.0);
+    vxf::VoxelizeOptions voxelize;
+    voxelize.voxelSize = dx;
+    vxf::VoxelSet set = vxf::voxelize(ballMesh, voxelize);
+    vxf::test::putConstantFluence(set, "direct", 0.0);
+    vxf::Material material;
+    material.sigmaA = openvdb::Vec3d(sigmaT);
+    material.sigmaS = openvdb::Vec3d(0.0);
+    const vxf::Medium medium(set, material);
+    vxf::Scene scene = frontView();
+    vxf::SceneObject ball;
+    ball.name = "ball";
+    ball.material = material;
+    scene.objects.push_back(ball);
+    vxf::SceneObject wall;
+    wall.name = "wall";
+    wall.role = vxf::SceneObject::Role::Occluder;
+    wall.surface.diffuse = openvdb::Vec3d(kd);
+    scene.objects.push_back(wall);
+    const openvdb::Vec3d toLight = openvdb::Vec3d(0, -1, 1).unit();
+    scene.lights.push_back(sunAlong(-toLight, irradiance));
+
+    const vxf::TriangleMesh wallMesh = vxf::makeBox(openvdb::Vec3d(-2.0, 1.5, -2.0), openvdb::Vec3d(2.0, 2.0, 2.0));
+    vxf::RayScene visible, occluders, media;
+    visible.add(wallMesh, 1);
+    visible.commit();
+    occluders.add(wallMesh, 1);
+    occluders.commit();
+    media.add(ballMesh, 0);
+    media.commit();
+    vxf::RenderOptions options;
+    options.width = options.height = 31;
+    options.samples = 1;
+    const vxf::RenderedImage onMesh = vxf::render(set, medium, scene, options, {&visible, &occluders, &media});
+    const vxf::RenderedImage marched = vxf::render(set, medium, scene, options, {&visible, &occluders});
+
+    const double unshadowed = irradiance * toLight.dot(openvdb::Vec3d(0, -1, 0)) * kd / M_PI;
+    // Rows 2 and 28 of column 15: z = ±((2.5/31)·2 − 1)·1.5, x = 0; the shadow ray starts half a
+    // voxel off the wall.
+    const double z = (1.0 - 5.0 / 31.0) * 1.5;
+    const openvdb::Vec3d start(0.0, 1.5 - 0.5 * dx, -z);
+    const double miss = start.cross(toLight).length(); // the ray's distance from the centre
+    const double chord = 2.0 * std::sqrt(1.0 - miss * miss);
+    const double shadowed = unshadowed * std::exp(-sigmaT * chord);
+    const std::size_t top = 2 * 31 + 15, bottom = 28 * 31 + 15;
+    for (const vxf::RenderedImage* image : {&onMesh, &marched}) {
+        const double dark = std::min(image->surface[top][0], image->surface[bottom][0]);
+        const double bright = std::max(image->surface[top][0], image->surface[bottom][0]);
+        CHECK(bright == Approx(unshadowed).epsilon(1e-5));
+        CHECK(dark == Approx(shadowed).epsilon(0.01));
+    }
+    CHECK(onMesh.surface[top][0] == Approx(marched.surface[top][0]).epsilon(0.01));
+    CHECK(onMesh.surface[bottom][0] == Approx(marched.surface[bottom][0]).epsilon(0.01));
+}
+
 TEST_CASE("an emitter is seen by its emission and casts no shadow; an occluder in its place does", "[render][rayscene]")
 {
     // A wall (front face y = 1) lit by a point light inside a small emitting sphere between
