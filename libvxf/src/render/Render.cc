@@ -403,14 +403,16 @@ class SurfaceShader
 {
 public:
     /// @a media: the medium's meshes (null: none), which tell a shadow ray where it meets the
-    /// medium, so that it marches only from there (visibility).
+    /// medium, so that it marches only from there (visibility). Shadow rays march at @a march's
+    /// step and cutoff, as the camera rays' do.
     SurfaceShader(const Medium& medium, const std::vector<LightSampler>& lights, const RayScene* occluders,
-        const RayScene* media)
+        const RayScene* media, const MarchOptions& march)
         : mMedium(medium)
         , mSampler(medium)
         , mLights(lights)
         , mOccluders(occluders)
         , mMedia(media && !media->empty() ? media : nullptr)
+        , mMarch(march)
     {
     }
 
@@ -599,7 +601,8 @@ public:
               context.meshes.occluders, context.meshes.media, &context.emitters,
               context.firstMoment ? transportScaling(context.medium.phaseG()).forward : context.medium.phaseG(),
               context.scatterAnisotropy.get(), context.grids.material().phaseG)
-        , mShader(context.actual, context.surfaceLights, context.meshes.occluders, context.meshes.media)
+        , mShader(context.actual, context.surfaceLights, context.meshes.occluders, context.meshes.media,
+              MarchOptions{context.options.step, context.options.cutoff})
         , mEpsilon(1e-4 * context.medium.voxelSize())
     {
     }
