@@ -466,6 +466,11 @@ TEST_CASE("vxf light lights a voxel set from a scene file", "[cli][light]")
     CHECK(direct->tree().getValue(top).x() > 100.0f * direct->tree().getValue(bottom).x());
     CHECK(set.find("surface")); // the input grids are carried along
     CHECK(set.metadata().metaValue<std::string>("vxf:material").find("sigma_s") != std::string::npos);
+    // The march step: the scene's (scatter.step, 1 unless set), as vxf run lights it; --step wins.
+    CHECK(nlohmann::json::parse(set.paramsJson()).at("step").get<double>() == 1.0);
+    REQUIRE(run(fmt::format("{} light {} --scene {} -o {} -q --step 0.25", binary("vxf"), dir.path("s.vdb"), dir.path("scene.json"),
+                    dir.path("l4.vdb"))).status == 0);
+    CHECK(nlohmann::json::parse(vxf::readVoxelSet(dir.path("l4.vdb")).paramsJson()).at("step").get<double>() == 0.25);
 
     // Scatter from the file alone (the material travels in its metadata).
     const auto scattered = run(fmt::format("{} scatter {} -o {} --passes 3 --directions 16 --keep-passes --tolerance 0",
