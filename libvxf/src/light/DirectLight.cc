@@ -14,8 +14,8 @@
 #include <tbb/parallel_for.h>
 
 #include <atomic>
-#include <functional>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <optional>
 
@@ -140,8 +140,9 @@ constexpr double kRimHandOff = 2.0;
 
 /// A march toward a light that has left the medium and finds (by the medium's meshes) more
 /// of it ahead skips the vacuum up to this many voxels before it: light crossing vacuum
-/// keeps its depth, and stepping there cost the thick bunny at dim 256 a third of its march
-/// steps (the light behind the ears, across the gap to the body).
+/// keeps its depth. The bunny at dim 256: 110k of its point light's band marches ran 20-40
+/// voxels, across the gap from the body to the ears (0.23 of the light's 2.3 s); the sky's
+/// rim leaving outward 0.25 s of 4.85 (accuracy-notes (w)).
 constexpr double kVacuumSkipped = 2.0;
 
 /// Optical depths in place of a march's transmittance, and back: a march stops (T = 0) where

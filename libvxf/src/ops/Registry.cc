@@ -617,9 +617,13 @@ std::vector<Operator> makeRegistry()
             flag("march", "every light by a march per voxel and sample (the reference; slow) instead of one optical-depth sweep "
                           "per direction for directional and environment lights")},
         [](OpContext& ctx) {
+            const double step = ctx.args.number("step");
+            if (step > 0.0 && step < 0.01) {
+                throw UsageError(fmt::format("light: parameter 'step' {} is below 0.01 voxels (0 takes the scene's)", step));
+            }
             const Scene scene = loadScene(ctx.args.text("scene"));
             DirectLightOptions o;
-            o.march.step = ctx.args.number("step") > 0.0 ? ctx.args.number("step") : scene.settings.step;
+            o.march.step = step > 0.0 ? step : scene.settings.step;
             o.march.cutoff = ctx.args.number("cutoff");
             o.sweep = !ctx.args.flag("march");
             const auto report = lightScene(ctx.set, scene, o, ctx.interrupter);
