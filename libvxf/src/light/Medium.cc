@@ -92,6 +92,8 @@ Medium::Medium(const VoxelSet& set, const Material& material)
         }
     }
     mActualSigmaS = mSigmaS;
+    if (mSigmaA) mSigmaADense = DenseCopy<openvdb::Vec3SGrid>::create(*mSigmaA, 2, kDenseCopyBytes);
+    if (mSigmaS) mSigmaSDense = mActualSigmaSDense = DenseCopy<openvdb::Vec3SGrid>::create(*mSigmaS, 2, kDenseCopyBytes);
     if (material.phaseG != 0.0) {
         // The transport's medium: σs* = (1 − f)·σs, σa as it is, the rest's g* (Phase.h).
         const PhaseScaling scaling = transportScaling(material.phaseG);
@@ -112,12 +114,14 @@ void Medium::scaleScattering(double factor, double restG)
     mMaterial.sigmaS *= factor;
     mMaterial.phaseG = restG;
     mSigmaS = mActualSigmaS;
+    mSigmaSDense = mActualSigmaSDense;
     if (mSigmaS) {
         openvdb::Vec3SGrid::Ptr scaled = mSigmaS->deepCopy();
         openvdb::tools::foreach(scaled->beginValueAll(), [factor](const openvdb::Vec3SGrid::ValueAllIter& it) {
             it.setValue(openvdb::Vec3f(openvdb::Vec3d(*it) * factor));
         });
         mSigmaS = scaled;
+        if (mSigmaSDense) mSigmaSDense = DenseCopy<openvdb::Vec3SGrid>::create(*mSigmaS, 2, kDenseCopyBytes);
     }
 }
 
@@ -126,6 +130,7 @@ Medium Medium::actual() const
     Medium m(*this);
     m.mMaterial = mActualMaterial;
     m.mSigmaS = mActualSigmaS;
+    m.mSigmaSDense = mActualSigmaSDense;
     return m;
 }
 
@@ -140,8 +145,8 @@ Medium::Sampler::Sampler(const Medium& medium)
     : mMedium(medium)
     , mDensity(*medium.mDensity, medium.mDensityDense.get())
 {
-    if (medium.mSigmaA) mSigmaA.emplace(medium.mSigmaA->getConstAccessor());
-    if (medium.mSigmaS) mSigmaS.emplace(medium.mSigmaS->getConstAccessor());
+    if (medium.mSigmaA) mSigmaA.emplace(*medium.mSigmaA, medium.mSigmaADense.get());
+    if (medium.mSigmaS) mSigmaS.emplace(*medium.mSigmaS, medium.mSigmaSDense.get());
     if (medium.mSurface) mSurface.emplace(*medium.mSurface, medium.mSurfaceDense.get());
 }
 
@@ -284,7 +289,7 @@ bool Medium::Sampler::skinPoint(const openvdb::Coord& ijk, openvdb::Vec3d& point
 
 openvdb::Vec3d Medium::Sampler::sigmaS(const openvdb::Vec3d& ijk)
 {
-    if (mSigmaS) return openvdb::Vec3d(openvdb::tools::BoxSampler::sample(*mSigmaS, ijk));
+    if (mSigmaS) return openvdb::Vec3d(mSigmaS->sampleTrilinear(ijk));
     return mMedium.mMaterial.sigmaS * double(mDensity.sampleTrilinear(ijk));
 }
 
@@ -301,8 +306,8 @@ openvdb::Vec3d Medium::Sampler::sigmaT(const openvdb::Vec3d& ijk)
         return mMedium.mMaterial.sigmaT() * double(mDensity.sampleTrilinear(ijk));
     }
     const double d = (mSigmaA && mSigmaS) ? 0.0 : double(mDensity.sampleTrilinear(ijk));
-    const openvdb::Vec3d a = mSigmaA ? openvdb::Vec3d(openvdb::tools::BoxSampler::sample(*mSigmaA, ijk)) : mMedium.mMaterial.sigmaA * d;
-    const openvdb::Vec3d s = mSigmaS ? openvdb::Vec3d(openvdb::tools::BoxSampler::sample(*mSigmaS, ijk)) : mMedium.mMaterial.sigmaS * d;
+    const openvdb::Vec3d a = mSigmaA ? openvdb::Vec3d(mSigmaA->sampleTrilinear(ijk)) : mMedium.mMaterial.sigmaA * d;
+    const openvdb::Vec3d s = mSigmaS ? openvdb::Vec3d(mSigmaS->sampleTrilinear(ijk)) : mMedium.mMaterial.sigmaS * d;
     return a + s;
 }
 
