@@ -138,13 +138,6 @@ constexpr double kSweptReadBack = 4.0, kSweptReadOff = 1.0;
 /// light within 0.58% (L1) of the whole marches at 2 voxels, 1.1% at 1; 21.3 → 18.9 s (17.6 s at 1).
 constexpr double kRimHandOff = 2.0;
 
-/// A march toward a light that has left the medium and finds (by the medium's meshes) more
-/// of it ahead skips the vacuum up to this many voxels before it: light crossing vacuum
-/// keeps its depth. The bunny at dim 256: 110k of its point light's band marches ran 20-40
-/// voxels, across the gap from the body to the ears (0.23 of the light's 2.3 s); the sky's
-/// rim leaving outward 0.25 s of 4.85 (accuracy-notes (w)).
-constexpr double kVacuumSkipped = 2.0;
-
 /// Optical depths in place of a march's transmittance, and back: a march stops (T = 0) where
 /// every channel's depth passes the cutoff's, which a depth then stands for by `blocked`.
 struct MarchedDepths
@@ -257,9 +250,9 @@ std::vector<openvdb::Vec3f> sweepLight(const LightSampler& light, const detail::
         // The rim along the directions grazing it: marched from the medium point toward the
         // light until the ray lies kRimHandOff voxels from the surface (it left the medium, or
         // went deep into it), and on from there with the sweep's depth. A ray leaving the
-        // surface outward crosses vacuum up to the next of the medium's meshes ahead: none, and
-        // the light arrives whole; one further than kVacuumSkipped + 1 voxels, and the march
-        // starts kVacuumSkipped before it.
+        // surface outward crosses vacuum up to the next of the medium's meshes ahead
+        // (vacuumAhead): none, and the light arrives whole; else the march starts
+        // kVacuumMargin voxels before it.
         const detail::SweepLattice::SweptSoFar swept(lattice, tau);
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rim.voxels.size()), [&](const tbb::blocked_range<std::size_t>& r) {
             Medium::Sampler& sampler = samplers.local();
@@ -267,15 +260,13 @@ std::vector<openvdb::Vec3f> sweepLight(const LightSampler& light, const detail::
                 if (!rim.grazing(std::int32_t(e), -travel)) continue;
                 const openvdb::Vec3d& x = rim.points[e];
                 openvdb::Vec3d from = x;
-                bool clear = false;
+                double skip = 0.0;
                 if (options.boundary && rim.normals[e].dot(travel) < 0.0) {
                     const openvdb::Vec3d world = xform.indexToWorld(x);
-                    const auto hit = options.boundary->intersect(world, s.direction);
-                    const double run = hit ? (xform.worldToIndex(world + s.direction * hit->distance) - x).length() : 0.0;
-                    clear = !hit;
-                    if (run > kVacuumSkipped + 1.0) from -= travel * (run - kVacuumSkipped);
+                    skip = vacuumAhead(*options.boundary, world, s.direction, kVacuumMargin * medium.voxelSize());
+                    if (skip > 0.0 && std::isfinite(skip)) from = xform.worldToIndex(world + s.direction * skip);
                 }
-                const openvdb::Vec3d t = clear ? openvdb::Vec3d(1.0)
+                const openvdb::Vec3d t = std::isinf(skip) ? openvdb::Vec3d(1.0)
                     : transmittanceToBoundary(sampler, medium, from, -travel, options.march,
                           [&](const openvdb::Vec3d& at, double distance, openvdb::Vec3f& depth) {
                               return std::abs(distance) >= kRimHandOff && swept.sample(at, depth);
@@ -354,7 +345,9 @@ std::vector<openvdb::Vec3f> sweepPointLight(const LightSampler& light, const det
                 // Outside, where the sweep holds nothing to read (beyond the lattice, or across a
                 // shadow's edge): the meshes say whether any medium lies ahead, once a march.
                 // None: nothing more to cross. One: the way there is vacuum, and the march goes
-                // on from kVacuumSkipped voxels before it (the depth from there is the rest's).
+                // on from kVacuumMargin voxels before it (the depth from there is the rest's; the
+                // bunny at dim 256: 110k band marches had stepped 20-40 voxels across the gap from
+                // the body to the ears, 0.23 of the light's 2.3 s).
                 if (askedMeshes) return false;
                 askedMeshes = true;
                 const double run = clearRun(at);
@@ -362,8 +355,8 @@ std::vector<openvdb::Vec3f> sweepPointLight(const LightSampler& light, const det
                     depth = openvdb::Vec3f(0.0f);
                     return true;
                 }
-                if (run <= kVacuumSkipped + 1.0) return false;
-                depth = marchedDepth(at + (lightIjk - at).unit() * (run - kVacuumSkipped), swept);
+                if (run <= kVacuumMargin) return false;
+                depth = marchedDepth(at + (lightIjk - at).unit() * (run - kVacuumMargin), swept);
                 return true;
             });
         return depths.depthOf(t);

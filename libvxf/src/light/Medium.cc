@@ -150,24 +150,9 @@ Medium::Sampler::Sampler(const Medium& medium)
     if (medium.mSurface) mSurface.emplace(*medium.mSurface, medium.mSurfaceDense.get());
 }
 
-namespace {
-
-/// Whether @a ijk is a voxel's centre (@a voxel): there trilinear and triquadratic reads give the
-/// voxel's own value to the bit (their weights are 0 and 1), one read instead of 8 or 27. The
-/// lattices and the rim read every voxel's distance, σt and normal at centres.
-bool voxelCentre(const openvdb::Vec3d& ijk, openvdb::Coord& voxel)
-{
-    if (ijk[0] != std::floor(ijk[0]) || ijk[1] != std::floor(ijk[1]) || ijk[2] != std::floor(ijk[2])) return false;
-    voxel = openvdb::Coord::floor(ijk);
-    return true;
-}
-
-} // namespace
-
 double Medium::Sampler::signedDistance(const openvdb::Vec3d& ijk)
 {
     if (!mSurface) return -1.0;
-    if (openvdb::Coord voxel; voxelCentre(ijk, voxel)) return double(mSurface->getValue(voxel)) / mMedium.voxelSize();
     const double linear = double(mSurface->sampleTrilinear(ijk)) / mMedium.voxelSize();
     if (std::abs(linear) > kQuadraticBand) return linear;
     const double quadratic = double(mSurface->sampleTriquadratic(ijk)) / mMedium.voxelSize();
@@ -302,7 +287,6 @@ openvdb::Vec3d Medium::Sampler::sigmaS(const openvdb::Coord& ijk)
 openvdb::Vec3d Medium::Sampler::sigmaT(const openvdb::Vec3d& ijk)
 {
     if (!mSigmaA && !mSigmaS) {
-        if (openvdb::Coord voxel; voxelCentre(ijk, voxel)) return mMedium.mMaterial.sigmaT() * double(mDensity.getValue(voxel));
         return mMedium.mMaterial.sigmaT() * double(mDensity.sampleTrilinear(ijk));
     }
     const double d = (mSigmaA && mSigmaS) ? 0.0 : double(mDensity.sampleTrilinear(ijk));

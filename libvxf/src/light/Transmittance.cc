@@ -2,6 +2,8 @@
 
 #include <vxf/light/UniformBricks.h>
 
+#include <vxf/core/RayScene.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -127,6 +129,13 @@ openvdb::Vec3d transmittanceToBoundary(Medium::Sampler& sampler, const Medium& m
     if (!(length > 0.0)) return openvdb::Vec3d(1.0);
     return march(sampler, medium, fromIjk, direction / length, 0.0, std::numeric_limits<double>::max(), options,
         handOff ? &handOff : nullptr);
+}
+
+double vacuumAhead(const RayScene& media, const openvdb::Vec3d& xWorld, const openvdb::Vec3d& direction, double margin, double far)
+{
+    const auto hit = media.intersect(xWorld, direction, 0.0, far);
+    if (!hit) return std::numeric_limits<double>::infinity();
+    return hit->backFace ? 0.0 : std::max(0.0, hit->distance - margin);
 }
 
 } // namespace vxf
