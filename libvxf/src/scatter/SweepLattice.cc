@@ -740,14 +740,34 @@ void SweepLattice::opticalDepthAlong(const openvdb::Vec3d& omega, std::vector<op
 {
     tau.assign(voxelCount(), openvdb::Vec3f(0.0f));
     const Characteristic c = characteristic(omega);
+    const float halfStep = float(0.5 * c.length * mVoxelSize);
     inUpwindOrder(omega, tau, [&](std::size_t n, openvdb::Vec3f* buffer, const UpwindVoxel* voxels) {
+        openvdb::Vec3f* out = &tau[n * kLeafVoxels];
+        if (mUniform[n]) {
+            // One σt over the padded block: every step adds the same (its upwind blend of σt
+            // the same sum at every voxel), the block's σt not read (it is most of a sweep's
+            // memory traffic).
+            const openvdb::Vec3f sigmaT = mSigmaT[n * kPaddedVoxels];
+            openvdb::Vec3f stIn(0.0f);
+            for (int k = 0; k < 4; ++k) stIn += c.weight[k] * sigmaT;
+            const openvdb::Vec3f own = halfStep * (stIn + sigmaT);
+            for (int voxel = 0; voxel < kLeafVoxels; ++voxel) {
+                const int p = voxels[voxel].padded;
+                openvdb::Vec3f tauIn(0.0f);
+                for (int k = 0; k < 4; ++k) tauIn += c.weight[k] * buffer[p + c.offset[k]];
+                const openvdb::Vec3f result = tauIn + own;
+                buffer[p] = result;
+                out[voxels[voxel].local] = result;
+            }
+            return;
+        }
         for (int voxel = 0; voxel < kLeafVoxels; ++voxel) {
             const int p = voxels[voxel].padded;
             const openvdb::Vec3f upwind[4] = {buffer[p + c.offset[0]], buffer[p + c.offset[1]], buffer[p + c.offset[2]],
                 buffer[p + c.offset[3]]};
             const openvdb::Vec3f result = depthStep(n, p, omega, c.weight, c.offset, c.length, upwind);
             buffer[p] = result;
-            tau[n * kLeafVoxels + std::size_t(voxels[voxel].local)] = result;
+            out[voxels[voxel].local] = result;
         }
     }, entering);
 }

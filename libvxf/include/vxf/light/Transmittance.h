@@ -169,13 +169,20 @@ private:
         // With boundary meshes: an end the level set holds inside but near the surface may lie
         // outside the meshes (a short chord under a silhouette, a grazing ray's crossing a step
         // away from the level set's): the part before their entry, or after their exit, is outside.
-        double t;
-        bool entering;
-        if (lo == ta && sa > -Medium::kSnapWindow && mSampler.boundaryHit(mOrigin, mDirection, lo, hi, t, entering) && entering) {
-            lo = t;
+        // One ray serves both ends unless its first hit moved the start (then the end asks again past it).
+        double t = 0.0;
+        bool entering = false, hit = false, asked = false;
+        if (lo == ta && sa > -Medium::kSnapWindow) {
+            hit = mSampler.boundaryHit(mOrigin, mDirection, lo, hi, t, entering);
+            asked = true;
+            if (hit && entering) {
+                lo = t;
+                asked = false;
+            }
         }
-        if (hi == tb && sb > -Medium::kSnapWindow && mSampler.boundaryHit(mOrigin, mDirection, lo, hi, t, entering) && !entering) {
-            hi = t;
+        if (hi == tb && sb > -Medium::kSnapWindow) {
+            if (!asked) hit = mSampler.boundaryHit(mOrigin, mDirection, lo, hi, t, entering);
+            if (hit && !entering) hi = t;
         }
         return hi > lo;
     }
