@@ -217,7 +217,9 @@ std::vector<openvdb::Vec3f> sweepLight(const LightSampler& light, const detail::
         // hand, a ray toward the light that meets none crosses no medium; one that does left
         // the medium where it meets it, and from there on through vacuum carries the depth the
         // sweep already holds (an earlier wavefront's), read kSweptReadOff voxels off the
-        // surface; where the sweep has none there yet, marched from two voxels before the hit.
+        // surface; where the sweep has none there yet, marched from two voxels before the hit
+        // until kRimHandOff voxels from the surface, where the sweep's depth takes over as for
+        // the rim (these marches had run through the medium to the cutoff).
         lattice.opticalDepthAlong(travel, tau, [&](const openvdb::Coord& ijk, const detail::SweepLattice::SweptSoFar& swept) {
             openvdb::Vec3d from = ijk.asVec3d();
             if (options.boundary) {
@@ -235,7 +237,10 @@ std::vector<openvdb::Vec3f> sweepLight(const LightSampler& light, const detail::
                 const double ahead = distance - 2.0;
                 if (ahead > 0.0) from -= travel * ahead;
             }
-            return depths.depthOf(transmittanceToBoundary(samplers.local(), medium, from, -travel, options.march));
+            return depths.depthOf(transmittanceToBoundary(samplers.local(), medium, from, -travel, options.march,
+                [&](const openvdb::Vec3d& at, double distance, openvdb::Vec3f& depth) {
+                    return std::abs(distance) >= kRimHandOff && swept.sample(at, depth);
+                }));
         });
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
             for (std::size_t i = r.begin(); i != r.end(); ++i) {
