@@ -36,7 +36,7 @@ struct DirectLightOptions
     /// to the next mesh ahead in one go); the deeper ones blended from them. Area lights (many
     /// points) are marched either way.
     /// Off: every light marched (the reference). The bunny at dim 256 with a point light and a
-    /// 16-direction sky, steps of a voxel: 78 s marched, 5.4 s swept (docs/performance.md).
+    /// 16-direction sky, steps of a voxel: 78 s marched, 5.1 s swept (docs/performance.md).
     bool sweep = true;
     /// Light the similarity relation's isotropic medium (Medium::isotropic()) rather than the
     /// transport's: for a scatter that will carry no angular moment (the gather kernel, plain
