@@ -138,6 +138,15 @@ constexpr double kSweptReadBack = 4.0, kSweptReadOff = 1.0;
 /// light within 0.58% (L1) of the whole marches at 2 voxels, 1.1% at 1; 21.3 → 18.9 s (17.6 s at 1).
 constexpr double kRimHandOff = 2.0;
 
+/// A march's hand-off to what @a swept holds, once kRimHandOff voxels or more from the surface
+/// on either side (the rim's grazing marches, and light entering the lattice across vacuum).
+MarchHandOff sweptClearOfSurface(const detail::SweepLattice::SweptSoFar& swept)
+{
+    return [&swept](const openvdb::Vec3d& at, double distance, openvdb::Vec3f& depth) {
+        return std::abs(distance) >= kRimHandOff && swept.sample(at, depth);
+    };
+}
+
 /// Optical depths in place of a march's transmittance, and back: a march stops (T = 0) where
 /// every channel's depth passes the cutoff's, which a depth then stands for by `blocked`.
 struct MarchedDepths
@@ -237,10 +246,8 @@ std::vector<openvdb::Vec3f> sweepLight(const LightSampler& light, const detail::
                 const double ahead = distance - 2.0;
                 if (ahead > 0.0) from -= travel * ahead;
             }
-            return depths.depthOf(transmittanceToBoundary(samplers.local(), medium, from, -travel, options.march,
-                [&](const openvdb::Vec3d& at, double distance, openvdb::Vec3f& depth) {
-                    return std::abs(distance) >= kRimHandOff && swept.sample(at, depth);
-                }));
+            return depths.depthOf(
+                transmittanceToBoundary(samplers.local(), medium, from, -travel, options.march, sweptClearOfSurface(swept)));
         });
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
             for (std::size_t i = r.begin(); i != r.end(); ++i) {
@@ -259,6 +266,7 @@ std::vector<openvdb::Vec3f> sweepLight(const LightSampler& light, const detail::
         // (vacuumAhead): none, and the light arrives whole; else the march starts
         // kVacuumMargin voxels before it.
         const detail::SweepLattice::SweptSoFar swept(lattice, tau);
+        const MarchHandOff handOff = sweptClearOfSurface(swept);
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rim.voxels.size()), [&](const tbb::blocked_range<std::size_t>& r) {
             Medium::Sampler& sampler = samplers.local();
             for (std::size_t e = r.begin(); e != r.end(); ++e) {
@@ -272,10 +280,7 @@ std::vector<openvdb::Vec3f> sweepLight(const LightSampler& light, const detail::
                     if (skip > 0.0 && std::isfinite(skip)) from = xform.worldToIndex(world + s.direction * skip);
                 }
                 const openvdb::Vec3d t = std::isinf(skip) ? openvdb::Vec3d(1.0)
-                    : transmittanceToBoundary(sampler, medium, from, -travel, options.march,
-                          [&](const openvdb::Vec3d& at, double distance, openvdb::Vec3f& depth) {
-                              return std::abs(distance) >= kRimHandOff && swept.sample(at, depth);
-                          });
+                    : transmittanceToBoundary(sampler, medium, from, -travel, options.march, handOff);
                 if (t != openvdb::Vec3d(0.0) && unoccluded(options.occluders, medium, xform.indexToWorld(x), s)) {
                     phi[rim.voxels[e]] += openvdb::Vec3f(s.fluence * t);
                     if (flux) (*flux)[rim.voxels[e]] -= openvdb::Vec3f(greyOf(s.fluence * t) * s.direction);
