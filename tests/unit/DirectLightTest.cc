@@ -318,7 +318,7 @@ TEST_CASE("a directional light by sweeps: E exp(-sigma_t depth / cos) in a slab,
 
 TEST_CASE("an anisotropic phase: the source's mean direction is the light's direction of travel", "[light][direct][phase]")
 {
-    // The delta-Eddington transport keeps J0's first moment (Phase.h): one sun, swept or
+    // The delta-M transport keeps J0's mean direction (Phase.h): one sun, swept or
     // marched, gives a = its direction of travel at every lit voxel; a point light, the direction
     // away from it. An isotropic medium writes no such grid (and drops a stale one).
     const double dx = 0.05;

@@ -29,19 +29,20 @@ TEST_CASE("Henyey-Greenstein: unit mean over the sphere, mean cosine g, 1 everyw
     CHECK(vxf::henyeyGreenstein4Pi(0.0, 0.3) == 1.0);
 }
 
-TEST_CASE("a medium of phase g holds the delta-Eddington transport; isotropic() the similarity relation's; actual() the material's", "[phase]")
+TEST_CASE("a medium of phase g holds the delta-M transport; isotropic() the similarity relation's; actual() the material's", "[phase]")
 {
     vxf::Material m = vxf::test::greyMaterial(1.0, 4.0);
     m.phaseG = 0.75;
     vxf::VoxelSet set = vxf::test::uniformSphere(m, 1.0, 8);
     const vxf::Medium medium(set, m);
     const openvdb::Vec3d centre(0.0);
-    // f = g² = 0.5625 of σs kept in the beam: σs* = 1.75, σt* = 5 − 2.25 = 2.75; the rest's
-    // mean cosine g* = g/(1 + g) = 3/7, and σt* − g*σs* = 2 = σt − gσs (transport-corrected).
+    // f = g⁴ = 0.31640625 of σs kept in the beam: σs* = 4(1 − f) = 2.734375, σt* = 5 − 4f =
+    // 3.734375; the rest's mean cosine g* = (g − f)/(1 − f) = 0.634286, and σt* − g*σs* = 2 =
+    // σt − gσs (transport-corrected).
     vxf::Medium::Sampler transport(medium);
-    CHECK(transport.sigmaS(centre).x() == Approx(1.75));
-    CHECK(transport.sigmaT(centre).x() == Approx(2.75));
-    CHECK(medium.material().phaseG == Approx(3.0 / 7.0));
+    CHECK(transport.sigmaS(centre).x() == Approx(2.734375));
+    CHECK(transport.sigmaT(centre).x() == Approx(3.734375));
+    CHECK(medium.material().phaseG == Approx(0.43359375 / 0.68359375));
     CHECK(medium.material().sigmaT().x() - medium.material().phaseG * medium.material().sigmaS.x() == Approx(2.0));
     CHECK(medium.phaseG() == 0.75);
     // The similarity relation: σs' = (1 − g)σs = 1, σt' = σt − gσs = 2, isotropic.
@@ -73,8 +74,8 @@ TEST_CASE("a medium of phase g holds the delta-Eddington transport; isotropic() 
     set.put(sigmaS);
     const vxf::Medium gridded(set, m);
     vxf::Medium::Sampler griddedTransport(gridded);
-    CHECK(griddedTransport.sigmaS(centre).x() == Approx(3.5));
-    CHECK(griddedTransport.sigmaT(centre).x() == Approx(1.0 + 3.5));
+    CHECK(griddedTransport.sigmaS(centre).x() == Approx(8.0 * 0.68359375));
+    CHECK(griddedTransport.sigmaT(centre).x() == Approx(1.0 + 8.0 * 0.68359375));
     const vxf::Medium griddedIsotropic = gridded.isotropic(), griddedActual = gridded.actual();
     vxf::Medium::Sampler griddedReduced(griddedIsotropic);
     CHECK(griddedReduced.sigmaS(centre).x() == Approx(2.0));
@@ -92,6 +93,41 @@ TEST_CASE("a medium of phase g holds the delta-Eddington transport; isotropic() 
     CHECK(a.sigmaS(p) == b.sigmaS(p));
     CHECK(a.sigmaT(p) == c.sigmaT(p));
     CHECK(a.sigmaS(p) == c.sigmaS(p));
+}
+
+TEST_CASE("the rest of the phase: delta-M's moments, and its angular factor's Legendre moments chi_l k^l", "[phase]")
+{
+    // g = 0.6: f = g⁴ kept in the beam, the rest's χ_l = (g^l − f)/(1 − f) for l = 1…3.
+    const double g = 0.6, f = std::pow(g, 4.0);
+    const vxf::PhaseScaling scaling = vxf::transportScaling(g);
+    CHECK(scaling.forward == Approx(f));
+    for (int l = 1; l <= 3; ++l) CHECK(scaling.rest[l - 1] == Approx((std::pow(g, l) - f) / (1.0 - f)));
+    CHECK(scaling.restG == scaling.rest[0]);
+    CHECK(vxf::transportScaling(-0.3).forward == -0.3); // a backward phase: the similarity relation
+    CHECK(vxf::transportScaling(-0.3).restG == 0.0);
+    // Light of mean direction a = k·â scattered by the rest: RestPhase(a, ω) depends on μ = â·ω
+    // alone, and its Legendre moments ½∫ R·P_l dμ are χ_l·k^l (a Henyey-Greenstein lobe of
+    // parameter k scattered by the rest): 1, χ1·k, χ2·k², χ3·k³, and 0 beyond (no clamp at g 0.6).
+    const vxf::RestPhase rest(scaling);
+    const openvdb::Vec3f axis = openvdb::Vec3f(1.0f, 2.0f, -2.0f).unit();
+    for (const double k : {0.0, 0.35, 0.8, 1.0}) {
+        double moment[5] = {0, 0, 0, 0, 0};
+        const int steps = 20000;
+        for (int i = 0; i < steps; ++i) {
+            const double mu = -1.0 + (i + 0.5) * 2.0 / steps;
+            // ω at angle acos(μ) from the axis, in any plane through it.
+            const openvdb::Vec3f side = axis.cross(openvdb::Vec3f(0.0f, 0.0f, 1.0f)).unit();
+            const openvdb::Vec3f omega = axis * float(mu) + side * float(std::sqrt(1.0 - mu * mu));
+            const double r = rest(axis * float(k), omega);
+            const double p[5] = {1.0, mu, 0.5 * (3 * mu * mu - 1), 0.5 * (5 * mu * mu * mu - 3 * mu),
+                (35 * std::pow(mu, 4) - 30 * mu * mu + 3) / 8};
+            for (int l = 0; l < 5; ++l) moment[l] += 0.5 * r * p[l] * 2.0 / steps;
+        }
+        INFO("k " << k);
+        CHECK(moment[0] == Approx(1.0).epsilon(1e-5));
+        for (int l = 1; l <= 3; ++l) CHECK(moment[l] == Approx(scaling.rest[l - 1] * std::pow(k, l)).margin(1e-5));
+        CHECK(std::abs(moment[4]) < 1e-5);
+    }
 }
 
 TEST_CASE("the material's phase is recorded in the voxel set, and isotropic sets' records are as before", "[phase]")

@@ -729,17 +729,21 @@ TEST_CASE("a Henyey-Greenstein phase: the scattered light reaches the camera thr
     CHECK(image.scatter[15 * 31 + 15].x() == Approx(reducedS * phi / (4.0 * M_PI) / reducedT).epsilon(0.01));
 }
 
-TEST_CASE("a Henyey-Greenstein phase: the scattered light's first moment scatters it toward the camera", "[render][phase]")
+TEST_CASE("a Henyey-Greenstein phase: the scattered light's mean direction scatters it toward the camera by the rest of the phase", "[render][phase]")
 {
     // The accelerated sweeps' scattered fluence φ with its mean direction a (`scatter_anisotropy`),
-    // in the delta-Eddington medium (f = g² kept in the beam, Phase.h): toward the camera
-    // J = σs*φ(1 + 3g*·a·ω)/4π, reaching it through σt* = σt − g²σs: in a thick sphere
-    // L = J/σt*. The light travelling toward the camera (a along −y, the camera at −y) is the
-    // brighter, away from it the darker.
-    const double g = 0.6, phi = 3.0;
+    // in the delta-M medium (f = g⁴ kept in the beam, Phase.h): toward the camera
+    // J = σs*φ·R/4π, R = 1 + 3χ1·t + 5χ2·t² + 7χ3·t³ for a of length |t| along the line of
+    // sight (t > 0 toward the camera; the light taken as a Henyey-Greenstein lobe of parameter
+    // |t|, χ_l = (g^l − f)/(1 − f) the rest's moments), reaching it through σt* = σt − f·σs: in a
+    // thick sphere L = J/σt*. The light travelling toward the camera (a along −y, the camera at
+    // −y) is the brighter, away from it the darker.
+    const double g = 0.6, phi = 3.0, f = std::pow(g, 4.0);
     vxf::Material m = vxf::test::greyMaterial(2.0, 8.0); // σt = 10
     m.phaseG = g;
-    const double sigmaS = (1.0 - g * g) * 8.0, sigmaT = 10.0 - g * g * 8.0, rest = g / (1.0 + g);
+    const double sigmaS = (1.0 - f) * 8.0, sigmaT = 10.0 - f * 8.0;
+    double chi[3];
+    for (int l = 0; l < 3; ++l) chi[l] = (std::pow(g, l + 1) - f) / (1.0 - f);
     for (const double toward : {0.6, -0.6}) {
         vxf::VoxelSet set = litSphere(0.0);
         vxf::test::putConstantFluence(set, "scatter", phi);
@@ -753,7 +757,8 @@ TEST_CASE("a Henyey-Greenstein phase: the scattered light's first moment scatter
         options.samples = 1;
         const vxf::RenderedImage image = vxf::render(set, medium, frontView(), options);
         INFO("a toward the camera " << toward);
-        CHECK(image.scatter[15 * 31 + 15].x() == Approx(sigmaS * phi * (1.0 + 3.0 * rest * toward) / (4.0 * M_PI) / sigmaT).epsilon(0.01));
+        const double r = 1.0 + 3.0 * chi[0] * toward + 5.0 * chi[1] * toward * toward + 7.0 * chi[2] * toward * toward * toward;
+        CHECK(image.scatter[15 * 31 + 15].x() == Approx(sigmaS * phi * r / (4.0 * M_PI) / sigmaT).epsilon(0.01));
         // Read in the medium's index space: a grid on other voxels is refused, not misread.
         anisotropy->setTransform(openvdb::math::Transform::createLinearTransform(0.5));
         CHECK_THROWS_WITH(vxf::render(set, medium, frontView(), options),

@@ -222,13 +222,15 @@ TEST_CASE("diffusion-accelerated sweeps with a Henyey-Greenstein phase: the tran
 
 TEST_CASE("an anisotropic phase's first moment: an infinite medium's fluence and mean direction in closed form", "[sweep][dsa][phase]")
 {
-    // A uniform source J0·(1 + 3g*·a0·ω) in a uniform medium, far from its edges (the centre of
-    // a sphere of σt R = 40, diffusion length R/40): ψ is the same everywhere, and the angular
-    // moments of the transport equation give φ = 4πJ0/σa whatever the phase, and the first
-    // moment F = (4π/3)·3g*·J0·a0/(σt − g*σs): the scattered light's own moment feeds back
-    // through g*. So a = F/φ = g*·σa·a0/(σt − g*σs); scattered isotropically (the moment not
-    // carried through the scattering) it would be g*·σa·a0/σt, 15% less at g = 0.6. The 16
-    // directions integrate ωωᵀ exactly (sweepDirections).
+    // A uniform source J0·R(a0, ω) (RestPhase: first moment 3g*·a0·ω, g* = χ1) in a uniform
+    // medium, far from its edges (the centre of a sphere of σt R = 40, diffusion length R/40):
+    // ψ is the same everywhere, and the angular moments of the transport equation give
+    // φ = 4πJ0/σa whatever the phase, and the first moment F = (4π/3)·3g*·J0·a0/(σt − g*σs):
+    // the scattered light's own moment feeds back through g*. So a = F/φ = g*·σa·a0/(σt − g*σs);
+    // scattered isotropically (the moment not carried through the scattering) it would be
+    // g*·σa·a0/σt, 25% less at g = 0.6. 64 directions: R's cubic term is a polynomial of degree 4
+    // in ω with ω's first moment, which 16 directions do not integrate exactly (a came out 10%
+    // high at g 0.6, 25% at g 0.9, across the axis 0.6-2.6% of it; 64: within 2%, 0.3%).
     for (const double g : {0.6, 0.9}) {
         vxf::Material m = vxf::test::albedoMaterial(40.0, 0.5);
         m.phaseG = g;
@@ -240,7 +242,7 @@ TEST_CASE("an anisotropic phase's first moment: an infinite medium's fluence and
         for (auto it = anisotropy->beginValueOn(); it; ++it) it.setValue(openvdb::Vec3f(0.0f, 0.0f, 0.8f));
         vxf::SweepSolveOptions options;
         options.tolerance = 1e-5;
-        options.directions = 16;
+        options.directions = 64;
         vxf::SweepSolveReport report;
         vxf::SweepMoments moments;
         moments.source = anisotropy.get();
@@ -254,8 +256,8 @@ TEST_CASE("an anisotropic phase's first moment: an infinite medium's fluence and
         CHECK(sum->tree().getValue(openvdb::Coord(0)).x() == Approx(4.0 * M_PI / sigmaA).epsilon(0.01));
         const openvdb::Vec3f a = moments.scattered->tree().getValue(openvdb::Coord(0));
         CHECK(a.z() == Approx(gRest * sigmaA * 0.8 / (sigmaT - gRest * sigmaS)).epsilon(0.02));
-        CHECK(std::abs(a.x()) < 1e-3);
-        CHECK(std::abs(a.y()) < 1e-3);
+        CHECK(std::abs(a.x()) < 5e-3);
+        CHECK(std::abs(a.y()) < 5e-3);
         // Without the source's anisotropy the light has no mean direction there.
         vxf::SweepMoments none;
         vxf::SweepSolveReport again;

@@ -23,7 +23,7 @@ const std::vector<GridRole>& gridRoles()
         {"scatter_source", "vec3s", GRID_UNKNOWN, "radiance/world unit",
             "in-scattered radiance per unit length, J_0 = sigma_s phi_0 / 4pi"},
         {"scatter_source_anisotropy", "vec3s", GRID_UNKNOWN, "direction",
-            "with a forward phase: J_0's mean direction of travel a, J_0(w) = J_0 (1 + 3 g* a.w)"},
+            "with a forward phase: J_0's mean direction of travel a, J_0(w) = J_0 R(a, w), R the rest of the phase (Phase.h)"},
         {"scatter_pass_K", "vec3s", GRID_UNKNOWN, "fluence",
             "fluence added by scattering pass K (phi_K), kept on request"},
         {"scatter", "vec3s", GRID_UNKNOWN, "fluence", "sum of all scattering passes"},

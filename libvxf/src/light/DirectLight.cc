@@ -469,7 +469,7 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
         openvdb::tools::dilateActiveValues(grid->tree(), 1, openvdb::tools::NN_FACE_EDGE_VERTEX,
             options.coarseTiles ? openvdb::tools::PRESERVE_TILES : openvdb::tools::IGNORE_TILES);
     }
-    // An anisotropic rest of the phase (Medium: delta-Eddington's g*): the source's first moment.
+    // An anisotropic rest of the phase (Medium: delta-M's g*): the source's mean direction of travel.
     const bool anisotropic = medium.material().phaseG != 0.0;
     openvdb::Vec3SGrid::Ptr anisotropy;
     if (anisotropic) {

@@ -116,7 +116,7 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
     const bool carriesMoment = s.kernel == "sweep" && s.accelerate && !wants("scatter_passes") && s.finePasses == 0;
     if (material.phaseG != 0.0) { // isotropic scenes keep their cached stages
         lightInputs["phase_g"] = material.phaseG;
-        lightInputs["phase_scaling"] = carriesMoment ? "delta-Eddington, first moment" : "similarity";
+        lightInputs["phase_scaling"] = carriesMoment ? "delta-M 3, Henyey-Greenstein lobe" : "similarity";
     }
     const std::string lightHash = hashOf(lightInputs);
     const fs::path lightFile = cache / ("light-" + lightHash + ".vdb");

@@ -45,9 +45,9 @@ public:
     /// the light marched to the lights is scattered toward the camera by the phase through the
     /// medium's own σt; the grids' J, solved in the transport's scaled medium, reaches the
     /// camera through that medium's σt − @a gridForward·σs (the share of σs kept in the beam:
-    /// g² by delta-Eddington, g by the similarity relation; Phase.h). With @a scatterAnisotropy
-    /// (`scatter_anisotropy`) the scattered light's J toward the camera is
-    /// J·max(0, 1 + 3·@a restG·a·ω), its first moment. @a emitters (volume lights) are seen along
+    /// g⁴ by delta-M, g by the similarity relation; Phase.h). With @a scatterAnisotropy
+    /// (`scatter_anisotropy`, the mean direction of travel a) the scattered light's J toward
+    /// the camera is J·@a rest(a, ω), the rest of the phase. @a emitters (volume lights) are seen along
     /// the march, in the direct layer, through the medium's own σt, where the medium is.
     /// With @a boundary (the media's meshes) the marches cross the surface where the meshes
     /// do (Medium::Sampler::snapCrossingsTo): grazing rays, at silhouettes and terminators.
@@ -55,7 +55,7 @@ public:
         const SourceField* scatter,
         const std::vector<LightSampler>* lights = nullptr, const RayScene* occluders = nullptr,
         const RayScene* boundary = nullptr, const std::vector<VolumeEmission>* emitters = nullptr, double gridForward = 0.0,
-        const openvdb::Vec3SGrid* scatterAnisotropy = nullptr, double restG = 0.0)
+        const openvdb::Vec3SGrid* scatterAnisotropy = nullptr, const RestPhase& rest = {})
         : mMedium(medium)
         , mSampler(medium)
         , mShadowSampler(medium)
@@ -64,9 +64,9 @@ public:
         , mOccluders(occluders)
         , mPhaseG(medium.phaseG())
         , mGridForward(gridForward)
-        , mRestG(restG)
+        , mRest(rest)
     {
-        if (scatterAnisotropy && restG != 0.0) mScatterAnisotropy.emplace(scatterAnisotropy->getConstAccessor());
+        if (scatterAnisotropy && rest.chi[0] != 0.0f) mScatterAnisotropy.emplace(scatterAnisotropy->getConstAccessor());
         if (emitters) {
             for (const VolumeEmission& e : *emitters) mEmitters.emplace_back(e);
         }
@@ -255,11 +255,11 @@ private:
         if (mDirect) e.direct = e.directExact = mDirect->sample(p);
         if (mScatter) e.scatter = mScatter->sample(p);
         if (mScatterAnisotropy) {
-            // The scattered light's first moment, toward the camera (−mRayDirection).
+            // The scattered light by the rest of the phase, toward the camera (−mRayDirection).
             openvdb::Vec3s sampled;
             openvdb::tools::BoxSampler::sample(*mScatterAnisotropy, p, sampled); // the medium's index space
-            const openvdb::Vec3d a = clampedToUnit(openvdb::Vec3d(sampled));
-            e.scatter *= std::max(0.0, 1.0 - 3.0 * mRestG * a.dot(mRayDirection));
+            const openvdb::Vec3f a(clampedToUnit(openvdb::Vec3d(sampled)));
+            e.scatter *= double(mRest(a, -openvdb::Vec3f(mRayDirection)));
         }
         if (!mEmitters.empty()) {
             const openvdb::Vec3d world = mMedium.transform().indexToWorld(p);
@@ -315,7 +315,7 @@ private:
     std::uint64_t mExtraPoint = 0; ///< the next refined point's index along the ray (after the steps' 3 per step)
     double mPhaseG;                ///< Henyey-Greenstein g (0: isotropic)
     double mGridForward;           ///< the share of σs the grids' transport kept in the beam
-    double mRestG;                 ///< the rest's mean cosine g*, with mScatterAnisotropy
+    RestPhase mRest;               ///< the rest of the phase, with mScatterAnisotropy
     /// The `scatter_anisotropy` grid, read trilinearly (none: the scattered light isotropic).
     std::optional<openvdb::Vec3SGrid::ConstAccessor> mScatterAnisotropy;
     std::vector<VolumeEmission::Sampler> mEmitters; ///< volume lights (none: empty)
@@ -592,7 +592,8 @@ public:
               context.scatterField ? &*context.scatterField : nullptr, context.options.directFromLights ? &context.volumeLights : nullptr,
               context.meshes.occluders, context.meshes.media, &context.emitters,
               context.firstMoment ? transportScaling(context.medium.phaseG()).forward : context.medium.phaseG(),
-              context.scatterAnisotropy.get(), context.grids.material().phaseG)
+              context.scatterAnisotropy.get(),
+              context.firstMoment ? RestPhase(transportScaling(context.medium.phaseG())) : RestPhase())
         , mShader(context.actual, context.surfaceLights, context.meshes.occluders, context.meshes.media,
               MarchOptions{context.options.step, context.options.cutoff})
         , mEpsilon(1e-4 * context.medium.voxelSize())

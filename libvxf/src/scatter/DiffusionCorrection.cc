@@ -87,6 +87,32 @@ DiffusionCorrection::DiffusionCorrection(const SweepLattice& lattice, int coarse
         }
     });
 
+    // With a phase, each cell's six neighbours (−1: vacuum) and its factor of the moment's
+    // change, χ1·σs/σtr per channel (solve's fluxChange), faded by 1/(σtr·h) in cells thicker
+    // than a transport mean free path: there a sweep's flux within a cell is not diffusion's,
+    // and the term slowed the smoke puff at 3 mean free paths per voxel (g 0.2, albedo 0.999)
+    // from 7 sweeps to 70 (docs/accuracy-notes.md (u)).
+    if (restG != 0.0) {
+        mNeighbours.assign(cells.size() * 6, -1);
+        mMomentFactor.assign(cells.size(), openvdb::Vec3d(0.0));
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t c = r.begin(); c != r.end(); ++c) {
+                for (int f = 0; f < 6; ++f) {
+                    openvdb::Coord next = cells[c];
+                    next[f >> 1] += (f & 1) ? 1 : -1;
+                    const auto found = cellIndex.find(next);
+                    if (found != cellIndex.end()) mNeighbours[c * 6 + std::size_t(f)] = found->second;
+                }
+                openvdb::Vec3d s(0.0);
+                for (std::uint32_t k = mStart[c]; k < mStart[c + 1]; ++k) s += openvdb::Vec3d(sigmaS[mMembers[k]]);
+                s /= double(mStart[c + 1] - mStart[c]);
+                for (int ch = 0; ch < 3; ++ch) {
+                    mMomentFactor[c][ch] = restG * s[ch] / cellSigmaT[c][ch] * std::min(1.0, 1.0 / (cellSigmaT[c][ch] * h));
+                }
+            }
+        });
+    }
+
     for (int ch = 0; ch < 3; ++ch) {
         for (int other = 0; other < ch && mChannels[ch].same < 0; ++other) {
             if (mChannels[other].same >= 0) continue;
@@ -127,7 +153,7 @@ DiffusionCorrection::DiffusionCorrection(const SweepLattice& lattice, int coarse
 }
 
 DiffusionCorrection::Solve DiffusionCorrection::solve(const std::vector<openvdb::Vec3f>& change, double guessScale, double tolerance,
-    int maxIterations)
+    int maxIterations, const std::vector<openvdb::Vec3f>* fluxChange)
 {
     Solve result;
     if (mMembers.empty()) return result;
@@ -135,6 +161,17 @@ DiffusionCorrection::Solve DiffusionCorrection::solve(const std::vector<openvdb:
     const std::vector<openvdb::Vec3f>& sigmaS = mLattice.sigmaS();
     const std::size_t cells = size();
     const auto count = openvdb::math::pcg::SizeType(cells);
+    // The first moment's change per cell (its voxels' mean), for the term −∇·(χ1σsΔF/σtr).
+    std::vector<openvdb::Vec3d> cellFlux;
+    if (fluxChange && !mMomentFactor.empty()) {
+        cellFlux.assign(cells, openvdb::Vec3d(0.0));
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t c = r.begin(); c != r.end(); ++c) {
+                for (std::uint32_t k = mStart[c]; k < mStart[c + 1]; ++k) cellFlux[c] += openvdb::Vec3d((*fluxChange)[mMembers[k]]);
+                cellFlux[c] /= double(mStart[c + 1] - mStart[c]);
+            }
+        });
+    }
     for (int ch = 0; ch < 3; ++ch) {
         const int source = mChannels[ch].same >= 0 ? mChannels[ch].same : ch;
         const Channel& channel = mChannels[source];
@@ -165,7 +202,21 @@ DiffusionCorrection::Solve DiffusionCorrection::solve(const std::vector<openvdb:
                     const std::size_t v = mMembers[k];
                     rhs += double(sigmaS[v][ch]) * double(change[v][ch]);
                 }
-                b[openvdb::math::pcg::SizeType(c)] = rhs / double(mStart[c + 1] - mStart[c]) * h;
+                rhs = rhs / double(mStart[c + 1] - mStart[c]) * h;
+                if (!cellFlux.empty()) {
+                    // −∮ G·n over the cell's faces (in units of the cell, as the rows are), G =
+                    // χ1σsΔF/σtr at a face the mean of its two cells', 0 at a vacuum face (taking
+                    // the cell's own there, where the light streams out, the sweeps diverged on
+                    // every cloud of (u)).
+                    const double own = mMomentFactor[c][ch];
+                    for (int f = 0; f < 6; ++f) {
+                        const int j = mNeighbours[c * 6 + std::size_t(f)];
+                        const double g = j < 0 ? 0.0
+                                               : 0.5 * (own * cellFlux[c][f >> 1] + mMomentFactor[std::size_t(j)][ch] * cellFlux[std::size_t(j)][f >> 1]);
+                        rhs -= (f & 1) ? g : -g;
+                    }
+                }
+                b[openvdb::math::pcg::SizeType(c)] = rhs;
                 if (guess) x[openvdb::math::pcg::SizeType(c)] = mSolution[ch][c] * guessScale;
             }
         });

@@ -64,7 +64,16 @@ public:
     /// @a tolerance relative residual (at most @a maxIterations), starting from the last
     /// solution times @a guessScale (the previous sweep's correction scaled as the change
     /// shrank; 0, or before the first solve: from 0).
-    Solve solve(const std::vector<openvdb::Vec3f>& change, double guessScale, double tolerance, int maxIterations);
+    /// With @a fluxChange (per voxel, F_{l+½} − F_l of the light's first moment, grey, along the
+    /// lattice's index axes) and a phase, the right-hand side takes the moment's part of the
+    /// P1 error equations too, −∇·(χ1σs·ΔF/σtr) (ΔF grey, each channel by its own σs/σtr; see
+    /// the constructor for where it fades). The moment itself is not corrected: correcting it
+    /// by the P1 error equations' ε1 = −D∇δ + χ1σsΔF/σtr too made every cloud of
+    /// docs/accuracy-notes.md (u) diverge (P1 synthetic acceleration is known to be unstable in
+    /// several dimensions); without this term the correction, blind to the moment's lag, stalled
+    /// or diverged on the forward clouds (g ≥ 0.6 at albedo 0.999).
+    Solve solve(const std::vector<openvdb::Vec3f>& change, double guessScale, double tolerance, int maxIterations,
+        const std::vector<openvdb::Vec3f>* fluxChange = nullptr);
 
     /// @a values (per voxel) += @a weight × the last solution δ, each voxel of the domain its cell's.
     void addTo(std::vector<openvdb::Vec3f>& values, double weight = 1.0) const;
@@ -83,6 +92,8 @@ private:
     std::vector<std::uint32_t> mStart;   ///< cell c's voxels: mMembers[mStart[c] … mStart[c + 1])
     std::vector<std::uint32_t> mMembers; ///< the domain's voxels (per-voxel indices), cell by cell
     Channel mChannels[3];
+    std::vector<std::int32_t> mNeighbours;     ///< with a phase, 6 per cell (−x, +x, −y, +y, −z, +z), −1: vacuum
+    std::vector<openvdb::Vec3d> mMomentFactor; ///< with a phase, per cell, χ1·σs/σtr (faded)
     std::vector<double> mSolution[3]; ///< per channel, δ per cell (empty: none yet)
 };
 

@@ -557,13 +557,13 @@ void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::v
                     const int leaf = mNeighbours[n * 27 + g.slot];
                     buffer[g.padded] = leaf >= 0 ? ownFaces[std::size_t(leaf) * kFaceVoxels + std::size_t(g.face)] : openvdb::Vec3f(0.0f);
                 }
-                // With a moment, the source toward ω: J·max(0, 1 + b·ω) over the leaf's padded block.
+                // With a moment, the source toward ω: J·RestPhase(a, ω) over the leaf's padded block.
                 const openvdb::Vec3f* j = &source[n * kPaddedVoxels];
                 openvdb::Vec3f worldOmega(0.0f);
                 if (moment) {
                     worldOmega = openvdb::Vec3f(moment->worldDirections[d]);
-                    const openvdb::Vec3f* b = &(*moment->sourceAnisotropy)[n * kPaddedVoxels];
-                    for (int q = 0; q < kPaddedVoxels; ++q) scratch.toward[std::size_t(q)] = j[q] * std::max(0.0f, 1.0f + b[q].dot(worldOmega));
+                    const openvdb::Vec3f* a = &(*moment->sourceAnisotropy)[n * kPaddedVoxels];
+                    for (int q = 0; q < kPaddedVoxels; ++q) scratch.toward[std::size_t(q)] = j[q] * moment->rest(a[q], worldOmega);
                     j = scratch.toward.data();
                 }
                 sweepLeaf(n, omega, upwindVoxels(octant, dominantAxis(omega)).data(), j, buffer, w, &fluence[n * kLeafVoxels],

@@ -4,6 +4,7 @@
 #include <vxf/core/Hash.h>
 #include <vxf/core/Interrupter.h>
 #include <vxf/light/Medium.h>
+#include <vxf/light/Phase.h>
 
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Interpolation.h>
@@ -102,14 +103,15 @@ public:
     /// (see SweepPass.h). With @a skinFluence (skinCount() values), also the fluence of each
     /// skin voxel on the surface (see withSkin).
     ///
-    /// With @a moment, the source is anisotropic to first order and the sweep adds up the
-    /// fluence's first moment too (an anisotropic rest of the phase, Phase.h): direction i
-    /// sweeps the source J·max(0, 1 + b·ω_i) (b per voxel, padded as @a source; |b| ≤ 3|g*|, so
-    /// for g* ≤ 1/3 the clamp never bites, beyond only where the light is near collimated), and flux += Σ_i weight·grey(ψ_i)·ω_i
-    /// (per voxel). ω_i and b are in world space (worldDirections: @a directions carried to it).
+    /// With @a moment, the source is anisotropic by the rest of the phase (Phase.h) and the
+    /// sweep adds up the fluence's first moment too: direction i sweeps the source
+    /// J·RestPhase(a, ω_i) (a per voxel, the source's mean direction of travel, padded as
+    /// @a source), and flux += Σ_i weight·grey(ψ_i)·ω_i (per voxel). ω_i and a are in world
+    /// space (worldDirections: @a directions carried to it).
     struct FirstMoment
     {
-        const std::vector<openvdb::Vec3f>* sourceAnisotropy = nullptr; ///< b, padded
+        RestPhase rest;                                                ///< the rest's moments
+        const std::vector<openvdb::Vec3f>* sourceAnisotropy = nullptr; ///< a, padded
         std::vector<openvdb::Vec3d> worldDirections;                  ///< one per sweep direction, unit
         std::vector<openvdb::Vec3f>* flux = nullptr;                   ///< per voxel, added to
     };

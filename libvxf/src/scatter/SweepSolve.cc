@@ -154,24 +154,26 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
     const std::vector<openvdb::Vec3f>& sigmaS = lattice.sigmaS();
     const std::vector<openvdb::Vec3d> directions = sweepDirections(std::max(options.directions, 1), options.rotationSeed);
     const double weight = 4.0 * M_PI / double(directions.size());
-    // The first moment (restG ≠ 0): J0's anisotropy b0 = 3g*·a0, per voxel; the directions in world space.
+    // The rest of the phase (restG ≠ 0): J0's mean direction of travel a0, per voxel; the
+    // directions in world space.
     std::optional<detail::SweepLattice::FirstMoment> moment;
-    std::vector<openvdb::Vec3f> b0, flux, b;
+    std::vector<openvdb::Vec3f> a0, flux, previousFlux, a;
     if (restG != 0.0) {
         moment.emplace();
+        moment->rest = RestPhase(transportScaling(medium.phaseG()));
         for (const openvdb::Vec3d& d : directions) {
             moment->worldDirections.push_back(medium.transform().baseMap()->applyJacobian(d).unit());
         }
         if (moments && moments->source) {
-            b0 = lattice.read(*moments->source);
-            for (openvdb::Vec3f& v : b0) v = openvdb::Vec3f(clampedToUnit(openvdb::Vec3d(v)) * (3.0 * restG));
+            a0 = lattice.read(*moments->source);
+            for (openvdb::Vec3f& v : a0) v = openvdb::Vec3f(clampedToUnit(openvdb::Vec3d(v)));
         } else {
-            b0.assign(count, openvdb::Vec3f(0.0f));
+            a0.assign(count, openvdb::Vec3f(0.0f));
         }
     }
     // Per voxel: what the iteration keeps (the sweep's own arrays and J come and go, so that at
     // most six such arrays and the padded source live at once: 950 MB at dim 256, 4.5M voxels;
-    // a first moment adds b0, b, F and two padded arrays, b's and the source toward a direction).
+    // a first moment adds a0, a, F and two padded arrays, a's and the source toward a direction).
     std::vector<openvdb::Vec3f> phi(count, openvdb::Vec3f(0.0f)), next, skin;
     std::vector<openvdb::Vec3f> firstFlight; // the gather's K J0 (the same every iteration)
     AndersonMixing mixing; // of the corrected gathers
@@ -218,24 +220,23 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
                 }
             });
             if (moment) {
-                // One anisotropy for the sum: its parts' b weighted by their grey J, the scattered
-                // light's b = 3g*·F/φ.
-                b.resize(count);
+                // One mean direction for the sum: its parts' a weighted by their grey J, the
+                // scattered light's a = F/φ.
+                a.resize(count);
                 tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
                     for (std::size_t v = r.begin(); v != r.end(); ++v) {
                         const double total = greyOf(openvdb::Vec3d(j[v])), own = greyOf(openvdb::Vec3d(j0[v]));
                         const double phiGrey = greyOf(openvdb::Vec3d(phi[v]));
-                        openvdb::Vec3d sum = own * openvdb::Vec3d(b0[v]);
-                        if (phiGrey > 0.0 && !flux.empty()) {
-                            sum += (total - own) * 3.0 * restG * clampedToUnit(openvdb::Vec3d(flux[v]) / phiGrey);
-                        }
-                        b[v] = total > 0.0 ? openvdb::Vec3f(sum / total) : openvdb::Vec3f(0.0f);
+                        openvdb::Vec3d sum = own * openvdb::Vec3d(a0[v]);
+                        if (phiGrey > 0.0 && !flux.empty()) sum += (total - own) * clampedToUnit(openvdb::Vec3d(flux[v]) / phiGrey);
+                        a[v] = total > 0.0 ? openvdb::Vec3f(sum / total) : openvdb::Vec3f(0.0f);
                     }
                 });
             }
-            const std::vector<openvdb::Vec3f> paddedB = moment ? lattice.padded(b) : std::vector<openvdb::Vec3f>();
+            const std::vector<openvdb::Vec3f> paddedA = moment ? lattice.padded(a) : std::vector<openvdb::Vec3f>();
             if (moment) {
-                moment->sourceAnisotropy = &paddedB;
+                moment->sourceAnisotropy = &paddedA;
+                previousFlux.swap(flux);
                 flux.assign(count, openvdb::Vec3f(0.0f));
                 moment->flux = &flux;
             }
@@ -278,7 +279,20 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
                 const double moved = l1Max(change);
                 const double scale = previousChange > 0.0 ? std::min(1.0, moved / std::max(previousMoved, 1e-300)) : 0.0;
                 previousMoved = moved;
-                const auto solved = diffusion->solve(change, scale, kDiffusionTolerance, 1000);
+                // With a phase, the first moment's change too (along the lattice's axes).
+                std::vector<openvdb::Vec3f> fluxChange;
+                if (moment) {
+                    const openvdb::math::MapBase& map = *medium.transform().baseMap();
+                    const double dx = medium.voxelSize();
+                    fluxChange.resize(count);
+                    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
+                        for (std::size_t v = r.begin(); v != r.end(); ++v) {
+                            const openvdb::Vec3d d(previousFlux.empty() ? flux[v] : flux[v] - previousFlux[v]);
+                            fluxChange[v] = openvdb::Vec3f(map.applyInverseJacobian(d) * dx);
+                        }
+                    });
+                }
+                const auto solved = diffusion->solve(change, scale, kDiffusionTolerance, 1000, fluxChange.empty() ? nullptr : &fluxChange);
                 corrected = true;
                 it.diffusionIterations = solved.iterations;
                 it.diffusionResidual = solved.residual;
@@ -358,7 +372,7 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
     }
     if (moment && moments) {
         // a = F/φ at the centres (the skin's too: the correction is isotropic, F the last sweep's).
-        std::vector<openvdb::Vec3f> a(count);
+        a.resize(count);
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
             for (std::size_t v = r.begin(); v != r.end(); ++v) {
                 const double phiGrey = greyOf(openvdb::Vec3d(phi[v]));

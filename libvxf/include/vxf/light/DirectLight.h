@@ -91,7 +91,7 @@ openvdb::Vec3d lightFluence(const LightSampler& light, Medium::Sampler& sampler,
 /// - `scatter_source` (Vec3f): J0 = σs·φ0/(4π) + the emission of volume lights, same topology
 ///   (0 outside the medium, where σs is 0);
 /// - with an anisotropic rest of the phase (medium.material().phaseG ≠ 0),
-///   `scatter_source_anisotropy` (Vec3f, Phase.h): J0's mean direction, J0(ω) = J0·(1 + 3g*·a·ω);
+///   `scatter_source_anisotropy` (Vec3f, Phase.h): J0's mean direction a, J0(ω) = J0·R(a, ω);
 ///   without, a set's old one is removed.
 /// Lights with zero power are skipped and reported. Parallel over leaf nodes (TBB);
 /// each voxel is computed on its own, so results do not depend on the number of threads.

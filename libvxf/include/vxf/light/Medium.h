@@ -18,7 +18,7 @@ class UniformBricks;
 /// trilinear. Read-only and cheap to copy; give each thread its own Sampler.
 /// A material of Henyey-Greenstein g ≠ 0 gives the transport's coefficients (transportScaling,
 /// Phase.h): σs* = (1 − f)·σs, σt* = σt − f·σs, and the rest of the phase of mean cosine g*
-/// (material().phaseG; for g > 0 delta-Eddington, f = g², g* = g/(1 + g); for g < 0 the
+/// (material().phaseG; for g > 0 delta-M of order 3, f = g⁴, g* = (g − f)/(1 − f); for g < 0 the
 /// similarity relation, f = g, g* = 0), which the light stage, the accelerated sweeps and the
 /// camera's read of their light take; isotropic() is the similarity relation's medium (σs(1 − g),
 /// isotropic) for the transport that carries no angular moment; actual() the material's own
@@ -46,7 +46,7 @@ public:
     /// Index-space bounds of the medium (active density), empty when there is none.
     const openvdb::CoordBBox& activeBounds() const { return mBounds; }
     const openvdb::FloatGrid& density() const { return *mDensity; }
-    /// The material of the coefficients held: the transport's (delta-Eddington: σs*, and as
+    /// The material of the coefficients held: the transport's (delta-M: σs*, and as
     /// phaseG the rest's mean cosine g*), isotropic()'s (σs', g 0) or actual()'s, the material
     /// itself. A Medium made from it takes it as a material of its own.
     const Material& material() const { return mMaterial; }

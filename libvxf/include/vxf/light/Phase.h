@@ -33,33 +33,76 @@ inline double henyeyGreenstein4Pi(double g, double cosTheta)
 /// single scattering with the phase itself.
 inline double reducedScatteringFactor(double g) { return 1.0 - g; }
 
+/// How many Legendre moments of the phase the transport carries (delta-M of this order).
+inline constexpr int kRestOrders = 3;
+
 /// How the transport takes a phase of mean cosine g: the share f of σs it keeps in the beam
-/// (σs* = (1 − f)·σs, σt* = σt − f·σs) and the mean cosine g* of the rest, which the sweep
-/// solve carries as a first angular moment, the source (σs*/4π)(φ + 3g*·F·ω).
+/// (σs* = (1 − f)·σs, σt* = σt − f·σs) and the Legendre moments χ*_l (l = 1…kRestOrders) of the
+/// rest, whose scattering the sweep solve and the camera's read take by RestPhase.
 struct PhaseScaling
 {
-    double forward = 0.0; ///< f
-    double restG = 0.0;   ///< g*
+    double forward = 0.0;                ///< f
+    double restG = 0.0;                  ///< g* = χ*_1, the rest's mean cosine
+    double rest[kRestOrders] = {0, 0, 0}; ///< χ*_1…χ*_3
 };
 
-/// The transport's scaling (Medium::material()). A forward phase (g > 0) by delta-Eddington:
-/// f = g², the Henyey-Greenstein phase's second Legendre moment, and g* = (g − f)/(1 − f) =
-/// g/(1 + g) (≤ 0.49 at g = 0.95); σt* − g*σs* = σt − g·σs, so deep in a thick medium the
-/// diffuse light is the similarity relation's. On the smoke puff of docs/accuracy-notes.md (p)
-/// Mitsuba put this scaling's multiple scattering 23% (back-lit) and 10% (front-lit) below the
-/// true phase's, against 47% and 30% for the similarity relation. A backward phase has no
-/// forward peak to cut, and its first moment, one sweep behind in the solve, alternates in sign
-/// and slowed the accelerated sweeps to a rate of 0.69 (g = −0.3, albedo 0.999): it keeps the
-/// similarity relation, f = g (< 0: σs' > σs), g* = 0.
+/// The transport's scaling (Medium::material()). A forward phase (g > 0) by delta-M of order 3
+/// (Wiscombe 1977): f = g⁴, the Henyey-Greenstein phase's fourth Legendre moment, kept in the
+/// beam, and the rest's moments χ*_l = (g^l − f)/(1 − f), exact for l ≤ 3 (g* = χ*_1 ≤ 0.73 at
+/// g = 0.95); σt* − g*σs* = σt − g·σs, so deep in a thick medium the diffuse light is the
+/// similarity relation's. On the smoke puff of docs/accuracy-notes.md (p, q, u) Mitsuba put the
+/// multiple scattering of such a cut phase 7% below the true phase's (back-lit), against 12%
+/// for f = g³, 23% for delta-Eddington (f = g²) and 47% for the similarity relation. A backward
+/// phase has no forward peak to cut, and its first moment, one sweep behind in the solve,
+/// alternates in sign and slowed the accelerated sweeps to a rate of 0.69 (g = −0.3, albedo
+/// 0.999): it keeps the similarity relation, f = g (< 0: σs' > σs), χ* = 0.
 inline PhaseScaling transportScaling(double g)
 {
-    if (g > 0.0) return {g * g, g / (1.0 + g)};
-    return {g, 0.0};
+    PhaseScaling s;
+    if (g <= 0.0) {
+        s.forward = g;
+        return s;
+    }
+    const double g2 = g * g;
+    s.forward = g2 * g2;
+    double gl = 1.0;
+    for (int l = 0; l < kRestOrders; ++l) {
+        gl *= g;
+        s.rest[l] = (gl - s.forward) / (1.0 - s.forward);
+    }
+    s.restG = s.rest[0];
+    return s;
 }
 
-/// The first angular moment the transport keeps for the rest's g* (≠ 0 only), as the mean
+/// The rest of the phase (PhaseScaling::rest, in float) as the sweeps and the camera's read
+/// take it: the angular factor of light scattered toward unit ω of light whose mean direction
+/// of travel is a (|a| = k ≤ 1), that light's angular shape taken as a Henyey-Greenstein lobe of
+/// parameter k about â (exact for a collimated beam, k = 1, and for isotropic light, k = 0; its
+/// first moment k·â in every case), whose moments k^l the rest scatters by its χ*_l:
+/// 1 + Σ_l (2l + 1)·χ*_l·k^l·P_l(â·ω) = 1 + 3χ*_1·c + (5/2)χ*_2·(3c² − k²) + (7/2)χ*_3·(5c³ −
+/// 3c·k²), c = a·ω, clamped at 0 (a strongly forward rest of a near-collimated beam dips below
+/// it backward). Its mean over the sphere is 1, and over the sweep's directions too (opposite
+/// pairs, isotropic second moments: SweepPass.h), clamp aside.
+struct RestPhase
+{
+    float chi[kRestOrders] = {0.0f, 0.0f, 0.0f};
+
+    RestPhase() = default;
+    explicit RestPhase(const PhaseScaling& s)
+    {
+        for (int l = 0; l < kRestOrders; ++l) chi[l] = float(s.rest[l]);
+    }
+    float operator()(const openvdb::Vec3f& a, const openvdb::Vec3f& omega) const
+    {
+        const float c = a.dot(omega), k2 = a.lengthSqr();
+        const float f = 1.0f + c * (3.0f * chi[0] + 3.5f * chi[2] * (5.0f * c * c - 3.0f * k2)) + 2.5f * chi[1] * (3.0f * c * c - k2);
+        return f > 0.0f ? f : 0.0f;
+    }
+};
+
+/// The angular moment the transport keeps for the rest of the phase (g* ≠ 0 only), as the mean
 /// direction of travel a = F/φ of the light (world space, |a| ≤ 1, one vector for the three
-/// channels: F and φ their means), so that a source emits J(ω) = J·(1 + 3g*·a·ω) toward ω:
+/// channels: F and φ their means), so that a source emits J(ω) = J·RestPhase(a, ω) toward ω:
 /// the light stage's source J0 (its scattered share; a volume light's emission has none) and
 /// the scattered fluence the solve writes, which the camera reads toward itself. Scaling a
 /// fluence grid leaves its anisotropy as it is; a set with g = 0 has neither grid.

@@ -94,11 +94,14 @@ struct SweepSolveReport
 /// no rate (the first made the whole estimate), so an accelerated solve stops at the second only
 /// when its change is within a tenth of the tolerance.
 ///
-/// An anisotropic rest of the phase (medium.material().phaseG = g* ≠ 0, Phase.h) is carried as
-/// a first angular moment: each sweep's source is J0·(1 + 3g*·a0·ω) + (σs/4π)(φ_l + 3g*·F_l·ω)
-/// (one anisotropy vector for the channels, SweepLattice::FirstMoment), F_l the last sweep's
-/// first moment; the diffusion correction takes 1/(3(σt − g*σs)) and corrects φ alone. The
-/// sweeps only: with the gather the medium must be isotropic (Medium::isotropic; UsageError).
+/// An anisotropic rest of the phase (medium.material().phaseG = g* ≠ 0, Phase.h) is carried by
+/// the light's mean direction of travel: each sweep's source toward ω is (J0 + σs·φ_l/4π)·R(a, ω),
+/// R the rest of the phase (RestPhase: the light a Henyey-Greenstein lobe about a, scattered
+/// by the rest's Legendre moments to order 3), a the mean of J0's a0 and the scattered light's
+/// F_l/φ_l weighted by their grey J (one vector for the channels, SweepLattice::FirstMoment),
+/// F_l the last sweep's first moment. The diffusion correction takes 1/(3(σt − g*σs)) and the
+/// moment's change as a source (DiffusionCorrection::solve) and corrects φ alone. The sweeps
+/// only: with the gather the medium must be isotropic (Medium::isotropic; UsageError).
 /// @a moments: a0 as a grid (`scatter_source_anisotropy`; null: J0 isotropic), and out the
 /// scattered fluence's anisotropy a = F/φ (`scatter_anisotropy`, source's topology).
 struct SweepMoments
