@@ -91,7 +91,7 @@ DiffusionCorrection::DiffusionCorrection(const SweepLattice& lattice, int coarse
     // change, χ1·σs/σtr per channel (solve's fluxChange), faded by 1/(σtr·h) in cells thicker
     // than a transport mean free path: there a sweep's flux within a cell is not diffusion's,
     // and the term slowed the smoke puff at 3 mean free paths per voxel (g 0.2, albedo 0.999)
-    // from 7 sweeps to 70 (docs/accuracy-notes.md (u)).
+    // from 7 sweeps to 70 (docs/accuracy-notes.md (y)).
     if (restG != 0.0) {
         mNeighbours.assign(cells.size() * 6, -1);
         mMomentFactor.assign(cells.size(), openvdb::Vec3d(0.0));
@@ -207,7 +207,7 @@ DiffusionCorrection::Solve DiffusionCorrection::solve(const std::vector<openvdb:
                     // −∮ G·n over the cell's faces (in units of the cell, as the rows are), G =
                     // χ1σsΔF/σtr at a face the mean of its two cells', 0 at a vacuum face (taking
                     // the cell's own there, where the light streams out, the sweeps diverged on
-                    // every cloud of (u)).
+                    // every cloud of docs/accuracy-notes.md (y)).
                     const double own = mMomentFactor[c][ch];
                     for (int f = 0; f < 6; ++f) {
                         const int j = mNeighbours[c * 6 + std::size_t(f)];

@@ -69,7 +69,7 @@ public:
     /// P1 error equations too, −∇·(χ1σs·ΔF/σtr) (ΔF grey, each channel by its own σs/σtr; see
     /// the constructor for where it fades). The moment itself is not corrected: correcting it
     /// by the P1 error equations' ε1 = −D∇δ + χ1σsΔF/σtr too made every cloud of
-    /// docs/accuracy-notes.md (u) diverge (P1 synthetic acceleration is known to be unstable in
+    /// docs/accuracy-notes.md (y) diverge (P1 synthetic acceleration is known to be unstable in
     /// several dimensions); without this term the correction, blind to the moment's lag, stalled
     /// or diverged on the forward clouds (g ≥ 0.6 at albedo 0.999).
     Solve solve(const std::vector<openvdb::Vec3f>& change, double guessScale, double tolerance, int maxIterations,

@@ -50,7 +50,7 @@ struct PhaseScaling
 /// (Wiscombe 1977): f = g⁴, the Henyey-Greenstein phase's fourth Legendre moment, kept in the
 /// beam, and the rest's moments χ*_l = (g^l − f)/(1 − f), exact for l ≤ 3 (g* = χ*_1 ≤ 0.73 at
 /// g = 0.95); σt* − g*σs* = σt − g·σs, so deep in a thick medium the diffuse light is the
-/// similarity relation's. On the smoke puff of docs/accuracy-notes.md (p, q, u) Mitsuba put the
+/// similarity relation's. On the smoke puff of docs/accuracy-notes.md (p, q, y) Mitsuba put the
 /// multiple scattering of such a cut phase 7% below the true phase's (back-lit), against 12%
 /// for f = g³, 23% for delta-Eddington (f = g²) and 47% for the similarity relation. A backward
 /// phase has no forward peak to cut, and its first moment, one sweep behind in the solve,
