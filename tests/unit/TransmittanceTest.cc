@@ -340,6 +340,61 @@ TEST_CASE("marches cross uniform regions in one go with the same optical depth",
     }
 }
 
+TEST_CASE("a grid too large for a dense copy: marches cross its tree's empty nodes and tiles in one go", "[light][transmittance][volume]")
+{
+    // Two puffs 4000 voxels apart along each axis (a box of 6.4e10 voxels: no dense copy): a
+    // 16³ block of density 1 held as tiles, and a 16³ block whose density varies (leaf voxels).
+    // The regions are the tree's (its tiles, and the background between its nodes), and the
+    // optical depth along rays through both is the same, to rounding, as the same medium's
+    // given as sigma grids, whose marches take every step.
+    const double dx = 0.1, sigmaA = 0.5, sigmaS = 1.5;
+    vxf::VoxelSet set(openvdb::math::Transform::createLinearTransform(dx));
+    auto density = openvdb::FloatGrid::create(0.0f);
+    density->setName("density");
+    density->setTransform(set.transformPtr());
+    density->tree().fill(openvdb::CoordBBox(openvdb::Coord(0), openvdb::Coord(15)), 1.0f, true);
+    const openvdb::Coord far(4000);
+    for (auto ijk = openvdb::CoordBBox(far, far.offsetBy(15)).begin(); ijk; ++ijk) {
+        density->tree().setValueOn(*ijk, 0.5f + 0.03f * float(((*ijk)[0] + 2 * (*ijk)[1] + 3 * (*ijk)[2]) % 17));
+    }
+    set.put(density);
+    const vxf::Medium medium(set, vxf::test::greyMaterial(sigmaA, sigmaS));
+    const vxf::UniformBricks* uniform = medium.uniformBricks();
+    REQUIRE(uniform != nullptr);
+    openvdb::Vec3d lo, hi;
+    float value = -1.0f;
+    CHECK(uniform->find(openvdb::Vec3d(2000.5), 1.0, lo, hi, value)); // between the puffs: the background
+    CHECK(value == 0.0f);
+    CHECK(hi[0] - lo[0] >= 126.0); // a node of 128³ or more, less a voxel at either face
+    CHECK(uniform->find(openvdb::Vec3d(3.5, 4.2, 2.9), 1.0, lo, hi, value)); // inside a tile of the first puff
+    CHECK(value == 1.0f);
+    CHECK_FALSE(uniform->find(openvdb::Vec3d(7.5, 4.2, 2.9), 1.0, lo, hi, value)); // a voxel from its face: reads the next tile
+    CHECK_FALSE(uniform->find(far.asVec3d() + openvdb::Vec3d(4.5), 1.0, lo, hi, value)); // the second puff's voxels
+
+    vxf::VoxelSet grids = set;
+    for (const auto& [name, sigma] : {std::pair<const char*, double>{"sigma_a", sigmaA}, {"sigma_s", sigmaS}}) {
+        auto grid = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
+        grid->setName(name);
+        grid->setTransform(density->transformPtr()->copy());
+        grid->tree().topologyUnion(density->tree());
+        grid->tree().voxelizeActiveTiles();
+        for (auto it = grid->tree().beginValueOn(); it; ++it) it.setValue(openvdb::Vec3f(float(sigma * density->tree().getValue(it.getCoord()))));
+        grids.put(grid);
+    }
+    const vxf::Medium stepped(grids, vxf::test::greyMaterial(0.0, 0.0));
+    REQUIRE(stepped.uniformBricks() == nullptr);
+    vxf::Medium::Sampler a(medium), b(stepped);
+    for (const openvdb::Vec3d& aim : {openvdb::Vec3d(0.0), openvdb::Vec3d(0.3, -0.2, 0.1), openvdb::Vec3d(-0.4, 0.5, 0.2)}) {
+        const openvdb::Vec3d from = openvdb::Vec3d(-20.0) + aim, to = far.asVec3d() + openvdb::Vec3d(40.0) - aim;
+        const vxf::MarchOptions march{1.0, 0.0};
+        const double one = -std::log(vxf::transmittance(a, medium, from, to, march).x());
+        const double other = -std::log(vxf::transmittance(b, stepped, from, to, march).x());
+        INFO("from " << from << " to " << to);
+        CHECK(one > 1.0);
+        CHECK(one == Approx(other).epsilon(1e-6));
+    }
+}
+
 TEST_CASE("a surface on another lattice is refused by name", "[light][transmittance]")
 {
     // Files may hold grids on other transforms (kept as read); the sharp boundary needs the

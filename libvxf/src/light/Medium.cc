@@ -105,6 +105,8 @@ Medium::Medium(const VoxelSet& set, const Material& material)
     if (mSurface) mSurfaceDense = DenseCopy<openvdb::FloatGrid>::create(*mSurface, 2, kDenseCopyBytes);
     if (!mSigmaA && !mSigmaS && mDensityDense) {
         mUniform = std::make_shared<const UniformBricks>(mDensityDense.get(), mBounds, mSurfaceDense.get(), voxelSize(), bool(mSurface));
+    } else if (!mSigmaA && !mSigmaS && !mSurface && !mBounds.empty()) {
+        mUniform = std::make_shared<const UniformBricks>(mDensity); // too large for a dense copy: the tree's regions
     }
 }
 

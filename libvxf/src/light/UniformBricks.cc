@@ -111,8 +111,39 @@ UniformBricks::UniformBricks(const DenseCopy<openvdb::FloatGrid>* density, const
     });
 }
 
+UniformBricks::UniformBricks(openvdb::FloatGrid::ConstPtr density)
+    : mTree(std::move(density))
+{
+}
+
+bool UniformBricks::findInTree(const openvdb::Vec3d& p, openvdb::Vec3d& lo, openvdb::Vec3d& hi, float& density) const
+{
+    using Tree = openvdb::FloatTree;
+    using Upper = Tree::RootNodeType::ChildNodeType;
+    using Lower = Upper::ChildNodeType;
+    const openvdb::Coord voxel = openvdb::Coord::floor(p);
+    const Tree& tree = mTree->tree();
+    // The depth of the node holding voxel's value: −1 the background beyond the root's nodes, 0 a
+    // root tile, 1 and 2 the internal nodes' tiles, 3 a leaf's voxel (not a region).
+    const int depth = tree.getValueDepth(voxel);
+    const int size = depth <= 0 ? int(Upper::DIM) : depth == 1 ? int(Lower::DIM) : depth == 2 ? int(Lower::ChildNodeType::DIM) : 0;
+    if (size == 0) return false;
+    const float value = tree.getValue(voxel);
+    if (!(value >= 0.0f && std::isfinite(value))) return false;
+    const openvdb::Coord first(voxel[0] & ~(size - 1), voxel[1] & ~(size - 1), voxel[2] & ~(size - 1));
+    // Points whose reads (their floor voxel and the next) stay inside, a voxel from either face.
+    lo = first.asVec3d() + openvdb::Vec3d(1.0);
+    hi = first.asVec3d() + openvdb::Vec3d(double(size - 1));
+    for (int a = 0; a < 3; ++a) {
+        if (p[a] < lo[a] || p[a] >= hi[a]) return false;
+    }
+    density = value;
+    return true;
+}
+
 bool UniformBricks::find(const openvdb::Vec3d& p, double step, openvdb::Vec3d& lo, openvdb::Vec3d& hi, float& density) const
 {
+    if (mTree) return findInTree(p, lo, hi, density);
     if (mBricks.empty()) return false;
     const openvdb::Coord voxel = openvdb::Coord::floor(p);
     const auto in = [&](const std::vector<float>& table, int shift, const openvdb::Coord& origin, const openvdb::Coord& dims) {

@@ -116,19 +116,30 @@ public:
         InsideSteps inside(mSampler, o, d, t0, h);
         InsideStep step;
         Emission eStart, eMiddle, eEnd; // J at the step's start, middle and end
+        bool endRead = false;           // eEnd is the last step's (an empty step reads none)
         for (int i = 0; i < steps; ++i) {
             // Only the part of the step inside the surface holds medium (sharp boundary).
             if (!inside.next(step)) continue;
             const std::uint64_t point = 3 * std::uint64_t(i); // the ray's emission points, 3 per step
+            // An empty step adds nothing: its J is not read (a volume object's empty space, where
+            // marching to the lights from every step was most of the render).
+            const openvdb::Vec3d sigmaT = mSampler.sigmaT(step.midpoint) * step.interior;
+            if (sigmaT[0] <= 0.0 && sigmaT[1] <= 0.0 && sigmaT[2] <= 0.0) {
+                endRead = false;
+                continue;
+            }
             // The interior scale at the step's ends, where σs is read there (lights).
             const auto scaleAt = [&](const openvdb::Vec3d& p) {
                 return mLights ? mSampler.interiorScale(p, step.distanceBound) : 1.0;
             };
-            eStart = step.joined ? eEnd : emission(step.start, scaleAt(step.start), key, point);
+            // A joined step starts where the last ended: its J there, read as the last step's end
+            // (point − 1) would have been.
+            eStart = !step.joined ? emission(step.start, scaleAt(step.start), key, point)
+                : endRead         ? eEnd
+                                  : emission(step.start, scaleAt(step.start), key, point - 1);
             eMiddle = emission(step.midpoint, step.interior, key, point + 1);
             eEnd = emission(step.end, scaleAt(step.end), key, point + 2);
-            const openvdb::Vec3d sigmaT = mSampler.sigmaT(step.midpoint) * step.interior;
-            if (sigmaT[0] <= 0.0 && sigmaT[1] <= 0.0 && sigmaT[2] <= 0.0) continue;
+            endRead = true;
             g.touched = true;
             const double hWorld = step.length * mMedium.voxelSize();
             const Segment whole{step.start, step.end, hWorld, eStart, eMiddle, eEnd};

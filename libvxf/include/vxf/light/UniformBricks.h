@@ -50,6 +50,13 @@ public:
     UniformBricks(const DenseCopy<openvdb::FloatGrid>* density, const openvdb::CoordBBox& bounds,
         const DenseCopy<openvdb::FloatGrid>* surface, double dx, bool hasSurface);
 
+    /// Without a dense copy (a grid too large for one, e.g. a simulation's puffs far apart) and
+    /// without a surface: the regions are the density tree's own tiles and the background
+    /// between its nodes (Tree::getValueDepth), 8³ to 4096³ voxels of one value, less a voxel
+    /// at their faces (trilinear reads reach the next voxel), so that a march crosses the empty
+    /// space between a sparse grid's parts in one go rather than a step at a time.
+    explicit UniformBricks(openvdb::FloatGrid::ConstPtr density);
+
     /// The uniform region holding index-space point @a p for march steps of @a step voxels (a
     /// block where there is one, else a brick) as its closed-open box [lo, hi) of points whose
     /// floor lies in it, and its @a density (0 outside the surface); false where @a p lies in no
@@ -66,6 +73,9 @@ private:
 
     openvdb::Coord mBrickOrigin, mBrickDims, mBlockOrigin, mBlockDims; ///< in bricks, in blocks
     std::vector<float> mBricks, mBlocks;
+    openvdb::FloatGrid::ConstPtr mTree; ///< the tree's regions instead of the tables'
+    /// The tree's region holding index point @a p (find's), if any.
+    bool findInTree(const openvdb::Vec3d& p, openvdb::Vec3d& lo, openvdb::Vec3d& hi, float& density) const;
     std::size_t mUniformBricks = 0;
 };
 
