@@ -41,17 +41,9 @@ namespace {
 int uniformSteps(const UniformBricks& uniform, const openvdb::Vec3d& p, const openvdb::Vec3d& unit, double h, int most,
     openvdb::Vec3d& tau, const Medium& medium)
 {
-    openvdb::Vec3d lo, hi;
-    float density;
-    if (most < 2 || !uniform.find(p, h, lo, hi, density)) return 0;
-    double leave = std::numeric_limits<double>::max();
-    for (int a = 0; a < 3; ++a) {
-        if (unit[a] > 0.0) leave = std::min(leave, (hi[a] - p[a]) / unit[a]);
-        if (unit[a] < 0.0) leave = std::min(leave, (lo[a] - p[a]) / unit[a]);
-    }
-    // Every step's end strictly before it leaves: a point on the region's far face reads beyond it.
-    const int count = std::min(most, int(std::ceil(leave / h)) - 1);
-    if (count < 2) return 0;
+    float density = 0.0f;
+    const int count = uniform.stepsWithin(p, unit, h, most, density);
+    if (count == 0) return 0;
     const openvdb::Vec3d sigmaT = medium.material().sigmaT() * double(density);
     const double length = count * h * medium.voxelSize();
     for (int c = 0; c < 3; ++c) tau[c] += std::max(0.0, sigmaT[c]) * length;

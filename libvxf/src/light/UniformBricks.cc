@@ -162,4 +162,17 @@ bool UniformBricks::find(const openvdb::Vec3d& p, double step, openvdb::Vec3d& l
     return in(mBlocks, kBlockShift, mBlockOrigin, mBlockDims) || in(mBricks, kBrickShift, mBrickOrigin, mBrickDims);
 }
 
+int UniformBricks::stepsWithin(const openvdb::Vec3d& p, const openvdb::Vec3d& direction, double step, int most, float& density) const
+{
+    openvdb::Vec3d lo, hi;
+    if (most < 2 || !find(p, step, lo, hi, density)) return 0;
+    double leave = std::numeric_limits<double>::max();
+    for (int a = 0; a < 3; ++a) {
+        if (direction[a] > 0.0) leave = std::min(leave, (hi[a] - p[a]) / direction[a]);
+        if (direction[a] < 0.0) leave = std::min(leave, (lo[a] - p[a]) / direction[a]);
+    }
+    const int count = std::min(most, int(std::ceil(leave / step)) - 1);
+    return count < 2 ? 0 : count;
+}
+
 } // namespace vxf

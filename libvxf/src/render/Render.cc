@@ -6,6 +6,7 @@
 #include <vxf/light/InteriorField.h>
 #include <vxf/light/LightSampler.h>
 #include <vxf/light/Phase.h>
+#include <vxf/light/UniformBricks.h>
 #include <vxf/light/Transmittance.h>
 #include <vxf/light/VolumeEmission.h>
 #include <vxf/scatter/SourceField.h>
@@ -117,7 +118,17 @@ public:
         InsideStep step;
         Emission eStart, eMiddle, eEnd; // J at the step's start, middle and end
         bool endRead = false;           // eEnd is the last step's (an empty step reads none)
+        const UniformBricks* uniform = mMedium.uniformBricks();
         for (int i = 0; i < steps; ++i) {
+            // Empty space (a region of density 0, or outside the surface) crossed at once.
+            float density = 0.0f;
+            const int empty = uniform ? uniform->stepsWithin(o + d * inside.t(), d, h, steps - i, density) : 0;
+            if (empty > 0 && density == 0.0f) {
+                inside.skip(empty);
+                i += empty - 1;
+                endRead = false;
+                continue;
+            }
             // Only the part of the step inside the surface holds medium (sharp boundary).
             if (!inside.next(step)) continue;
             const std::uint64_t point = 3 * std::uint64_t(i); // the ray's emission points, 3 per step

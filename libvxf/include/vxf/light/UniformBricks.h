@@ -63,6 +63,12 @@ public:
     /// such region.
     bool find(const openvdb::Vec3d& p, double step, openvdb::Vec3d& lo, openvdb::Vec3d& hi, float& density) const;
 
+    /// The whole steps of @a step voxels from @a p along unit @a direction that lie in the
+    /// region holding @a p (at most @a most; 0 for fewer than two, or no region), every step's
+    /// end strictly before the region's far face (a point on it reads beyond), with the
+    /// region's @a density.
+    int stepsWithin(const openvdb::Vec3d& p, const openvdb::Vec3d& direction, double step, int most, float& density) const;
+
     /// Bricks found uniform (for reports and tests).
     std::size_t uniformBrickCount() const { return mUniformBricks; }
 
