@@ -729,7 +729,7 @@ TEST_CASE("a Henyey-Greenstein phase: the scattered light reaches the camera thr
     CHECK(image.scatter[15 * 31 + 15].x() == Approx(reducedS * phi / (4.0 * M_PI) / reducedT).epsilon(0.01));
 }
 
-TEST_CASE("a Henyey-Greenstein phase: the scattered light's mean direction scatters it toward the camera by the rest of the phase", "[render][phase]")
+TEST_CASE("a Henyey-Greenstein phase: the grids' light scatters toward the camera by the rest of the phase from its mean direction", "[render][phase]")
 {
     // The accelerated sweeps' scattered fluence φ with its mean direction a (`scatter_anisotropy`),
     // in the delta-M medium (f = g⁴ kept in the beam, Phase.h): toward the camera
@@ -737,20 +737,25 @@ TEST_CASE("a Henyey-Greenstein phase: the scattered light's mean direction scatt
     // sight (t > 0 toward the camera; the light taken as a Henyey-Greenstein lobe of parameter
     // |t|, χ_l = (g^l − f)/(1 − f) the rest's moments), reaching it through σt* = σt − f·σs: in a
     // thick sphere L = J/σt*. The light travelling toward the camera (a along −y, the camera at
-    // −y) is the brighter, away from it the darker.
+    // −y) is the brighter, away from it the darker. The `direct` grid's J (read, not marched to
+    // the lights) alike from `scatter_source_anisotropy`.
     const double g = 0.6, phi = 3.0, f = std::pow(g, 4.0);
     vxf::Material m = vxf::test::greyMaterial(2.0, 8.0); // σt = 10
     m.phaseG = g;
     const double sigmaS = (1.0 - f) * 8.0, sigmaT = 10.0 - f * 8.0;
     double chi[3];
     for (int l = 0; l < 3; ++l) chi[l] = (std::pow(g, l + 1) - f) / (1.0 - f);
+    const double direct = 2.0;
     for (const double toward : {0.6, -0.6}) {
-        vxf::VoxelSet set = litSphere(0.0);
+        vxf::VoxelSet set = litSphere(direct);
         vxf::test::putConstantFluence(set, "scatter", phi);
         auto anisotropy = set.get<openvdb::Vec3SGrid>("scatter")->deepCopy();
         for (auto it = anisotropy->beginValueOn(); it; ++it) it.setValue(openvdb::Vec3f(0.0f, float(-toward), 0.0f));
         anisotropy->setName("scatter_anisotropy");
         set.put(anisotropy);
+        auto sourceAnisotropy = anisotropy->deepCopy();
+        sourceAnisotropy->setName("scatter_source_anisotropy");
+        set.put(sourceAnisotropy);
         const vxf::Medium medium(set, m);
         vxf::RenderOptions options;
         options.width = options.height = 31;
@@ -759,6 +764,7 @@ TEST_CASE("a Henyey-Greenstein phase: the scattered light's mean direction scatt
         INFO("a toward the camera " << toward);
         const double r = 1.0 + 3.0 * chi[0] * toward + 5.0 * chi[1] * toward * toward + 7.0 * chi[2] * toward * toward * toward;
         CHECK(image.scatter[15 * 31 + 15].x() == Approx(sigmaS * phi * r / (4.0 * M_PI) / sigmaT).epsilon(0.01));
+        CHECK(image.direct[15 * 31 + 15].x() == Approx(sigmaS * direct * r / (4.0 * M_PI) / sigmaT).epsilon(0.01));
         // Read in the medium's index space: a grid on other voxels is refused, not misread.
         anisotropy->setTransform(openvdb::math::Transform::createLinearTransform(0.5));
         CHECK_THROWS_WITH(vxf::render(set, medium, frontView(), options),

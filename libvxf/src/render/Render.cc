@@ -48,7 +48,8 @@ public:
     /// camera through that medium's σt − @a gridForward·σs (the share of σs kept in the beam:
     /// g⁴ by delta-M, g by the similarity relation; Phase.h). With @a scatterAnisotropy
     /// (`scatter_anisotropy`, the mean direction of travel a) the scattered light's J toward
-    /// the camera is J·@a rest(a, ω), the rest of the phase. @a emitters (volume lights) are seen along
+    /// the camera is J·@a rest(a, ω), the rest of the phase; with @a directAnisotropy
+    /// (`scatter_source_anisotropy`) the `direct` grid's J alike. @a emitters (volume lights) are seen along
     /// the march, in the direct layer, through the medium's own σt, where the medium is.
     /// With @a boundary (the media's meshes) the marches cross the surface where the meshes
     /// do (Medium::Sampler::snapCrossingsTo): grazing rays, at silhouettes and terminators.
@@ -56,7 +57,8 @@ public:
         const SourceField* scatter,
         const std::vector<LightSampler>* lights = nullptr, const RayScene* occluders = nullptr,
         const RayScene* boundary = nullptr, const std::vector<VolumeEmission>* emitters = nullptr, double gridForward = 0.0,
-        const openvdb::Vec3SGrid* scatterAnisotropy = nullptr, const RestPhase& rest = {})
+        const openvdb::Vec3SGrid* scatterAnisotropy = nullptr, const RestPhase& rest = {},
+        const openvdb::Vec3SGrid* directAnisotropy = nullptr)
         : mMedium(medium)
         , mSampler(medium)
         , mShadowSampler(medium)
@@ -68,6 +70,7 @@ public:
         , mRest(rest)
     {
         if (scatterAnisotropy && rest.chi[0] != 0.0f) mScatterAnisotropy.emplace(scatterAnisotropy->getConstAccessor());
+        if (directAnisotropy && rest.chi[0] != 0.0f) mDirectAnisotropy.emplace(directAnisotropy->getConstAccessor());
         if (emitters) {
             for (const VolumeEmission& e : *emitters) mEmitters.emplace_back(e);
         }
@@ -265,6 +268,15 @@ private:
     /// σs·φ/4π of the `scatter` grid, continued to the surface by SourceField's layers (the
     /// passes read its lattice alone; σs·φ is one per-voxel quantity: interpolating σs and φ
     /// apart would square the ramp where both fall to zero at the surface).
+    /// The rest of the phase toward the camera (−mRayDirection) of light whose mean direction of
+    /// travel @a anisotropy holds, at index point @a p (the medium's index space).
+    double towardCamera(openvdb::Vec3SGrid::ConstAccessor& anisotropy, const openvdb::Vec3d& p) const
+    {
+        openvdb::Vec3s sampled;
+        openvdb::tools::BoxSampler::sample(anisotropy, p, sampled);
+        return double(mRest(openvdb::Vec3f(clampedToUnit(openvdb::Vec3d(sampled))), -openvdb::Vec3f(mRayDirection)));
+    }
+
     Emission emission(const openvdb::Vec3d& p, double interior, std::uint64_t key, std::uint64_t point)
     {
         Emission e;
@@ -274,15 +286,13 @@ private:
             e.direct = scale * fluenceFromLights(mMedium.transform().indexToWorld(p), key, point, exact);
             e.directExact = scale * exact;
         }
-        if (mDirect) e.direct = e.directExact = mDirect->sample(p);
-        if (mScatter) e.scatter = mScatter->sample(p);
-        if (mScatterAnisotropy) {
-            // The scattered light by the rest of the phase, toward the camera (−mRayDirection).
-            openvdb::Vec3s sampled;
-            openvdb::tools::BoxSampler::sample(*mScatterAnisotropy, p, sampled); // the medium's index space
-            const openvdb::Vec3f a(clampedToUnit(openvdb::Vec3d(sampled)));
-            e.scatter *= double(mRest(a, -openvdb::Vec3f(mRayDirection)));
+        if (mDirect) {
+            e.direct = mDirect->sample(p);
+            if (mDirectAnisotropy) e.direct *= towardCamera(*mDirectAnisotropy, p);
+            e.directExact = e.direct;
         }
+        if (mScatter) e.scatter = mScatter->sample(p);
+        if (mScatterAnisotropy) e.scatter *= towardCamera(*mScatterAnisotropy, p);
         if (!mEmitters.empty()) {
             const openvdb::Vec3d world = mMedium.transform().indexToWorld(p);
             for (VolumeEmission::Sampler& emitter : mEmitters) e.emitted += emitter.at(world);
@@ -337,9 +347,11 @@ private:
     std::uint64_t mExtraPoint = 0; ///< the next refined point's index along the ray (after the steps' 3 per step)
     double mPhaseG;                ///< Henyey-Greenstein g (0: isotropic)
     double mGridForward;           ///< the share of σs the grids' transport kept in the beam
-    RestPhase mRest;               ///< the rest of the phase, with mScatterAnisotropy
+    RestPhase mRest;               ///< the rest of the phase, with mScatterAnisotropy or mDirectAnisotropy
     /// The `scatter_anisotropy` grid, read trilinearly (none: the scattered light isotropic).
     std::optional<openvdb::Vec3SGrid::ConstAccessor> mScatterAnisotropy;
+    /// The `scatter_source_anisotropy` grid with the `direct` grid read (none: its J isotropic).
+    std::optional<openvdb::Vec3SGrid::ConstAccessor> mDirectAnisotropy;
     std::vector<VolumeEmission::Sampler> mEmitters; ///< volume lights (none: empty)
     openvdb::Vec3d mRayDirection;  ///< the marched ray's world direction (the phase's outgoing one)
 };
@@ -541,8 +553,11 @@ struct RenderContext
         }
         if (firstMoment) {
             scatterAnisotropy = set.get<openvdb::Vec3SGrid>(kScatterAnisotropyGrid);
-            if (scatterAnisotropy->transform() != medium.transform()) { // read in the medium's index space
-                throw Error(fmt::format("grid '{}' does not share the transform of 'density'", kScatterAnisotropyGrid));
+            if (set.find(kSourceAnisotropyGrid)) sourceAnisotropy = set.get<openvdb::Vec3SGrid>(kSourceAnisotropyGrid);
+            for (const auto& grid : {scatterAnisotropy, sourceAnisotropy}) { // read in the medium's index space
+                if (grid && grid->transform() != medium.transform()) {
+                    throw Error(fmt::format("grid '{}' does not share the transform of 'density'", grid->getName()));
+                }
             }
         }
 
@@ -578,9 +593,12 @@ struct RenderContext
     const bool firstMoment;
     /// The medium the grids' J is read in and reaches the camera through: the transport's
     /// (firstMoment) or its isotropic() one. (The `direct` grid's J, read without the lights,
-    /// is taken isotropic in it either way.)
+    /// scatters toward the camera by the rest of the phase with firstMoment, from
+    /// `scatter_source_anisotropy`: a front-lit smoke's backscatter is a sixth of isotropic's;
+    /// isotropically otherwise.)
     const Medium grids;
     openvdb::Vec3SGrid::ConstPtr scatterAnisotropy; ///< with firstMoment
+    openvdb::Vec3SGrid::ConstPtr sourceAnisotropy;  ///< with firstMoment, where the set has it
     const Scene& scene;
     const RenderOptions& options;
     const RenderMeshes& meshes;
@@ -615,7 +633,8 @@ public:
               context.meshes.occluders, context.meshes.media, &context.emitters,
               context.firstMoment ? transportScaling(context.medium.phaseG()).forward : context.medium.phaseG(),
               context.scatterAnisotropy.get(),
-              context.firstMoment ? RestPhase(transportScaling(context.medium.phaseG())) : RestPhase())
+              context.firstMoment ? RestPhase(transportScaling(context.medium.phaseG())) : RestPhase(),
+              context.directField ? context.sourceAnisotropy.get() : nullptr)
         , mShader(context.actual, context.surfaceLights, context.meshes.occluders, context.meshes.media,
               MarchOptions{context.options.step, context.options.cutoff})
         , mEpsilon(1e-4 * context.medium.voxelSize())
