@@ -54,7 +54,7 @@ public:
         mApp->add_option("--kernel", mKernel,
                "How a pass carries light: gather (a ray march per voxel and direction, the thesis's) or sweep "
                "(discrete ordinates: one upwind sweep over the tree per direction, O(1) per voxel and direction) "
-               "(default gather; sweep for a forward-scattering phase, g > 0, whose first moment only the accelerated "
+               "(default gather; sweep for a forward-scattering phase, g > 0, whose anisotropy only the accelerated "
                "sweeps carry: the gather and plain passes take the similarity relation's isotropic medium)")
             ->check(CLI::IsMember({"gather", "sweep"}));
         mApp->add_flag("--no-accelerate", [this](std::int64_t) { mOptions.accelerate = false; },

@@ -248,7 +248,7 @@ Scene parseScene(const std::string& text, const std::string& path)
     SceneSettings& s = scene.settings;
     // An anisotropic phase shows in single scattering marched to the lights; the direct grid's is isotropic.
     s.directFromLights = anisotropic;
-    // A forward phase's first moment only the accelerated sweeps carry (Phase.h, Scatter.h).
+    // A forward phase's anisotropy only the accelerated sweeps carry (Phase.h, Scatter.h).
     if (anisotropic && transportScaling(firstMedium->material->phaseG).restG != 0.0) s.kernel = "sweep";
     if (document.contains("voxelize")) {
         const json& v = document["voxelize"];

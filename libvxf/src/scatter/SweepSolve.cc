@@ -173,7 +173,8 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
     }
     // Per voxel: what the iteration keeps (the sweep's own arrays and J come and go, so that at
     // most six such arrays and the padded source live at once: 950 MB at dim 256, 4.5M voxels;
-    // a first moment adds a0, a, F and two padded arrays, a's and the source toward a direction).
+    // a first moment adds a0, a, F, the last sweep's F and the correction's ΔF, and two padded
+    // arrays, a's and the source toward a direction).
     std::vector<openvdb::Vec3f> phi(count, openvdb::Vec3f(0.0f)), next, skin;
     std::vector<openvdb::Vec3f> firstFlight; // the gather's K J0 (the same every iteration)
     AndersonMixing mixing; // of the corrected gathers

@@ -86,9 +86,10 @@ openvdb::Vec3d gridEnergy(const openvdb::Vec3SGrid& grid);
 /// Run scattering passes on @a set: J_k = σs·φ_k/(4π) feeds pass k+1 (J_0 is `scatter_source`,
 /// read from the set, so an artist may have edited it). @a medium is the transport's (Medium):
 /// with a forward phase (material().phaseG = g* ≠ 0) and a source lit with its moment
-/// (`scatter_source_anisotropy`), the accelerated sweeps carry the first moment and write
-/// `scatter_anisotropy`; every other way (gather kernel, plain, kept, coarse or continued
-/// passes, a source lit by the similarity relation: DirectLightOptions::similarity) solves
+/// (`scatter_source_anisotropy`), the accelerated sweeps carry the rest of the phase
+/// (RestPhase) and write `scatter_anisotropy`; every other way (gather kernel, plain, kept,
+/// coarse or continued passes, a source lit by the similarity relation:
+/// DirectLightOptions::similarity) solves
 /// medium.isotropic(), the similarity relation, a source lit with the moment scaled by 1 − g*
 /// (the share of the once-scattered light that leaves isotropically under it; a volume light's
 /// emission alike), and drops a stale `scatter_anisotropy`. Writes `scatter` = Σ_{k≥1} φ_k and,
