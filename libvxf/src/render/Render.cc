@@ -6,8 +6,8 @@
 #include <vxf/light/InteriorField.h>
 #include <vxf/light/LightSampler.h>
 #include <vxf/light/Phase.h>
-#include <vxf/light/UniformBricks.h>
 #include <vxf/light/Transmittance.h>
+#include <vxf/light/UniformBricks.h>
 #include <vxf/light/VolumeEmission.h>
 #include <vxf/scatter/SourceField.h>
 
@@ -49,8 +49,9 @@ public:
     /// g⁴ by delta-M, g by the similarity relation; Phase.h). With @a scatterAnisotropy
     /// (`scatter_anisotropy`, the mean direction of travel a) the scattered light's J toward
     /// the camera is J·@a rest(a, ω), the rest of the phase; with @a directAnisotropy
-    /// (`scatter_source_anisotropy`) the `direct` grid's J alike. @a emitters (volume lights) are seen along
-    /// the march, in the direct layer, through the medium's own σt, where the medium is.
+    /// (`scatter_source_anisotropy`) the `direct` grid's J alike. @a emitters (volume lights)
+    /// are seen along the march, in the direct layer, through the medium's own σt, where the
+    /// medium is.
     /// With @a boundary (the media's meshes) the marches cross the surface where the meshes
     /// do (Medium::Sampler::snapCrossingsTo): grazing rays, at silhouettes and terminators.
     Marcher(const Medium& medium, const RenderOptions& options, const InteriorField* direct,
@@ -261,13 +262,6 @@ private:
     static constexpr double kRefineShare = 1e-3; ///< ... when it could add this share of the ray's light
     static constexpr int kRefineDepth = 4;       ///< halvings at most: pieces down to 1/16 of a step
 
-    /// J at index point @a p inside the surface, whose interior scale is @a interior
-    /// (Medium::Sampler::interiorScale). Single scattering: marched to the lights (one sample
-    /// per light, the @a point-th of the ray of @a key) with σs(p)·interior when
-    /// options.directFromLights, else the `direct` grid's InteriorField. Multiple scattering:
-    /// σs·φ/4π of the `scatter` grid, continued to the surface by SourceField's layers (the
-    /// passes read its lattice alone; σs·φ is one per-voxel quantity: interpolating σs and φ
-    /// apart would square the ramp where both fall to zero at the surface).
     /// The rest of the phase toward the camera (−mRayDirection) of light whose mean direction of
     /// travel @a anisotropy holds, at index point @a p (the medium's index space).
     double towardCamera(openvdb::Vec3SGrid::ConstAccessor& anisotropy, const openvdb::Vec3d& p) const
@@ -277,6 +271,13 @@ private:
         return double(mRest(openvdb::Vec3f(clampedToUnit(openvdb::Vec3d(sampled))), -openvdb::Vec3f(mRayDirection)));
     }
 
+    /// J at index point @a p inside the surface, whose interior scale is @a interior
+    /// (Medium::Sampler::interiorScale). Single scattering: marched to the lights (one sample
+    /// per light, the @a point-th of the ray of @a key) with σs(p)·interior when
+    /// options.directFromLights, else the `direct` grid's InteriorField. Multiple scattering:
+    /// σs·φ/4π of the `scatter` grid, continued to the surface by SourceField's layers (the
+    /// passes read its lattice alone; σs·φ is one per-voxel quantity: interpolating σs and φ
+    /// apart would square the ramp where both fall to zero at the surface).
     Emission emission(const openvdb::Vec3d& p, double interior, std::uint64_t key, std::uint64_t point)
     {
         Emission e;
