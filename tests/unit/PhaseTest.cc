@@ -1,5 +1,6 @@
 #include <vxf/light/Medium.h>
 #include <vxf/light/Phase.h>
+#include <vxf/scatter/SweepPass.h>
 
 #include "TestSupport.h"
 
@@ -127,6 +128,33 @@ TEST_CASE("the rest of the phase: delta-M's moments, and its angular factor's Le
         CHECK(moment[0] == Approx(1.0).epsilon(1e-5));
         for (int l = 1; l <= 3; ++l) CHECK(moment[l] == Approx(scaling.rest[l - 1] * std::pow(k, l)).margin(1e-5));
         CHECK(std::abs(moment[4]) < 1e-5);
+    }
+}
+
+TEST_CASE("the rest of the phase on the sweep's directions: mean 1 and first moment chi1 a, with their correction", "[phase][sweep]")
+{
+    // On the sweep's N directions (opposite pairs, isotropic second moments) the factor's mean
+    // is 1 and, with β = RestPhase::quadratureCorrection, its first moment Σ R·ω_i/N is χ1·a as
+    // on the sphere; without β the cubic term's aliasing puts it off. (g 0.6: R nowhere clamped.)
+    const vxf::RestPhase rest(vxf::transportScaling(0.6));
+    for (const int count : {16, 32}) {
+        const std::vector<openvdb::Vec3d> directions = vxf::sweepDirections(count, 7);
+        std::vector<openvdb::Vec3d> firsts;
+        for (std::size_t i = 0; i < directions.size(); i += 2) firsts.push_back(directions[i]);
+        const openvdb::Vec3f a = openvdb::Vec3f(0.3f, -0.5f, 0.6f);
+        const openvdb::Vec3f beta = rest.quadratureCorrection(a, firsts);
+        double mean = 0.0;
+        openvdb::Vec3d moment(0.0), plain(0.0);
+        for (const openvdb::Vec3d& w : directions) {
+            const openvdb::Vec3f omega(w);
+            mean += rest(a, omega, beta) / double(count);
+            moment += w * (rest(a, omega, beta) / double(count));
+            plain += w * (rest(a, omega) / double(count));
+        }
+        INFO(count << " directions");
+        CHECK(mean == Approx(1.0).epsilon(1e-5));
+        for (int axis = 0; axis < 3; ++axis) CHECK(moment[axis] == Approx(rest.chi[0] * a[axis]).margin(1e-5));
+        CHECK((plain - openvdb::Vec3d(a) * double(rest.chi[0])).length() > 1e-3);
     }
 }
 

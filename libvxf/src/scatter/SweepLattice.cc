@@ -563,7 +563,12 @@ void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::v
                 if (moment) {
                     worldOmega = openvdb::Vec3f(moment->worldDirections[d]);
                     const openvdb::Vec3f* a = &(*moment->sourceAnisotropy)[n * kPaddedVoxels];
-                    for (int q = 0; q < kPaddedVoxels; ++q) scratch.toward[std::size_t(q)] = j[q] * moment->rest(a[q], worldOmega);
+                    if (moment->quadratureCorrection) {
+                        const openvdb::Vec3f* beta = &(*moment->quadratureCorrection)[n * kPaddedVoxels];
+                        for (int q = 0; q < kPaddedVoxels; ++q) scratch.toward[std::size_t(q)] = j[q] * moment->rest(a[q], worldOmega, beta[q]);
+                    } else {
+                        for (int q = 0; q < kPaddedVoxels; ++q) scratch.toward[std::size_t(q)] = j[q] * moment->rest(a[q], worldOmega);
+                    }
                     j = scratch.toward.data();
                 }
                 sweepLeaf(n, omega, upwindVoxels(octant, dominantAxis(omega)).data(), j, buffer, w, &fluence[n * kLeafVoxels],

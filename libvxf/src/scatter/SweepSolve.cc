@@ -158,12 +158,19 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
     // directions in world space.
     std::optional<detail::SweepLattice::FirstMoment> moment;
     std::vector<openvdb::Vec3f> a0, flux, previousFlux, a;
+    std::vector<openvdb::Vec3d> pairFirsts;
     if (restG != 0.0) {
         moment.emplace();
         moment->rest = RestPhase(transportScaling(medium.phaseG()));
         for (const openvdb::Vec3d& d : directions) {
             moment->worldDirections.push_back(medium.transform().baseMap()->applyJacobian(d).unit());
         }
+        // The direction set's opposite pairs (sweepDirections: ω, −ω in turn), one of each, for
+        // the rest's quadrature correction (none for a set of no such pairs).
+        const std::vector<openvdb::Vec3d>& world = moment->worldDirections;
+        bool paired = world.size() % 2 == 0;
+        for (std::size_t i = 0; paired && i < world.size(); i += 2) paired = (world[i] + world[i + 1]).length() < 1e-9;
+        for (std::size_t i = 0; paired && i < world.size(); i += 2) pairFirsts.push_back(world[i]);
         if (moments && moments->source) {
             a0 = lattice.read(*moments->source);
             for (openvdb::Vec3f& v : a0) v = openvdb::Vec3f(clampedToUnit(openvdb::Vec3d(v)));
@@ -235,6 +242,16 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
                 });
             }
             const std::vector<openvdb::Vec3f> paddedA = moment ? lattice.padded(a) : std::vector<openvdb::Vec3f>();
+            std::vector<openvdb::Vec3f> paddedBeta;
+            if (moment && !pairFirsts.empty()) {
+                // The direction set's own error in the rest's first moment, taken off (Phase.h).
+                std::vector<openvdb::Vec3f> beta(count);
+                tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
+                    for (std::size_t v = r.begin(); v != r.end(); ++v) beta[v] = moment->rest.quadratureCorrection(a[v], pairFirsts);
+                });
+                paddedBeta = lattice.padded(beta);
+                moment->quadratureCorrection = &paddedBeta;
+            }
             if (moment) {
                 moment->sourceAnisotropy = &paddedA;
                 previousFlux.swap(flux);

@@ -4,6 +4,7 @@
 #include <openvdb/math/Vec3.h>
 
 #include <cmath>
+#include <vector>
 
 namespace vxf {
 
@@ -82,7 +83,8 @@ inline PhaseScaling transportScaling(double g)
 /// 1 + Σ_l (2l + 1)·χ*_l·k^l·P_l(â·ω) = 1 + 3χ*_1·c + (5/2)χ*_2·(3c² − k²) + (7/2)χ*_3·(5c³ −
 /// 3c·k²), c = a·ω, clamped at 0 (a strongly forward rest of a near-collimated beam dips below
 /// it backward). Its mean over the sphere is 1, and over the sweep's directions too (opposite
-/// pairs, isotropic second moments: SweepPass.h), clamp aside.
+/// pairs, isotropic second moments: SweepPass.h), clamp aside; its first moment χ1·a there with
+/// quadratureCorrection.
 struct RestPhase
 {
     float chi[kRestOrders] = {0.0f, 0.0f, 0.0f};
@@ -94,9 +96,38 @@ struct RestPhase
     }
     float operator()(const openvdb::Vec3f& a, const openvdb::Vec3f& omega) const
     {
-        const float c = a.dot(omega), k2 = a.lengthSqr();
-        const float f = 1.0f + c * (3.0f * chi[0] + 3.5f * chi[2] * (5.0f * c * c - 3.0f * k2)) + 2.5f * chi[1] * (3.0f * c * c - k2);
+        const float f = unclamped(a, omega);
         return f > 0.0f ? f : 0.0f;
+    }
+    /// The same less β·ω: a discrete direction set's correction (quadratureCorrection).
+    float operator()(const openvdb::Vec3f& a, const openvdb::Vec3f& omega, const openvdb::Vec3f& beta) const
+    {
+        const float f = unclamped(a, omega) - beta.dot(omega);
+        return f > 0.0f ? f : 0.0f;
+    }
+    /// On N directions ω_i in opposite pairs with isotropic second moments (the sweep's), the
+    /// factor's mean is 1 and its first moment Σ R·ω_i/N = χ1·a as on the sphere, but for the
+    /// cubic term, of degree 4 with ω, which N directions do not integrate: off by
+    /// (7/2)χ3·(5/N·Σ ω_i(a·ω_i)³ − k²a)·… The β that takes that off, β = (21/2)·χ3·(5/N·Σ_i
+    /// ω_i(a·ω_i)³ − k²·a) (Σ (β·ω_i)ω_i = N/3·β), leaving the mean as it is (Σ ω_i = 0).
+    /// @a directions: one of each opposite pair (ω(a·ω)³ is the same for both), N twice their count.
+    openvdb::Vec3f quadratureCorrection(const openvdb::Vec3f& a, const std::vector<openvdb::Vec3d>& directions) const
+    {
+        if (chi[2] == 0.0f || directions.empty()) return openvdb::Vec3f(0.0f);
+        openvdb::Vec3d sum(0.0);
+        const openvdb::Vec3d ad(a);
+        for (const openvdb::Vec3d& w : directions) {
+            const double c = ad.dot(w);
+            sum += w * (c * c * c);
+        }
+        return openvdb::Vec3f((sum * (5.0 / double(directions.size())) - ad * ad.lengthSqr()) * (10.5 * double(chi[2])));
+    }
+
+private:
+    float unclamped(const openvdb::Vec3f& a, const openvdb::Vec3f& omega) const
+    {
+        const float c = a.dot(omega), k2 = a.lengthSqr();
+        return 1.0f + c * (3.0f * chi[0] + 3.5f * chi[2] * (5.0f * c * c - 3.0f * k2)) + 2.5f * chi[1] * (3.0f * c * c - k2);
     }
 };
 
