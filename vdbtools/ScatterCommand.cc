@@ -79,7 +79,7 @@ public:
         VoxelSet set = readVoxelSet(mInput);
         const Material material = mScene.empty() ? recordedMaterial(set) : sceneMaterial(loadScene(mScene));
         const Medium medium(set, material);
-        if (mKernel.empty()) mKernel = transportScaling(material.phaseG).restG != 0.0 ? "sweep" : "gather";
+        if (mKernel.empty()) mKernel = transportScaling(material.phaseG).restG() != 0.0 ? "sweep" : "gather";
         mOptions.pass.kernel = scatterKernelNamed(mKernel);
         const ScatterReport report = scatter(set, medium, mOptions, &progress);
         nlohmann::json params = {{"command", "scatter"}, {"input", mInput}, {"passes", mOptions.passes},

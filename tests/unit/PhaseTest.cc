@@ -103,9 +103,9 @@ TEST_CASE("the rest of the phase: delta-M's moments, and its angular factor's Le
     const vxf::PhaseScaling scaling = vxf::transportScaling(g);
     CHECK(scaling.forward == Approx(f));
     for (int l = 1; l <= 3; ++l) CHECK(scaling.rest[l - 1] == Approx((std::pow(g, l) - f) / (1.0 - f)));
-    CHECK(scaling.restG == scaling.rest[0]);
+    CHECK(scaling.restG() == Approx((g - f) / (1.0 - f))); // the mean cosine the diffusion correction takes
     CHECK(vxf::transportScaling(-0.3).forward == -0.3); // a backward phase: the similarity relation
-    CHECK(vxf::transportScaling(-0.3).restG == 0.0);
+    CHECK(vxf::transportScaling(-0.3).restG() == 0.0);
     // Light of mean direction a = k·â scattered by the rest: RestPhase(a, ω) depends on μ = â·ω
     // alone, and its Legendre moments ½∫ R·P_l dμ are χ_l·k^l (a Henyey-Greenstein lobe of
     // parameter k scattered by the rest): 1, χ1·k, χ2·k², χ3·k³, and 0 beyond (no clamp at g 0.6).

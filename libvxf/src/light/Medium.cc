@@ -97,7 +97,7 @@ Medium::Medium(const VoxelSet& set, const Material& material)
     if (material.phaseG != 0.0) {
         // The transport's medium: σs* = (1 − f)·σs, σa as it is, the rest's g* (Phase.h).
         const PhaseScaling scaling = transportScaling(material.phaseG);
-        scaleScattering(1.0 - scaling.forward, scaling.restG);
+        scaleScattering(1.0 - scaling.forward, scaling.restG());
     }
     mBounds = mDensity->evalActiveVoxelBoundingBox();
     // Trilinear lookups reach a voxel beyond the active voxels (marchBounds).

@@ -249,7 +249,7 @@ Scene parseScene(const std::string& text, const std::string& path)
     // An anisotropic phase shows in single scattering marched to the lights; the direct grid's is isotropic.
     s.directFromLights = anisotropic;
     // A forward phase's anisotropy only the accelerated sweeps carry (Phase.h, Scatter.h).
-    if (anisotropic && transportScaling(firstMedium->material->phaseG).restG != 0.0) s.kernel = "sweep";
+    if (anisotropic && transportScaling(firstMedium->material->phaseG).restG() != 0.0) s.kernel = "sweep";
     if (document.contains("voxelize")) {
         const json& v = document["voxelize"];
         s.dim = v.value("dim", s.dim);

@@ -106,8 +106,8 @@ public:
     /// With @a moment, the source is anisotropic by the rest of the phase (Phase.h) and the
     /// sweep adds up the fluence's first moment too: direction i sweeps the source
     /// J·RestPhase(a, ω_i, β) (a per voxel, the source's mean direction of travel, padded as
-    /// @a source; β its direction set's correction), and flux += Σ_i weight·grey(ψ_i)·ω_i (per voxel). ω_i and a are in world
-    /// space (worldDirections: @a directions carried to it).
+    /// @a source; β its direction set's correction), and flux += Σ_i weight·grey(ψ_i)·ω_i (per
+    /// voxel). ω_i and a are in world space (worldDirections: @a directions carried to it).
     struct FirstMoment
     {
         RestPhase rest;                                                ///< the rest's moments

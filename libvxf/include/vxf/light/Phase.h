@@ -43,8 +43,9 @@ inline constexpr int kRestOrders = 3;
 struct PhaseScaling
 {
     double forward = 0.0;                ///< f
-    double restG = 0.0;                  ///< g* = χ*_1, the rest's mean cosine
     double rest[kRestOrders] = {0, 0, 0}; ///< χ*_1…χ*_3
+    /// g* = χ*_1, the rest's mean cosine.
+    double restG() const { return rest[0]; }
 };
 
 /// The transport's scaling (Medium::material()). A forward phase (g > 0) by delta-M of order 3
@@ -71,7 +72,6 @@ inline PhaseScaling transportScaling(double g)
         gl *= g;
         s.rest[l] = (gl - s.forward) / (1.0 - s.forward);
     }
-    s.restG = s.rest[0];
     return s;
 }
 
@@ -106,10 +106,10 @@ struct RestPhase
         return f > 0.0f ? f : 0.0f;
     }
     /// On N directions ω_i in opposite pairs with isotropic second moments (the sweep's), the
-    /// factor's mean is 1 and its first moment Σ R·ω_i/N = χ1·a as on the sphere, but for the
-    /// cubic term, of degree 4 with ω, which N directions do not integrate: off by
-    /// (7/2)χ3·(5/N·Σ ω_i(a·ω_i)³ − k²a)·… The β that takes that off, β = (21/2)·χ3·(5/N·Σ_i
-    /// ω_i(a·ω_i)³ − k²·a) (Σ (β·ω_i)ω_i = N/3·β), leaving the mean as it is (Σ ω_i = 0).
+    /// factor's mean is 1 and its first moment Σ R·ω_i/N is χ1·a as on the sphere but for the
+    /// cubic term, of degree 4 with ω, which N directions do not integrate: it adds
+    /// (7/2)χ3·(5/N·Σ_i ω_i(a·ω_i)³ − k²·a). The β that takes that off (Σ (β·ω_i)ω_i/N = β/3):
+    /// β = (21/2)·χ3·(5/N·Σ_i ω_i(a·ω_i)³ − k²·a), leaving the mean as it is (Σ ω_i = 0).
     /// @a directions: one of each opposite pair (ω(a·ω)³ is the same for both), N twice their count.
     openvdb::Vec3f quadratureCorrection(const openvdb::Vec3f& a, const std::vector<openvdb::Vec3d>& directions) const
     {
