@@ -156,3 +156,46 @@ TEST_CASE("plain sweeps carry each scattering order on as the gather does, throu
         CHECK(sweep == Approx(gather).epsilon(0.01));
     }
 }
+
+TEST_CASE("a sweep of emission where the medium thins out stays within the light it emits", "[sweep][stability][emission]")
+{
+    // A volume light's flame reaching a smoke's edge: emission J = 1 over a box whose σt falls
+    // from 5 per voxel in the core to 1e-5 of that in its outer shell. Scattered light's J
+    // follows σt; emission's does not, and read as J/σt at the thin end a step from the shell
+    // into the core swept about 150 times the light emitted.
+    auto density = openvdb::FloatGrid::create(0.0f);
+    density->setTransform(openvdb::math::Transform::createLinearTransform(1.0 / 8.0));
+    density->setName("density");
+    density->setGridClass(openvdb::GRID_FOG_VOLUME);
+    auto source = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
+    source->setTransform(density->transformPtr());
+    const int half = 8;
+    for (int i = -half; i <= half; ++i) {
+        for (int j = -half; j <= half; ++j) {
+            for (int k = -half; k <= half; ++k) {
+                const bool core = std::max({std::abs(i), std::abs(j), std::abs(k)}) <= half - 3;
+                density->tree().setValue(openvdb::Coord(i, j, k), core ? 1.0f : 1e-5f);
+                source->tree().setValue(openvdb::Coord(i, j, k), openvdb::Vec3f(1.0f));
+            }
+        }
+    }
+    vxf::VoxelSet set(density->transformPtr());
+    set.put(density);
+    const vxf::Material m = vxf::test::albedoMaterial(40.0, 0.9); // 5 per voxel at density 1
+    const vxf::Medium medium(set, m);
+    vxf::ScatterPassOptions options;
+    options.kernel = vxf::ScatterKernel::Sweep;
+    options.directions = 16;
+    auto phi = vxf::sweepPass(medium, *source, options);
+    // Unattenuated, J = 1 along the box's longest chord gives 4π·J·(diagonal); deep in the core,
+    // 4π·J/σt.
+    const double diagonal = std::sqrt(3.0) * (2 * half + 1) / 8.0;
+    for (auto it = phi->cbeginValueOn(); it; ++it) {
+        const float v = (*it).x();
+        INFO(it.getCoord());
+        REQUIRE(std::isfinite(v));
+        REQUIRE(v >= 0.0f);
+        REQUIRE(v <= 4.0 * M_PI * diagonal);
+    }
+    CHECK(phi->tree().getValue(openvdb::Coord(0)).x() == Approx(4.0 * M_PI / 40.0).epsilon(0.02));
+}

@@ -197,6 +197,35 @@ inline float uniformStep(float psiIn, float jStart, float jEnd, double sigma, do
     return w.transmittance * psiIn + w.in * jStart + w.own * jEnd;
 }
 
+/// ψ at the end of a step of length @a h through σt varying from @a sa to @a sb (not equal),
+/// with J from @a ja to @a jb.
+///
+/// dψ/dτ = −ψ + S with the source function S = J/σt linear in the optical depth
+/// τ = ½(σa + σb)·h: ψ = e^{−τ}ψ_in + τ(in·S_a + own·S_b), exact for those, and S_b where the step
+/// is optically thick (the local equilibrium J/σt, whatever σt does along the step). An end
+/// without medium (σt = 0) takes the other end's S. That model holds where J follows σt, as
+/// scattered light does (J = σs·φ/4π). Emission does not (a volume light's flame where the smoke
+/// thins out, an artist's edit of the source): J/σt grows without bound as σt → 0 at one end,
+/// and a flame reaching a resampled smoke's edge (σt 1e-4 of the next voxel's) swept 150x too
+/// much light. Along the step σt ≥ min(σa, σb), so the source adds at most what J linear along
+/// it gives through that constant σt; an answer above that bound is no model of this step, and
+/// J linear through the step's own τ takes its place.
+inline double varyingStep(double psiIn, double ja, double jb, double sa, double sb, double h)
+{
+    double Sa = sa > 0.0 ? ja / sa : 0.0, Sb = sb > 0.0 ? jb / sb : 0.0;
+    if (sa <= 0.0) Sa = Sb;
+    if (sb <= 0.0) Sb = Sa;
+    const double tau = 0.5 * (sa + sb) * h;
+    const StepWeights sw = stepWeights(tau);
+    double added = tau * (sw.in * Sa + sw.own * Sb);
+    // The bound at σt = 0 first (no exp): scattered light stays far below it.
+    if (std::abs(added) > 0.5 * h * (std::abs(ja) + std::abs(jb))) {
+        const StepWeights thinnest = stepWeights(std::max(std::min(sa, sb), 0.0) * h);
+        if (std::abs(added) > h * (thinnest.in * std::abs(ja) + thinnest.own * std::abs(jb))) added = h * (sw.in * ja + sw.own * jb);
+    }
+    return sw.transmittance * psiIn + added;
+}
+
 /// The part of a short characteristic's step inside the surface, from the signed distances at
 /// its start (the upwind crossing) and its end (the centre), linear along it: all of it, none,
 /// or the part next to the end inside, whose values then hold over that part.
@@ -659,17 +688,7 @@ void SweepLattice::sweepLeaf(std::size_t n, const openvdb::Vec3d& omega, const U
                     result[ch] = uniformStep(psiIn[ch], jStart[ch], jEnd[ch], std::max(sa, sb), h, uw[ch]);
                     continue;
                 }
-                // dψ/dτ = −ψ + S with the source function S = J/σt linear in the
-                // optical depth τ = ½(σa + σb)·h: ψ = e^{−τ}ψ_in + τ(in·S_a + own·S_b),
-                // exact for those, and S_b where the step is optically thick (the
-                // local equilibrium J/σt, whatever σt does along the step). An end
-                // without medium (σt = 0) takes the other end's S.
-                double Sa = sa > 0.0 ? double(jStart[ch]) / sa : 0.0, Sb = sb > 0.0 ? double(jEnd[ch]) / sb : 0.0;
-                if (sa <= 0.0) Sa = Sb;
-                if (sb <= 0.0) Sb = Sa;
-                const double tau = 0.5 * (sa + sb) * h;
-                const StepWeights sw = stepWeights(tau);
-                result[ch] = float(sw.transmittance * psiIn[ch] + tau * (sw.in * Sa + sw.own * Sb));
+                result[ch] = float(varyingStep(psiIn[ch], jStart[ch], jEnd[ch], sa, sb, h));
             }
         }
         buffer[p] = result;
