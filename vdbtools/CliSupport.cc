@@ -41,11 +41,16 @@ namespace {
 std::string gTool = "vxf";
 std::string gCommand;
 std::atomic<bool> gInterrupted{false};
+std::atomic<int> gSignal{SIGINT}; ///< the first stopping signal received
 std::mutex gDrawMutex;
 
-extern "C" void onSigint(int)
+/// SIGINT (Ctrl-C), SIGTERM (kill, timeout, schedulers and farms) and SIGHUP (a closed
+/// terminal or session) all stop the work between steps: the command reports "interrupted",
+/// writes no output and removes its temporaries. A second one leaves at once.
+extern "C" void onStopSignal(int signal)
 {
-    if (gInterrupted.exchange(true)) std::_Exit(130); // second Ctrl-C: leave now
+    if (gInterrupted.exchange(true)) std::_Exit(128 + signal);
+    gSignal.store(signal);
 }
 
 void printError(const std::string& message)
@@ -64,7 +69,7 @@ int runMain(CLI::App& app, int argc, char** argv, const std::function<void()>& r
 {
     gTool = app.get_name();
     gCommand = gTool;
-    std::signal(SIGINT, onSigint);
+    for (const int stop : {SIGINT, SIGTERM, SIGHUP}) std::signal(stop, onStopSignal);
     // Past a file size limit (ulimit -f) a write fails with EFBIG, reported as an error with
     // the previous output intact, instead of killing the process beside a half-written file.
     std::signal(SIGXFSZ, SIG_IGN);
@@ -89,8 +94,9 @@ int runMain(CLI::App& app, int argc, char** argv, const std::function<void()>& r
         printError(e.what());
         return 2;
     } catch (const Interrupted&) {
-        printError("interrupted; no output written");
-        return 130;
+        const int signal = gSignal.load();
+        printError(fmt::format("interrupted ({}); no output written", signal == SIGTERM ? "SIGTERM" : signal == SIGHUP ? "SIGHUP" : "SIGINT"));
+        return 128 + signal;
     } catch (const Error& e) {
         printError(e.what());
         return 1;

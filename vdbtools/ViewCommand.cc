@@ -27,7 +27,8 @@ public:
             "slices with a value readout; select by box, sphere, value range or brushing, then set RGB, shift hue, scale "
             "saturation and value, add or remove voxels, undo; export the whole set, the difference, or the difference with "
             "smoothed edges. Every edit is the libvxf operator `vxf op` runs, recorded as a pipeline `vxf graph` replays. "
-            "Serves on 127.0.0.1 until Ctrl-C.");
+            "Serves on 127.0.0.1 until Ctrl-C (or SIGTERM, SIGHUP). Only the printed address opens the editor: it carries "
+            "the session's secret, and requests from other web pages or other host names are refused.");
         mApp->add_option("input", mInput, "The .vdb to view and edit (never written: exports go beside it)")->required();
         mApp->add_option("--port", mPort, "Port to listen on (0: any free port)")->check(CLI::Range(0, 65535));
         mApp->add_option("--bind", mHost, "Address to listen on (the default serves this machine only)");
@@ -55,7 +56,8 @@ public:
         for (const unsigned char c : mGrid) {
             query += std::isalnum(c) || c == '.' || c == '_' || c == '-' ? std::string(1, char(c)) : fmt::format("%{:02X}", c);
         }
-        const std::string url = fmt::format("http://{}:{}/{}", mHost, port, query.empty() ? "" : "?grid=" + query);
+        // The token in the address, as notebook servers do: the page passes it on with every request.
+        const std::string url = fmt::format("http://{}:{}/?token={}{}", mHost, port, server.token(), query.empty() ? "" : "&grid=" + query);
         std::cout << fmt::format("view: {} at {} (Ctrl-C stops)", session.path(), url) << std::endl;
         std::thread serving([&] { server.listen(); });
         if (!mNoBrowser) {

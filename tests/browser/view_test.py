@@ -29,6 +29,49 @@ def grid_values(path, name):
     return {(it.min, it.max): tuple(it.value) if hasattr(it.value, "__len__") else it.value for it in grid.citerOnValues()}
 
 
+def hostile_page(browser, url, work):
+    """A page of another origin (another port of 127.0.0.1, as any web page the user visits could
+    be) tries what a browser lets it send without asking: text/plain and form POSTs to apply and
+    export, with and without the token it cannot know, and a JSON POST (which needs a preflight
+    the server does not grant). Nothing may change and nothing may be written."""
+    import http.server, threading
+    api = re.match(r"(http://[^/]+)/", url).group(1)
+    script = f"""<script>
+      const api = '{api}';
+      const edit = JSON.stringify({{op: 'mul', params: {{grid: 'colour', value: 2}}}});
+      const tries = [
+        fetch(api + '/api/apply', {{method: 'POST', mode: 'no-cors', headers: {{'Content-Type': 'text/plain'}}, body: edit}}),
+        fetch(api + '/api/export', {{method: 'POST', mode: 'no-cors', headers: {{'Content-Type': 'text/plain'}},
+                                    body: JSON.stringify({{path: 'evil.vdb', mode: 'whole'}})}}),
+        fetch(api + '/api/apply?token=guess', {{method: 'POST', mode: 'no-cors', body: new URLSearchParams({{a: edit}})}}),
+        fetch(api + '/api/apply', {{method: 'POST', headers: {{'Content-Type': 'application/json'}}, body: edit}}),
+      ];
+      Promise.allSettled(tries).then(() => {{ document.title = 'done'; }});
+    </script>"""
+
+    class Page(http.server.BaseHTTPRequestHandler):
+        def do_GET(self):
+            self.send_response(200)
+            self.send_header("Content-Type", "text/html")
+            self.end_headers()
+            self.wfile.write(script.encode())
+
+        def log_message(self, *args):
+            pass
+
+    evil = http.server.HTTPServer(("127.0.0.1", 0), Page)
+    threading.Thread(target=evil.serve_forever, daemon=True).start()
+    try:
+        other = browser.new_page()
+        other.goto(f"http://127.0.0.1:{evil.server_address[1]}/")
+        other.wait_for_function("document.title === 'done'", timeout=20000)
+        other.close()
+    finally:
+        evil.shutdown()
+    if os.path.exists(os.path.join(work, "evil.vdb")):
+        sys.exit("view_test: a page from another origin wrote a file through vxf view")
+
+
 def main():
     vxf, work = sys.argv[1], sys.argv[2]
     screenshot = sys.argv[sys.argv.index("--screenshot") + 1] if "--screenshot" in sys.argv else None
@@ -106,7 +149,12 @@ def main():
             if screenshot:
                 page.evaluate("document.getElementById('panel').scrollTop = 0")
                 page.screenshot(path=screenshot)
-            pipeline = page.evaluate("fetch('/api/pipeline?output=replayed.vdb').then(r => r.json())")
+            pipeline = page.evaluate("window.vxfView.call('GET', '/api/pipeline?output=replayed.vdb').then(r => r.json())")
+            steps_before = len(pipeline["nodes"])
+            hostile_page(browser, url, work)
+            after = page.evaluate("window.vxfView.call('GET', '/api/pipeline?output=replayed.vdb').then(r => r.json())")
+            if len(after["nodes"]) != steps_before:
+                sys.exit("view_test: a page from another origin changed the edit history")
             if errors:
                 sys.exit(f"view_test: the page raised: {errors}")
             browser.close()

@@ -319,7 +319,7 @@ TEST_CASE("vxf2vdb and vdb2vxf round-trip real files", "[cli][convert]")
     CHECK_FALSE(fs::exists(dir.path("n.vxf")));
 }
 
-TEST_CASE("SIGINT stops a long scatter: exit 130, the previous output intact, no temporary file left", "[cli][interrupt]")
+TEST_CASE("SIGINT, SIGTERM and SIGHUP stop a long scatter: exit 128+N, the previous output intact, no temporary file left", "[cli][interrupt]")
 {
     TempDir dir;
     REQUIRE(run(fmt::format("{} voxelize builtin:sphere -o {} --dim 32 -q", binary("vxf"), dir.path("s.vdb"))).status == 0);
@@ -331,17 +331,21 @@ TEST_CASE("SIGINT stops a long scatter: exit 130, the previous output intact, no
     REQUIRE(run(fmt::format("{} light {} --scene {} -o {} -q", binary("vxf"), dir.path("s.vdb"), dir.path("scene.json"), dir.path("l.vdb"))).status == 0);
     fs::copy_file(dir.path("l.vdb"), dir.path("out.vdb")); // a previous result the interrupted run must not touch
     const std::string before = slurp(dir.path("out.vdb"));
-    // Thousands of plain gather passes at albedo 0.999 (minutes), interrupted after a second.
-    const auto result = run(fmt::format("({} scatter {} -o {} --passes 5000 --tolerance 0 --directions 64 & pid=$!; sleep 1; "
-                                        "kill -INT $pid; wait $pid)",
-        binary("vxf"), dir.path("l.vdb"), dir.path("out.vdb")));
-    CHECK(result.status == 130);
-    CHECK(result.err.find("vxf: scatter: interrupted; no output written") != std::string::npos);
-    CHECK(slurp(dir.path("out.vdb")) == before);
-    std::vector<std::string> left;
-    for (const auto& entry : fs::directory_iterator(dir.root())) left.push_back(entry.path().filename().string());
-    std::sort(left.begin(), left.end());
-    CHECK(left == std::vector<std::string>{"l.vdb", "out.vdb", "s.vdb", "scene.json"});
+    // Ctrl-C, what `timeout`, schedulers and farms send, and a closed terminal: the same.
+    for (const auto& [name, status] : {std::pair<std::string, int>{"INT", 130}, {"TERM", 143}, {"HUP", 129}}) {
+        CAPTURE(name);
+        // Thousands of plain gather passes at albedo 0.999 (minutes), interrupted after a second.
+        const auto result = run(fmt::format("({} scatter {} -o {} --passes 5000 --tolerance 0 --directions 64 & pid=$!; sleep 1; "
+                                            "kill -{} $pid; wait $pid)",
+            binary("vxf"), dir.path("l.vdb"), dir.path("out.vdb"), name));
+        CHECK(result.status == status);
+        CHECK(result.err.find(fmt::format("vxf: scatter: interrupted (SIG{}); no output written", name)) != std::string::npos);
+        CHECK(slurp(dir.path("out.vdb")) == before);
+        std::vector<std::string> left;
+        for (const auto& entry : fs::directory_iterator(dir.root())) left.push_back(entry.path().filename().string());
+        std::sort(left.begin(), left.end());
+        CHECK(left == std::vector<std::string>{"l.vdb", "out.vdb", "s.vdb", "scene.json"});
+    }
 }
 
 TEST_CASE("a write past the file size limit is an error that keeps the previous output", "[cli][interrupt]")

@@ -113,6 +113,7 @@ TEST_CASE("view: edits are the registry's operators, undoable, and the pipeline 
     hue.hueShift = 120.0;
     ops::edit(*direct, mask.get(), hue);
 
+    std::filesystem::create_directory(dir.path("out")); // exports create no folders
     const std::string whole = session.exportTo("out/whole.vdb", view::ExportMode::Whole, "", 0);
     const VoxelSet written = readVoxelSet(whole);
     std::string why;

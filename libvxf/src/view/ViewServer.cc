@@ -4,10 +4,13 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
+#include <random>
 
 #include <unistd.h>
 
@@ -25,6 +28,13 @@ namespace {
 
 /// Requests larger than this are refused (an edit is a few hundred bytes of JSON).
 constexpr std::size_t kMaxRequestBytes = 1 << 20;
+/// A connection that sends nothing for this long is closed (a half-sent request holds a worker
+/// thread only this long); and the workers, enough that dozens of such requests leave the page
+/// answered at once.
+constexpr time_t kReadTimeoutSeconds = 2, kKeepAliveSeconds = 2;
+constexpr std::size_t kWorkerThreads = 96;
+/// The secret's length in bytes (printed as hex in the page's address).
+constexpr std::size_t kTokenBytes = 16;
 /// The most points one request may ask for.
 constexpr std::size_t kMaxPointBudget = 4'000'000;
 
@@ -85,6 +95,33 @@ std::string stringField(const nlohmann::json& body, const char* name, const std:
     return body[name].get<std::string>();
 }
 
+/// A fresh secret from the system's entropy source (std::random_device reads /dev/urandom).
+std::string newToken()
+{
+    std::random_device entropy;
+    std::string token;
+    for (std::size_t i = 0; i < kTokenBytes; i += 4) token += fmt::format("{:08x}", std::uint32_t(entropy()));
+    return token;
+}
+
+/// Equal strings, compared in a time that does not depend on where they first differ.
+bool sameSecret(const std::string& a, const std::string& b)
+{
+    if (a.size() != b.size()) return false;
+    unsigned char diff = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) diff |= static_cast<unsigned char>(a[i] ^ b[i]);
+    return diff == 0;
+}
+
+/// The media type of a Content-Type value, lower case, without its parameters.
+std::string mediaType(const std::string& contentType)
+{
+    std::string type = contentType.substr(0, contentType.find(';'));
+    type.erase(std::remove_if(type.begin(), type.end(), [](unsigned char c) { return std::isspace(c); }), type.end());
+    std::transform(type.begin(), type.end(), type.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return type;
+}
+
 } // namespace
 
 struct ViewServer::Impl
@@ -95,6 +132,28 @@ struct ViewServer::Impl
     httplib::Server server;
     std::mutex renderMutex;
     std::string lastPng;
+    std::string host; ///< the bound address and port
+    int port = 0;
+
+    /// Whether a request's Host names this server: the bound address or a loopback name, with
+    /// the bound port. A page of another name resolving to 127.0.0.1 (DNS rebinding) does not.
+    /// Bound to every interface (0.0.0.0, ::), any name is taken: the secret guards it.
+    bool hostAllowed(const std::string& value) const
+    {
+        if (host == "0.0.0.0" || host == "::") return true;
+        const std::string suffix = fmt::format(":{}", port);
+        for (const std::string& name : {host, std::string("127.0.0.1"), std::string("localhost"), std::string("[::1]")}) {
+            const std::string bracketed = name.find(':') != std::string::npos && name.front() != '[' ? "[" + name + "]" : name;
+            if (value == bracketed + suffix || (port == 80 && value == bracketed)) return true;
+        }
+        return false;
+    }
+    /// Whether an Origin header is this server's own page.
+    bool originAllowed(const std::string& origin) const
+    {
+        const std::string scheme = "http://";
+        return origin.compare(0, scheme.size(), scheme) == 0 && hostAllowed(origin.substr(scheme.size()));
+    }
     Impl(ViewSession& s, ViewServerOptions o)
         : session(s)
         , options(std::move(o))
@@ -119,6 +178,39 @@ ViewServer::ViewServer(ViewSession& session, ViewServerOptions options)
     ViewSession& s = session;
     Impl& impl = *mImpl;
     server.set_payload_max_length(kMaxRequestBytes);
+    server.set_read_timeout(kReadTimeoutSeconds);
+    server.set_keep_alive_timeout(kKeepAliveSeconds);
+    server.new_task_queue = [] { return new httplib::ThreadPool(kWorkerThreads); };
+    if (impl.options.token.empty()) impl.options.token = newToken();
+    // Before any page or request: a Host of this server's (DNS rebinding); for the API the
+    // session's secret (another page on this machine cannot know it); for every request that
+    // changes or writes, the page's own Origin and a JSON body (a cross-origin form or text/plain
+    // POST, which a browser sends without asking, is refused before it is read).
+    server.set_pre_routing_handler([&impl](const httplib::Request& req, httplib::Response& res) {
+        const auto refuse = [&res](int status, const std::string& why) {
+            sendError(res, status, why);
+            res.set_header("Connection", "close");
+            return httplib::Server::HandlerResponse::Handled;
+        };
+        if (!impl.hostAllowed(req.get_header_value("Host"))) {
+            return refuse(403, fmt::format("Host '{}' is not this server's", req.get_header_value("Host").substr(0, 100)));
+        }
+        if (req.path.rfind("/api/", 0) != 0) return httplib::Server::HandlerResponse::Unhandled;
+        const std::string given = req.has_header(kTokenHeader) ? req.get_header_value(kTokenHeader)
+            : req.has_param("token") ? req.get_param_value("token") : std::string();
+        if (!sameSecret(given, impl.options.token)) {
+            return refuse(403, "this request lacks the session's token (open the address vxf view printed, with its ?token=)");
+        }
+        if (req.method != "GET" && req.method != "HEAD") {
+            if (req.has_header("Origin") && !impl.originAllowed(req.get_header_value("Origin"))) {
+                return refuse(403, fmt::format("Origin '{}' is not this server's page", req.get_header_value("Origin").substr(0, 100)));
+            }
+            if (mediaType(req.get_header_value("Content-Type")) != "application/json") {
+                return refuse(415, "a request that changes or writes must send application/json");
+            }
+        }
+        return httplib::Server::HandlerResponse::Unhandled;
+    });
     // vxf's errors from bad input are the client's (400); anything else is the server's (500).
     server.set_exception_handler([](const httplib::Request&, httplib::Response& res, std::exception_ptr ep) {
         try {
@@ -253,13 +345,17 @@ ViewServer::~ViewServer() = default;
 int ViewServer::bind(const std::string& host, int port)
 {
     if (port == 0) {
-        const int bound = mImpl->server.bind_to_any_port(host);
-        if (bound <= 0) throw Error(fmt::format("view: cannot listen on {} (any port)", host));
-        return bound;
+        port = mImpl->server.bind_to_any_port(host);
+        if (port <= 0) throw Error(fmt::format("view: cannot listen on {} (any port)", host));
+    } else if (!mImpl->server.bind_to_port(host, port)) {
+        throw Error(fmt::format("view: cannot listen on {}:{} (in use? try --port 0)", host, port));
     }
-    if (!mImpl->server.bind_to_port(host, port)) throw Error(fmt::format("view: cannot listen on {}:{} (in use? try --port 0)", host, port));
+    mImpl->host = host;
+    mImpl->port = port;
     return port;
 }
+
+const std::string& ViewServer::token() const { return mImpl->options.token; }
 
 void ViewServer::listen() { mImpl->server.listen_after_bind(); }
 

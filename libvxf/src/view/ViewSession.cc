@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstring>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -26,6 +27,19 @@ namespace vxf::view {
 namespace {
 
 namespace fs = std::filesystem;
+
+/// Export paths: a file name's limit on Linux file systems, and a bound on the whole path.
+constexpr std::size_t kMaxNameBytes = 255, kMaxExportPathBytes = 1024;
+/// The pipeline written beside a whole export, NAME.pipeline.json.
+constexpr const char* kPipelineSuffix = ".pipeline.json";
+
+/// @a text for a message: control bytes as \xNN, cut to 80 bytes.
+std::string printable(const std::string& text)
+{
+    std::string out;
+    for (const unsigned char c : text.substr(0, 80)) out += c < 0x20 || c == 0x7f ? fmt::format("\\x{:02x}", unsigned(c)) : std::string(1, char(c));
+    return text.size() > 80 ? out + "…" : out;
+}
 
 /// The largest slice sent (cells): a 4096² plane of floats is 64 MiB, more than a page draws.
 constexpr std::int64_t kMaxSliceCells = std::int64_t(2048) * 2048;
@@ -437,19 +451,44 @@ ViewSession::Rendered ViewSession::render(const std::string& scenePath, int widt
 
 std::string ViewSession::resolveInside(const std::string& relativePath) const
 {
+    const auto refuse = [&](const std::string& why) {
+        throw UsageError(fmt::format("export path '{}': {}", printable(relativePath), why));
+    };
+    // Bytes a file name cannot hold or a shell would hide: a NUL ends the name the system sees
+    // ("notes.json\0.vdb" is notes.json), the others hide in listings and logs.
+    for (const unsigned char c : relativePath) {
+        if (c < 0x20 || c == 0x7f) refuse(fmt::format("holds the control character 0x{:02x}", unsigned(c)));
+    }
     const fs::path given(relativePath);
-    if (relativePath.empty() || given.is_absolute()) {
-        throw UsageError(fmt::format("export path '{}': give a path relative to {} (the served file's folder)", relativePath, mFolder));
-    }
+    if (relativePath.empty() || given.is_absolute()) refuse(fmt::format("give a path relative to {} (the served file's folder)", mFolder));
+    if (relativePath.size() > kMaxExportPathBytes) refuse(fmt::format("{} bytes long; at most {}", relativePath.size(), kMaxExportPathBytes));
     for (const auto& part : given) {
-        if (part == "..") throw UsageError(fmt::format("export path '{}': '..' would leave {}", relativePath, mFolder));
+        if (part == "..") refuse(fmt::format("'..' would leave {}", mFolder));
+        if (part == "~") refuse("'~' is not your home here: give a path relative to the served file's folder");
+        if (part.string().size() > kMaxNameBytes) refuse(fmt::format("a name of {} bytes; at most {}", part.string().size(), kMaxNameBytes));
     }
-    if (given.extension() != ".vdb") throw UsageError(fmt::format("export path '{}': must end in .vdb", relativePath));
-    const fs::path full = (fs::path(mFolder) / given).lexically_normal();
-    if (fs::weakly_canonical(full) == fs::weakly_canonical(mPath)) {
-        throw UsageError(fmt::format("export path '{}' is the served file itself: export beside it", relativePath));
+    if (given.extension() != ".vdb") refuse("must end in .vdb");
+    // NAME.pipeline.json is written beside a whole export: it must be a valid name too.
+    if (given.stem().string().size() + std::strlen(kPipelineSuffix) > kMaxNameBytes) {
+        refuse(fmt::format("the name leaves no room for its {} (at most {} bytes before .vdb)", kPipelineSuffix,
+            kMaxNameBytes - std::strlen(kPipelineSuffix)));
     }
-    return full.string();
+    // Real paths: a symbolic link inside the folder may point out of it; exports create no folder.
+    std::error_code error;
+    const fs::path folder = fs::canonical(mFolder, error);
+    if (error) refuse(fmt::format("the served file's folder {} cannot be resolved ({})", mFolder, error.message()));
+    const fs::path parent = (fs::path(mFolder) / given).parent_path();
+    if (!fs::is_directory(parent, error)) {
+        refuse(fmt::format("no folder '{}' in {} (exports create no folders)", given.parent_path().string(), mFolder));
+    }
+    const fs::path realParent = fs::canonical(parent, error);
+    if (error) refuse(fmt::format("its folder cannot be resolved ({})", error.message()));
+    const auto [end, rest] = std::mismatch(folder.begin(), folder.end(), realParent.begin(), realParent.end());
+    if (end != folder.end()) refuse(fmt::format("its folder is {}, outside {} (through a symbolic link)", realParent.string(), mFolder));
+    const fs::path target = realParent / given.filename();
+    if (fs::is_directory(target, error)) refuse("is a folder");
+    if (fs::exists(target, error) && fs::equivalent(target, mPath, error)) refuse("is the served file itself: export beside it");
+    return target.string();
 }
 
 std::string ViewSession::exportTo(const std::string& relativePath, ExportMode mode, const std::string& grid, int smooth)
@@ -484,10 +523,9 @@ std::string ViewSession::exportTo(const std::string& relativePath, ExportMode mo
     }
     out.setProvenance("view", nlohmann::json{{"file", mPath},
         {"export", mode == ExportMode::Whole ? "whole" : mode == ExportMode::Diff ? "diff" : "smoothed"}, {"grid", grid}}.dump());
-    fs::create_directories(fs::path(path).parent_path());
     writeVoxelSet(path, out);
     if (mode == ExportMode::Whole) {
-        const std::string pipelinePath = (fs::path(path).parent_path() / (fs::path(path).stem().string() + ".pipeline.json")).string();
+        const std::string pipelinePath = (fs::path(path).parent_path() / (fs::path(path).stem().string() + kPipelineSuffix)).string();
         const std::string text = pipeline(path).dump(2) + "\n";
         writeAtomically(pipelinePath, [&](const std::string& tmp) {
             std::ofstream file(tmp, std::ios::binary);

@@ -26,10 +26,20 @@ namespace vxf::view {
 ///
 /// Bad requests (unknown grid or operator, malformed JSON, a path outside the served file's
 /// folder) are 400 with {"error": message} and change nothing; unknown paths 404.
+///
+/// Only this machine's pages of this server may use it: every request's Host must be the bound
+/// address or a loopback name with the bound port (else 403: DNS rebinding); every /api/ request
+/// must carry the session's token (header X-Vxf-Token, or ?token=; else 403), which the page's
+/// address holds; a request other than GET must come from no Origin or this server's own (else
+/// 403) and send Content-Type application/json (else 415), so a cross-origin form or text/plain
+/// POST is refused before it is read. A connection silent for 2 s is closed.
+constexpr const char* kTokenHeader = "X-Vxf-Token";
+
 struct ViewServerOptions
 {
     std::string scene;        ///< a scene file for POST /api/render ("": renders refused)
     std::string renderFolder; ///< where renders are written ("": a folder under the system's temp dir, removed at the end)
+    std::string token;        ///< the session's secret ("": 128 random bits, as hex)
 };
 
 class ViewServer
@@ -42,6 +52,8 @@ public:
 
     /// Bind to @a host:@a port (0: any free port); returns the port. vxf::Error when it cannot.
     int bind(const std::string& host, int port);
+    /// The session's secret the API requires (the page's address carries it as ?token=).
+    const std::string& token() const;
     /// Serve until stop() (blocks).
     void listen();
     /// Stop listen() (from another thread or a signal handler's thread).

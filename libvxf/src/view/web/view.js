@@ -13,9 +13,13 @@ function status(text, error = false) {
   if (error) state.lastError = text;
 }
 
+// The session's secret from the page's address (vxf view prints it): every request carries it.
+const token = new URLSearchParams(location.search).get('token') || '';
+state.call = call; // for the browser tests
 async function call(method, url, body) {
-  const response = await fetch(url, body === undefined ? { method } : {
-    method, headers: { 'Content-Type': 'application/json' }, body: JSON.stringify(body) });
+  const response = await fetch(url, {
+    method, headers: { 'Content-Type': 'application/json', 'X-Vxf-Token': token },
+    body: body === undefined ? (method === 'GET' ? undefined : '{}') : JSON.stringify(body) });
   if (!response.ok) {
     let message = response.statusText;
     try { message = (await response.json()).error; } catch (e) { /* not JSON */ }
@@ -421,7 +425,7 @@ $('render').addEventListener('click', () => guarded(async () => {
   status('rendering…');
   const body = { width: parseInt($('renderWidth').value) || 480, height: parseInt($('renderHeight').value) || 360 };
   const result = await (await call('POST', '/api/render', body)).json();
-  $('renderImage').src = `/api/image?t=${Date.now()}`;
+  $('renderImage').src = `/api/image?token=${encodeURIComponent(token)}&t=${Date.now()}`;
   $('renderReport').textContent = `${result.ran.join(' + ')} in ${result.seconds.toFixed(1)} s`;
   status(`rendered: ran ${result.ran.join(', ')}`);
   state.rendered = result;
