@@ -5,10 +5,12 @@
 #include <vxf/core/GridStats.h>
 #include <vxf/light/DirectLight.h>
 #include <vxf/pipeline/LightScene.h>
+#include <vxf/pipeline/SceneMedium.h>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <filesystem>
 #include <iostream>
 
 namespace vxf::cli {
@@ -47,7 +49,7 @@ public:
         mOptions.sweep = !mMarch;
         const Scene scene = loadScene(mScene);
         if (mStep->count() == 0) mOptions.march.step = scene.settings.step;
-        VoxelSet set = readVoxelSet(mInput);
+        VoxelSet set = placedInput(scene, &progress);
         const DirectLightReport report = lightScene(set, scene, mOptions, &progress);
         nlohmann::json params = {{"command", "light"}, {"input", mInput}, {"scene", mScene}, {"step", mOptions.march.step},
             {"cutoff", mOptions.march.cutoff}, {"sweep", mOptions.sweep}};
@@ -69,6 +71,34 @@ public:
     }
 
 private:
+    /// The input set where the scene's medium lies. A volume object's own file is placed as
+    /// vxf run places it (moved by the object's transform); a set vxf run voxelized from the
+    /// scene already is; any other set is lit where its file places it, with a warning when the
+    /// scene's medium has a transform that therefore does not apply.
+    VoxelSet placedInput(const Scene& scene, Interrupter* interrupter) const
+    {
+        VoxelSet set = readVoxelSet(mInput);
+        const SceneObject* moved = nullptr;
+        for (const SceneObject& o : scene.objects) {
+            if (o.role == SceneObject::Role::Medium && o.objectToWorld != openvdb::Mat4d::identity()) moved = &o;
+        }
+        if (!moved) return set;
+        std::error_code error;
+        if (moved->isVolume() && std::filesystem::equivalent(moved->volume, mInput, error)) {
+            VoxelSet placed = voxelizeMedia(scene, VoxelizeOptions{}, interrupter);
+            placed.metadata() = set.metadata();
+            return placed;
+        }
+        const std::string params = set.paramsJson();
+        const bool fromRun = set.stage() == "voxelize" && params.find("\"media\"") != std::string::npos;
+        if (!fromRun) {
+            warn(fmt::format("object '{}' of {} has a transform, which {} does not carry: it is lit where its file places it "
+                             "(vxf run, or voxelizing the scene's object, places it)", moved->name, mScene, mInput));
+        }
+        return set;
+    }
+
+
     std::string mInput, mScene, mOutput;
     DirectLightOptions mOptions;
     VoxelSetWriteOptions mWrite;

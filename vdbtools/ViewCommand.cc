@@ -50,7 +50,7 @@ public:
         } else if (info["default_grid"].is_string()) {
             mGrid = info["default_grid"].get<std::string>(); // in the address: the page asks for its points at once
         }
-        view::ViewServer server(session, {mScene, ""});
+        view::ViewServer server(session, {mScene, "", ""});
         const int port = server.bind(mHost, mPort);
         std::string query; // the grid's name, percent-encoded
         for (const unsigned char c : mGrid) {

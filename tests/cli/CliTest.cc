@@ -821,3 +821,37 @@ TEST_CASE("vxf view refuses what it cannot serve before listening", "[cli][view]
     CHECK(scene.status == 2);
     CHECK_THAT(scene.err, Catch::Contains("no.json"));
 }
+
+TEST_CASE("vxf light places a volume object's own file by the object's transform, and says when it cannot", "[cli][light][transform]")
+{
+    TempDir dir;
+    const auto made = run(fmt::format("{} {} --resolution 16", vxf::test::source("scripts/make-smoke"), quoted(dir.path("smoke.vdb"))));
+    REQUIRE(made.status == 0);
+    vxf::test::spit(dir.path("smoke.json"), R"({
+  "objects": [{"name": "smoke", "volume": "smoke.vdb", "transform": {"translate": [2, 0, 0]},
+               "material": {"albedo": 0.9, "mean_free_path": 0.1}}],
+  "lights": [{"type": "directional", "direction": [0, 0, -1]}],
+  "camera": {"position": [2, -3, 0], "look_at": [2, 0, 0]}
+})");
+    const auto lit = run(fmt::format("{} light {} --scene {} -o {} -q", binary("vxf"), quoted(dir.path("smoke.vdb")),
+        quoted(dir.path("smoke.json")), quoted(dir.path("lit.vdb"))));
+    INFO(lit.err);
+    REQUIRE(lit.status == 0);
+    CHECK(lit.err.empty());
+    const vxf::VoxelSet set = vxf::readVoxelSet(dir.path("lit.vdb"));
+    const openvdb::CoordBBox box = set.get<openvdb::Vec3SGrid>("direct")->evalActiveVoxelBoundingBox();
+    CHECK(set.transform().indexToWorld(box.getCenter()).x() == Approx(2.0).margin(0.1)); // where the scene puts it
+
+    // A mesh medium voxelized on its own: lit where it lies, with a word about the transform.
+    REQUIRE(run(fmt::format("{} voxelize builtin:sphere -o {} --dim 12 -q", binary("vxf"), quoted(dir.path("ball.vdb")))).status == 0);
+    vxf::test::spit(dir.path("ball.json"), R"({
+  "objects": [{"name": "ball", "mesh": "builtin:sphere", "transform": {"translate": [2, 0, 0]},
+               "material": {"albedo": 0.9, "mean_free_path": 0.1}}],
+  "lights": [{"type": "directional", "direction": [0, 0, -1]}],
+  "camera": {"position": [2, -3, 0], "look_at": [2, 0, 0]}
+})");
+    const auto warned = run(fmt::format("{} light {} --scene {} -o {} -q", binary("vxf"), quoted(dir.path("ball.vdb")),
+        quoted(dir.path("ball.json")), quoted(dir.path("ball-lit.vdb"))));
+    CHECK(warned.status == 0);
+    CHECK_THAT(warned.err, Catch::Contains("warning: object 'ball'") && Catch::Contains("has a transform"));
+}

@@ -211,3 +211,27 @@ TEST_CASE("the embedded scene schema is the committed one", "[pipeline][scene][s
 {
     CHECK(vxf::sceneSchemaText() == vxf::test::slurp(vxf::test::source("schemas/scene.schema.json")));
 }
+
+TEST_CASE("a volume object's emission is a volume light on its file that moves with it; a mesh has none", "[scene][emission]")
+{
+    const vxf::Scene scene = parse(R"({
+      "objects": [{"name": "fire", "volume": "sim/fire.vdb", "transform": {"translate": [1, 2, 3]},
+                   "emission": {"grid": "flame", "intensity": 4, "color": [1, 0.5, 0.2]},
+                   "material": {"albedo": 0.9, "mean_free_path": 0.1}}],
+      "lights": [{"type": "directional", "direction": [0, 0, -1]}],
+      "camera": {"position": [0, -5, 1], "look_at": [0, 0, 1]}
+    })");
+    REQUIRE(scene.lights.size() == 2);
+    CHECK(scene.lights[0].type == vxf::Light::Type::Directional); // the file's lights keep their indices
+    const vxf::Light& e = scene.lights[1];
+    CHECK(e.type == vxf::Light::Type::Volume);
+    CHECK(e.name == "fire.emission");
+    CHECK(e.file == "/scenes/sim/fire.vdb");
+    CHECK(e.grid == "flame");
+    CHECK(e.power() == openvdb::Vec3d(4.0, 2.0, 0.8));
+    CHECK(e.gridToWorld == scene.objects[0].objectToWorld);
+    CHECK(e.gridToWorld.getTranslation() == openvdb::Vec3d(1, 2, 3));
+
+    CHECK(errorOf(edited(R"("mesh": "meshes/grape.obj", )", R"("mesh": "meshes/grape.obj", "emission": {"grid": "flame"}, )")) ==
+          "/scenes/test.json: /objects/0/emission: names a grid of a volume object's file; a mesh medium's glow is a volume light");
+}

@@ -13,7 +13,18 @@ VolumeEmission::VolumeEmission(const Light& light)
 {
     const VoxelSet source = readVoxelSet(light.file);
     const openvdb::GridBase::Ptr grid = source.find(light.grid);
-    if (!grid) throw Error(fmt::format("light '{}': no grid '{}' in {}", light.name, light.grid, light.file));
+    if (!grid) {
+        std::string names;
+        for (const auto& g : source.grids()) names += (names.empty() ? "" : ", ") + g->getName();
+        throw Error(fmt::format("light '{}': no grid '{}' in {} (the file has: {})", light.name, light.grid, light.file,
+            names.empty() ? "none" : names));
+    }
+    if (light.gridToWorld != openvdb::Mat4d::identity()) {
+        // Moved as its object is (SceneMedium's volume object: the same product of transforms).
+        openvdb::math::Transform::Ptr moved = grid->transform().copy();
+        moved->postMult(light.gridToWorld);
+        grid->setTransform(moved);
+    }
     mFloat = openvdb::gridConstPtrCast<openvdb::FloatGrid>(grid);
     mVec3 = openvdb::gridConstPtrCast<openvdb::Vec3SGrid>(grid);
     if (!mFloat && !mVec3) {

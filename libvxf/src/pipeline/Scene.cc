@@ -150,6 +150,21 @@ public:
         return l;
     }
 
+    /// A volume object's "emission": a volume light on a grid of its own file, placed as the
+    /// object is (Light::gridToWorld), named OBJECT.emission.
+    Light objectEmission(const json& j, const SceneObject& object) const
+    {
+        Light l;
+        l.type = Light::Type::Volume;
+        l.name = object.name + ".emission";
+        l.file = object.volume;
+        l.grid = j["grid"].get<std::string>();
+        if (j.contains("color")) l.color = rgb(j["color"]);
+        l.intensity = j.value("intensity", 1.0);
+        l.gridToWorld = object.objectToWorld;
+        return l;
+    }
+
     Camera camera(const json& j) const
     {
         Camera c;
@@ -179,6 +194,7 @@ Scene parseScene(const std::string& text, const std::string& path)
     SceneReader reader(path);
     Scene scene;
     scene.path = path;
+    std::vector<Light> emitting; // the volume objects' emission, as volume lights that move with them
     for (std::size_t i = 0; i < document["objects"].size(); ++i) {
         const json& o = document["objects"][i];
         const std::string where = fmt::format("/objects/{}", i);
@@ -222,11 +238,19 @@ Scene parseScene(const std::string& text, const std::string& path)
         if (object.role == SceneObject::Role::Emitter && object.surface.emission == openvdb::Vec3d(0.0)) {
             reader.fail(where + "/surface/emission", "an emitter needs a non-zero emission");
         }
+        if (o.contains("emission")) {
+            if (!object.isVolume()) {
+                reader.fail(where + "/emission", "names a grid of a volume object's file; a mesh medium's glow is a volume light");
+            }
+            emitting.push_back(reader.objectEmission(o["emission"], object));
+        }
         scene.objects.push_back(std::move(object));
     }
     for (std::size_t i = 0; i < document["lights"].size(); ++i) {
         scene.lights.push_back(reader.light(document["lights"][i], fmt::format("/lights/{}", i)));
     }
+    // Objects' emission after the scene's lights: a light's index in the scene stays its index in the file.
+    for (Light& l : emitting) scene.lights.push_back(std::move(l));
     scene.camera = reader.camera(document["camera"]);
 
     // One phase for the scene's media: the voxel set's coefficient grids sum the objects'

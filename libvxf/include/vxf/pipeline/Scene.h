@@ -75,6 +75,9 @@ struct Light
     double width = 1.0, height = 1.0, radius = 0.5;
     int samples = 16;
     std::string file, grid; ///< volume light grid / environment map (resolved path)
+    /// Volume light: where its grid is placed, after the grid's own transform (a volume object's
+    /// emission moves with the object: its objectToWorld; a `volume` light of the scene: identity).
+    openvdb::Mat4d gridToWorld = openvdb::Mat4d::identity();
 
     /// Radiant colour: color × intensity.
     openvdb::Vec3d power() const { return color * intensity; }
