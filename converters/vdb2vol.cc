@@ -18,10 +18,11 @@ int main(int argc, char** argv)
     std::string input, output, grid = "density";
     int pad = 1;
     app.add_option("input", input, ".vdb file")->required();
-    app.add_option("output", output, "Output .vol file")->required();
+    app.add_option("output", output, "Output .vol file")->required()->check(cli::OutputFile);
     app.add_option("--grid", grid, "The grid to write (default density)");
     app.add_option("--pad", pad, "Voxels of padding around the active bounding box (default 1)")->check(CLI::Range(0, 1024));
     return cli::runMain(app, argc, argv, [&] {
+        cli::refuseOutputOverInput(input, output);
         const VoxelSet set = readVoxelSet(input);
         auto g = set.find(grid);
         if (!g) throw UsageError(fmt::format("{}: no grid named '{}'", input, grid));

@@ -13,9 +13,10 @@ int main(int argc, char** argv)
     std::string input, output;
     VxfWriteOptions options;
     app.add_option("input", input, ".vdb file")->required();
-    app.add_option("output", output, "Output text VXF file")->required();
+    app.add_option("output", output, "Output text VXF file")->required()->check(cli::OutputFile);
     app.add_option("--grid", options.grids, "Grid to write as columns, in order (repeatable; default: all that fit)");
     return cli::runMain(app, argc, argv, [&] {
+        cli::refuseOutputOverInput(input, output);
         cli::TerminalProgress progress;
         const VoxelSet set = readVoxelSet(input);
         for (const auto& warning : writeVxfText(output, set, options, &progress)) cli::warn(warning);

@@ -15,9 +15,10 @@ int main(int argc, char** argv)
     std::string input, output;
     VoxelSetWriteOptions write;
     app.add_option("input", input, "Text VXF file")->required();
-    app.add_option("output", output, "Output .vdb file")->required();
+    app.add_option("output", output, "Output .vdb file")->required()->check(cli::OutputFile);
     app.add_flag("--half", write.half, "Store floats as 16-bit halves (lossy)");
     return cli::runMain(app, argc, argv, [&] {
+        cli::refuseOutputOverInput(input, output);
         cli::TerminalProgress progress;
         VoxelSet set = readVxfText(input, &progress);
         set.setProvenance("convert", nlohmann::json{{"command", "vxf2vdb"}, {"input", input}, {"half", write.half}}.dump());

@@ -5,9 +5,9 @@
 #include <vxf/io/MeshFile.h>
 #include <vxf/io/VoxelSetFile.h>
 #include <vxf/io/VxfText.h>
-#include <vxf/ops/Registry.h>
+#include <vxf/pipeline/Operators.h>
 #include <vxf/pipeline/Graph.h>
-#include <vxf/pipeline/Scene.h>
+#include <vxf/pipeline/SceneFile.h>
 
 #include <nlohmann/json.hpp>
 #include <openvdb/openvdb.h>
@@ -121,8 +121,8 @@ int vdbInfo(const std::uint8_t* data, std::size_t size)
 int opParams(const std::uint8_t* data, std::size_t size)
 {
     if (size < 2) return 0;
-    const auto& operators = ops::registry();
-    const ops::Operator& op = operators[data[0] % operators.size()];
+    const auto& all = vxf::operators();
+    const ops::Operator& op = all[data[0] % all.size()];
     const std::string rest(reinterpret_cast<const char*>(data + 2), size - 2);
     const std::size_t newline = rest.find('\n');
     return expectingErrors([&] {

@@ -1,6 +1,6 @@
 #include "TestSupport.h"
 
-#include <vxf/light/Phase.h>
+#include <vxf/transport/Phase.h>
 
 #include <vxf/core/Error.h>
 #include <vxf/io/JsonDocument.h>

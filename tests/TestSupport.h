@@ -3,7 +3,7 @@
 #pragma once
 
 #include <vxf/core/VoxelSet.h>
-#include <vxf/pipeline/Scene.h>
+#include <vxf/pipeline/SceneFile.h>
 
 #include <nlohmann/json.hpp>
 #include <openvdb/openvdb.h>

@@ -11,6 +11,7 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <iostream>
 #include <mutex>
 
@@ -36,6 +37,27 @@ CLI::Validator numberThat(const std::function<bool(double)>& ok, const std::stri
 
 const CLI::Validator AboveZero = numberThat([](double v) { return v > 0.0; }, "a number above zero", "POSITIVE");
 const CLI::Validator ZeroOrMore = numberThat([](double v) { return v >= 0.0; }, "a number of zero or more", "NONNEGATIVE");
+
+const CLI::Validator OutputFile(
+    [](std::string& text) -> std::string {
+        namespace fs = std::filesystem;
+        const fs::path path(text);
+        std::error_code error;
+        if (text.empty() || path.filename().empty()) return "'" + text + "' names no file";
+        if (fs::is_directory(path, error)) return "'" + text + "' is a folder, not a file to write";
+        const fs::path folder = path.parent_path().empty() ? fs::path(".") : path.parent_path();
+        if (!fs::is_directory(folder, error)) return "cannot write '" + text + "': folder '" + folder.string() + "' does not exist";
+        return {};
+    },
+    "FILE");
+
+void refuseOutputOverInput(const std::string& input, const std::string& output)
+{
+    std::error_code error;
+    if (std::filesystem::equivalent(input, output, error)) {
+        throw UsageError(fmt::format("output {} is the input {}: write the converted file beside it", output, input));
+    }
+}
 
 namespace {
 std::string gTool = "vxf";

@@ -46,6 +46,12 @@ extern const CLI::Validator AboveZero;
 
 /// Option check: a number of zero or more.
 extern const CLI::Validator ZeroOrMore;
+/// A file to write, checked before any work: its folder exists and it is not a folder itself
+/// (a missing folder was reported only after the whole computation).
+extern const CLI::Validator OutputFile;
+/// A usage error when @a output is the file @a input (a converter would replace its own input
+/// with another format).
+void refuseOutputOverInput(const std::string& input, const std::string& output);
 
 /// Seconds since @a start.
 inline double secondsSince(std::chrono::steady_clock::time_point start)

@@ -35,7 +35,7 @@ std::unique_ptr<Command> makeViewCommand(CLI::App& parent);
 #include <vxf/io/MeshFile.h>
 #include <vxf/io/VoxelSetFile.h>
 #include <vxf/voxelize/Voxelize.h>
-#include <vxf/pipeline/Scene.h>
+#include <vxf/pipeline/SceneFile.h>
 #include <vxf/render/Render.h>
 
 #include <string>

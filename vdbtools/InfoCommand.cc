@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <iostream>
 
 namespace vxf::cli {
@@ -48,10 +49,23 @@ nlohmann::json describe(const VoxelSet& set)
             g["bbox_min"] = {s.activeBBox.min().x(), s.activeBBox.min().y(), s.activeBBox.min().z()};
             g["bbox_max"] = {s.activeBBox.max().x(), s.activeBBox.max().y(), s.activeBBox.max().z()};
         }
-        nlohmann::json gridMeta = nlohmann::json::object();
-        for (auto it = grid->beginMeta(); it != grid->endMeta(); ++it) {
-            if (it->first.rfind("vxf:", 0) == 0) gridMeta[it->first] = it->second->str();
+        // Storage: what the file holds (a grid saved as half float reads back as float).
+        g["storage"] = grid->isType<openvdb::FloatGrid>() || grid->isType<openvdb::Vec3SGrid>()
+            ? (grid->saveFloatAsHalf() ? "half" : "float")
+            : grid->valueType();
+        const ValueRange range = valueRange(*grid);
+        if (range.channels > 0) {
+            const auto values = [&](const openvdb::Vec3d& v) {
+                return range.channels == 1 ? nlohmann::json(v[0]) : nlohmann::json{v[0], v[1], v[2]};
+            };
+            g["min"] = values(range.min);
+            g["max"] = values(range.max);
+            g["mean"] = values(range.mean);
         }
+        if (range.nonFinite > 0) g["non_finite_voxels"] = range.nonFinite;
+        // Every metadata item of the grid, as its writer left it (Houdini's, Blender's, OpenVDB's own).
+        nlohmann::json gridMeta = nlohmann::json::object();
+        for (auto it = grid->beginMeta(); it != grid->endMeta(); ++it) gridMeta[it->first] = it->second->str();
         g["metadata"] = gridMeta;
         info["grids"].push_back(g);
     }
@@ -83,8 +97,9 @@ public:
             for (const auto& [key, value] : info["metadata"].items()) {
                 std::cout << fmt::format("  {:<14} {}\n", key, value.is_string() ? value.get<std::string>() : value.dump());
             }
-            std::cout << fmt::format("  {:<16} {:<6} {:<11} {:<15} {:>12} {:>8} {:>6}  {:<34} {:>10}  {}\n", "grid", "type",
-                "class", "role", "active", "leaves", "tiles", "active bbox (index)", "memory", "units");
+            std::cout << fmt::format("  {:<16} {:<6} {:<6} {:<11} {:<15} {:>12} {:>8} {:>6}  {:<34} {:>10}  {:<36} {}\n", "grid",
+                "type", "stored", "class", "role", "active", "leaves", "tiles", "active bbox (index)", "memory",
+                "min / mean / max (active)", "units");
             for (const auto& g : info["grids"]) {
                 std::string bbox = "empty";
                 if (g.contains("bbox_min")) {
@@ -93,11 +108,24 @@ public:
                         g["bbox_max"][2].get<int>());
                 }
                 const std::string role = g["role"].get<std::string>();
-                std::cout << fmt::format("  {:<16} {:<6} {:<11} {:<15} {:>12} {:>8} {:>6}  {:<34} {:>10}  {}{}\n",
-                    g["name"].get<std::string>(), g["value_type"].get<std::string>(), g["class"].get<std::string>(),
-                    role.empty() ? "(passed through)" : role, g["active_voxels"].get<std::uint64_t>(),
+                std::string range = "-";
+                if (g.contains("min")) {
+                    // Grey for one channel; the largest channel's for a vector (its mean the channels' mean).
+                    const auto grey = [](const nlohmann::json& v, bool largest) {
+                        if (v.is_number()) return v.get<double>();
+                        const double a = v[0].get<double>(), b = v[1].get<double>(), c = v[2].get<double>();
+                        return largest ? std::max({a, b, c}) : (a + b + c) / 3.0;
+                    };
+                    range = fmt::format("{:.4g} / {:.4g} / {:.4g}", g["min"].is_number() ? g["min"].get<double>()
+                        : std::min({g["min"][0].get<double>(), g["min"][1].get<double>(), g["min"][2].get<double>()}),
+                        grey(g["mean"], false), grey(g["max"], true));
+                }
+                if (g.contains("non_finite_voxels")) range += fmt::format(" ({} non-finite)", g["non_finite_voxels"].get<std::uint64_t>());
+                std::cout << fmt::format("  {:<16} {:<6} {:<6} {:<11} {:<15} {:>12} {:>8} {:>6}  {:<34} {:>10}  {:<36} {}{}\n",
+                    g["name"].get<std::string>(), g["value_type"].get<std::string>(), g["storage"].get<std::string>(),
+                    g["class"].get<std::string>(), role.empty() ? "(passed through)" : role, g["active_voxels"].get<std::uint64_t>(),
                     g["leaf_nodes"].get<std::uint64_t>(), g["active_tiles"].get<std::uint64_t>(), bbox,
-                    formatBytes(g["memory_bytes"].get<std::uint64_t>()),
+                    formatBytes(g["memory_bytes"].get<std::uint64_t>()), range,
                     g["metadata"].value(kUnitsMetaKey, std::string()),
                     g["shares_transform"].get<bool>() ? "" : "  (own transform)");
             }

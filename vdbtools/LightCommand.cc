@@ -27,7 +27,7 @@ public:
             "`scatter_source` (sigma_s direct / 4 pi + volume-light emission).");
         mApp->add_option("input", mInput, "Voxel set with `density` (from vxf voxelize)")->required();
         mApp->add_option("--scene", mScene, "Scene file (schemas/scene.schema.json): material and lights")->required();
-        mApp->add_option("-o,--output", mOutput, "Output .vdb (all input grids + direct + scatter_source)")->required();
+        mApp->add_option("-o,--output", mOutput, "Output .vdb (all input grids + direct + scatter_source)")->required()->check(OutputFile);
         mStep = mApp->add_option("--step", mOptions.march.step,
                         "March step in voxels (default: the scene's scatter.step, 1, as vxf run lights it)")
                     ->check(CLI::Range(0.01, 64.0));

@@ -4,7 +4,7 @@
 #include "Commands.h"
 
 #include <vxf/io/VoxelSetFile.h>
-#include <vxf/ops/Registry.h>
+#include <vxf/pipeline/Operators.h>
 #include <vxf/pipeline/Graph.h>
 
 #include <fmt/format.h>
@@ -29,13 +29,13 @@ public:
         mApp->require_subcommand(0, 1);
         mApp->add_flag("--markdown", mMarkdown, "Print the operator table (as in the README) and exit");
         mApp->add_flag("--schema", mSchema, "Print schemas/pipeline.schema.json (generated from the operators) and exit");
-        for (const auto& op : ops::registry()) {
+        for (const auto& op : operators()) {
             CLI::App* sub = mApp->add_subcommand(op.name, op.summary);
             sub->allow_extras(); // unknown parameters are reported below, naming the operator
             Invocation& call = mCalls[op.name];
             call.app = sub;
             sub->add_option("input", call.input, "Input .vdb")->required();
-            sub->add_option("-o,--output", call.output, "Output .vdb (may be the input)")->required();
+            sub->add_option("-o,--output", call.output, "Output .vdb (may be the input)")->required()->check(OutputFile);
             sub->add_option("--record", call.record, "Append this command as a node to a pipeline graph (vxf graph)");
             sub->add_flag("--half", call.write.half, "Store floats as 16-bit halves");
             for (const auto& p : op.params) {
@@ -55,15 +55,15 @@ public:
     void run() override
     {
         if (mMarkdown) {
-            std::cout << ops::operatorTableMarkdown();
+            std::cout << operatorTableMarkdown();
             return;
         }
         if (mSchema) {
-            std::cout << ops::pipelineSchema().dump(2) << "\n";
+            std::cout << pipelineSchema().dump(2) << "\n";
             return;
         }
         for (auto& [name, call] : mCalls) {
-            if (call.app->parsed()) return runOperator(ops::findOperator(name), call);
+            if (call.app->parsed()) return runOperator(findOperator(name), call);
         }
         throw UsageError("name an operator (vxf op --help lists them)");
     }

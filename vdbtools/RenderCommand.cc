@@ -3,7 +3,7 @@
 #include "Commands.h"
 
 #include <vxf/io/ImageFile.h>
-#include <vxf/light/Medium.h>
+#include <vxf/transport/Medium.h>
 #include <vxf/pipeline/SceneGeometry.h>
 #include <vxf/pipeline/SceneMedium.h>
 #include <vxf/render/Render.h>
@@ -28,8 +28,8 @@ public:
             "surface, direct, scatter, depth, normal, samples (camera rays per pixel); optional sRGB PNG preview.");
         mApp->add_option("scene", mScene, "Scene file (camera, render settings)")->required();
         mApp->add_option("--volume", mVolume, "Voxel set from vxf scatter (or vxf light)")->required();
-        mApp->add_option("-o,--output", mOutput, "Output .exr")->required();
-        mApp->add_option("--png", mPng, "Also write an sRGB PNG preview");
+        mApp->add_option("-o,--output", mOutput, "Output .exr")->required()->check(OutputFile);
+        mApp->add_option("--png", mPng, "Also write an sRGB PNG preview")->check(OutputFile);
         mApp->add_option("--exposure", mExposure, "PNG exposure in stops (default 0)");
         mApp->add_option("--width", mWidth, "Override the scene's width")->check(CLI::Range(1, 32768));
         mApp->add_option("--height", mHeight, "Override the scene's height")->check(CLI::Range(1, 32768));

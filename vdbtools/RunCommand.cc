@@ -3,7 +3,7 @@
 #include "Commands.h"
 
 #include <vxf/pipeline/RunPipeline.h>
-#include <vxf/pipeline/Scene.h>
+#include <vxf/pipeline/SceneFile.h>
 #include <vxf/pipeline/SceneGeometry.h>
 
 #include <fmt/format.h>

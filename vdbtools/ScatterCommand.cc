@@ -2,8 +2,8 @@
 #include "CliSupport.h"
 #include "Commands.h"
 
-#include <vxf/light/Medium.h>
-#include <vxf/light/Phase.h>
+#include <vxf/transport/Medium.h>
+#include <vxf/transport/Phase.h>
 #include <vxf/pipeline/SceneMedium.h>
 #include <vxf/scatter/Scatter.h>
 
@@ -26,7 +26,7 @@ public:
             "`illumination` (direct + scatter), `scatter_pass_K` on request. Reads `scatter_source` (or a kept pass) from "
             "the file, so edited grids are honoured.");
         mApp->add_option("input", mInput, "Voxel set from vxf light (density, direct, scatter_source)")->required();
-        mApp->add_option("-o,--output", mOutput, "Output .vdb")->required();
+        mApp->add_option("-o,--output", mOutput, "Output .vdb")->required()->check(OutputFile);
         mApp->add_option("--passes", mOptions.passes, "At most this many passes (default 16)")->check(CLI::Range(0, 10000));
         mApp->add_option("--directions", mOptions.pass.directions, "Directions per voxel (default 64)")->check(CLI::Range(1, 65536));
         mApp->add_option("--step", mOptions.pass.step, "March step in voxels (default 1)")->check(CLI::Range(0.01, 64.0));

@@ -109,7 +109,7 @@ public:
         mApp->add_option("mesh", mRequest.mesh,
                fmt::format("Mesh file (.obj .ply .off .stl) or a built-in mesh: {}", fmt::join(builtinMeshNames(), ", ")))
             ->required();
-        mApp->add_option("-o,--output", mRequest.output, "Output .vdb file")->required();
+        mApp->add_option("-o,--output", mRequest.output, "Output .vdb file")->required()->check(OutputFile);
         auto* size = mApp->add_option("--voxel-size", mRequest.voxelize.voxelSize, "Voxel size in world units")
                          ->check(AboveZero);
         auto* dim = mApp->add_option("--dim", mRequest.voxelize.dim, "Voxels along the longest side of the mesh")

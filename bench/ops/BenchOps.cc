@@ -3,7 +3,7 @@
 //
 // Usage: bench_ops SET.vdb RUNS   (SET holds `density` and `surface`; see bench/ops/run)
 #include <vxf/io/VoxelSetFile.h>
-#include <vxf/ops/Registry.h>
+#include <vxf/pipeline/Operators.h>
 
 #include <fmt/format.h>
 #include <tbb/info.h>
@@ -29,14 +29,14 @@ int main(int argc, char** argv)
     const openvdb::Index64 voxels = density->activeVoxelCount();
     {
         // A colour grid over the same voxels, and a second one to blend with.
-        const auto& gradient = vxf::ops::findOperator("gradient");
+        const auto& gradient = vxf::findOperator("gradient");
         const auto args = vxf::ops::checkArgs(gradient, {{"kind", "radial"}, {"radius", 1.0}, {"colors", {{1, 0.5, 0.2}, {0.1, 0.2, 1}}}, {"out", "color"}});
         vxf::ops::OpContext context{base, args, nullptr};
         gradient.run(context);
         auto second = base.find("color")->deepCopyGrid();
         second->setName("color2");
         base.put(second);
-        const auto& select = vxf::ops::findOperator("select");
+        const auto& select = vxf::findOperator("select");
         const auto sargs = vxf::ops::checkArgs(select, {{"grid", "density"}, {"shape", "range"}, {"low", 0.5}, {"high", 0.9}, {"out", "mask"}});
         vxf::ops::OpContext scontext{base, sargs, nullptr};
         select.run(scontext);
@@ -60,7 +60,7 @@ int main(int argc, char** argv)
         {"copy", {{"grid", "color"}, {"to", "color3"}}},
     };
     std::cout << fmt::format("| operator | parameters | seconds (best of {}) | active voxels per second |\n|---|---|---:|---:|\n", runs);
-    for (const auto& op : vxf::ops::registry()) {
+    for (const auto& op : vxf::operators()) {
         const auto found = params.find(op.name);
         if (found == params.end()) continue; // pipeline stages and multi-grid setups (merge, apply_diff) are not timed here
         const auto args = vxf::ops::checkArgs(op, found->second);
@@ -69,7 +69,7 @@ int main(int argc, char** argv)
             vxf::VoxelSet set(base.transformPtr());
             for (const auto& g : base.grids()) set.putAsIs(g->deepCopyGrid());
             if (op.name == "denormalize") {
-                const auto& normalize = vxf::ops::findOperator("normalize");
+                const auto& normalize = vxf::findOperator("normalize");
                 const auto nargs = vxf::ops::checkArgs(normalize, {{"grid", "color"}});
                 vxf::ops::OpContext n{set, nargs, nullptr};
                 normalize.run(n);

@@ -3,7 +3,7 @@
 
 #include <vxf/io/ImageFile.h>
 #include <vxf/io/VoxelSetFile.h>
-#include <vxf/light/Medium.h>
+#include <vxf/transport/Medium.h>
 
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>
@@ -137,6 +137,7 @@ TEST_CASE("files made by other tools (pyopenvdb) are read, listed and converted"
                             "a.setValueOn((-1, 1, 0), 0.25)\n"
                             "v = vdb.Vec3SGrid(); v.name = 'vel'; v.transform = vdb.createLinearTransform(voxelSize=0.25)\n"
                             "v.getAccessor().setValueOn((0, 0, 0), (1.0, 2.0, 3.0))\n"
+                            "d['blender/solver'] = 'mantaflow'; d.saveFloatAsHalf = True\n"
                             "vdb.write('" + made + "', grids=[d, v], metadata={'creator': 'pyopenvdb'})\"");
     INFO(python.err);
     REQUIRE(python.status == 0);
@@ -145,10 +146,21 @@ TEST_CASE("files made by other tools (pyopenvdb) are read, listed and converted"
     const auto json = nlohmann::json::parse(info.out);
     CHECK(json["metadata"]["creator"] == "pyopenvdb");
     REQUIRE(json["grids"].size() == 2);
+    // Each grid's value range over its active voxels, its storage, and its writer's metadata.
+    const auto& density = json["grids"][0]["name"] == "density" ? json["grids"][0] : json["grids"][1];
+    const auto& vel = json["grids"][0]["name"] == "density" ? json["grids"][1] : json["grids"][0];
+    CHECK(density["min"] == 0.25);
+    CHECK(density["max"] == 1.0);
+    CHECK(density["mean"].get<double>() == Approx(1.75 / 3.0));
+    CHECK(density["storage"] == "half");
+    CHECK(density["metadata"]["blender/solver"] == "mantaflow");
+    CHECK(vel["storage"] == "float");
+    CHECK(vel["mean"] == nlohmann::json{1.0, 2.0, 3.0});
     const auto table = run(fmt::format("{} info {}", binary("vxf"), made));
     CHECK(table.out.find("(no vxf provenance)") != std::string::npos);
     CHECK(table.out.find("(passed through)") != std::string::npos); // 'vel' has no vxf role
     CHECK(table.out.find("(own transform)") != std::string::npos);  // nor the shared transform
+    CHECK(table.out.find("0.25 / 0.5833 / 1") != std::string::npos); // min / mean / max
 
     const auto text = run(fmt::format("{} {} {}", binary("vdb2vxf"), made, dir.path("h.vxf")));
     INFO(text.err);
@@ -854,4 +866,32 @@ TEST_CASE("vxf light places a volume object's own file by the object's transform
         quoted(dir.path("ball.json")), quoted(dir.path("ball-lit.vdb"))));
     CHECK(warned.status == 0);
     CHECK_THAT(warned.err, Catch::Contains("warning: object 'ball'") && Catch::Contains("has a transform"));
+}
+
+TEST_CASE("an output that cannot be written is refused before any work, and a converter never replaces its input", "[cli][output]")
+{
+    TempDir dir;
+    const std::string vxf = binary("vxf");
+    REQUIRE(run(fmt::format("{} voxelize builtin:sphere -o {} --dim 12 -q", vxf, quoted(dir.path("s.vdb")))).status == 0);
+    const auto voxelize = run(fmt::format("{} voxelize builtin:sphere -o {} --dim 12 -q", vxf, quoted(dir.path("nodir/s.vdb"))));
+    CHECK(voxelize.status == 2);
+    CHECK_THAT(voxelize.err, Catch::Contains("folder '" + dir.path("nodir") + "' does not exist"));
+    const auto folder = run(fmt::format("{} voxelize builtin:sphere -o {} --dim 12 -q", vxf, quoted(dir.root().string())));
+    CHECK(folder.status == 2);
+    CHECK_THAT(folder.err, Catch::Contains("is a folder, not a file to write"));
+    // Both of render's outputs are checked first: the .exr is not written when the PNG cannot be.
+    vxf::test::spit(dir.path("scene.json"), R"({"objects": [{"mesh": "builtin:sphere", "material": {"albedo": 0.5, "mean_free_path": 1}}],
+      "lights": [{"type": "point", "position": [0, 0, 3]}], "camera": {"position": [0, -4, 0], "look_at": [0, 0, 0]}})");
+    const auto render = run(fmt::format("{} render {} --scene {} -o {} --png {}", vxf, quoted(dir.path("s.vdb")), quoted(dir.path("scene.json")),
+        quoted(dir.path("ok.exr")), quoted(dir.path("nodir/x.png"))));
+    CHECK(render.status == 2);
+    CHECK_FALSE(fs::exists(dir.path("ok.exr")));
+    for (const auto& [tool, output] : {std::pair<std::string, std::string>{"vdb2vxf", "s.vdb"}, {"vdb2vol", "s.vdb"}}) {
+        CAPTURE(tool);
+        const std::string before = slurp(dir.path("s.vdb"));
+        const auto over = run(fmt::format("{} {} {}", binary(tool), quoted(dir.path("s.vdb")), quoted(dir.path(output))));
+        CHECK(over.status == 2);
+        CHECK_THAT(over.err, Catch::Contains("is the input"));
+        CHECK(slurp(dir.path("s.vdb")) == before);
+    }
 }

@@ -1,5 +1,5 @@
-#include <vxf/light/Medium.h>
-#include <vxf/light/Phase.h>
+#include <vxf/transport/Medium.h>
+#include <vxf/transport/Phase.h>
 #include <vxf/scatter/SweepPass.h>
 
 #include "TestSupport.h"

@@ -1,4 +1,4 @@
-#include <vxf/ops/Registry.h>
+#include <vxf/pipeline/Operators.h>
 
 #include <vxf/core/Error.h>
 #include <vxf/io/VoxelSetFile.h>
@@ -16,7 +16,7 @@ TEST_CASE("the registry: every operator named, summarized and typed once", "[ops
 {
     std::set<std::string> names;
     const std::regex snake("[a-z][a-z0-9_]*");
-    for (const auto& op : vxf::ops::registry()) {
+    for (const auto& op : vxf::operators()) {
         INFO(op.name);
         CHECK(names.insert(op.name).second);
         CHECK(std::regex_match(op.name, snake));
@@ -50,7 +50,7 @@ TEST_CASE("the registry: every operator named, summarized and typed once", "[ops
 
 TEST_CASE("bad parameters are errors naming the operator and the parameter", "[ops][registry]")
 {
-    const auto& blur = vxf::ops::findOperator("blur");
+    const auto& blur = vxf::findOperator("blur");
     CHECK_THROWS_WITH(vxf::ops::checkArgs(blur, {{"grid", "d"}, {"radious", 2}}),
         Catch::Contains("blur: unknown parameter 'radious'") && Catch::Contains("radius"));
     CHECK_THROWS_WITH(vxf::ops::checkArgs(blur, {{"grid", "d"}, {"radius", 0}}),
@@ -58,18 +58,18 @@ TEST_CASE("bad parameters are errors naming the operator and the parameter", "[o
     CHECK_THROWS_WITH(vxf::ops::checkArgs(blur, {{"grid", "d"}, {"radius", 1.5}}), Catch::Contains("parameter 'radius' is 1.5"));
     CHECK_THROWS_WITH(vxf::ops::checkArgs(blur, {{"grid", "d"}, {"kind", "gauss"}}), Catch::Contains("one of box|distance"));
     CHECK_THROWS_WITH(vxf::ops::checkArgs(blur, json::object()), Catch::Contains("blur: parameter 'grid' is required"));
-    const auto& gradient = vxf::ops::findOperator("gradient");
+    const auto& gradient = vxf::findOperator("gradient");
     CHECK_THROWS_WITH(vxf::ops::checkArgs(gradient, {{"radius", 2.0}}),
         Catch::Contains("gradient: parameter 'radius' is unused with kind=directional"));
     CHECK_NOTHROW(vxf::ops::checkArgs(gradient, {{"kind", "radial"}, {"radius", 2.0}}));
-    CHECK_THROWS_WITH(vxf::ops::checkArgs(vxf::ops::findOperator("blend"), {{"grid", "a"}, {"with", "b"}, {"weight", 0.2}}),
+    CHECK_THROWS_WITH(vxf::ops::checkArgs(vxf::findOperator("blend"), {{"grid", "a"}, {"with", "b"}, {"weight", 0.2}}),
         Catch::Contains("'weight' is unused with mode=add"));
     const auto args = vxf::ops::checkArgs(blur, {{"grid", "d"}});
     CHECK(args.integer("radius") == 1); // default filled in
     CHECK_FALSE(args.has("mask"));       // optional, absent
-    CHECK_THROWS_WITH(vxf::ops::findOperator("blurr"), Catch::Contains("no operator named 'blurr'") && Catch::Contains("blur_special"));
+    CHECK_THROWS_WITH(vxf::findOperator("blurr"), Catch::Contains("no operator named 'blurr'") && Catch::Contains("blur_special"));
 
-    const auto& mul = vxf::ops::findOperator("mul");
+    const auto& mul = vxf::findOperator("mul");
     const auto& value = mul.params[1];
     CHECK(vxf::ops::parseParamText(mul, value, "2") == json(2.0));
     CHECK(vxf::ops::parseParamText(mul, value, "1,0.5,2") == json::array({1.0, 0.5, 2.0}));
@@ -89,7 +89,7 @@ TEST_CASE("an operator runs on a voxel set and leaves the other grids untouched"
     other->tree().setValueOn(openvdb::Coord(0), 7.0f);
     set.put(density);
     set.put(other);
-    const auto& mul = vxf::ops::findOperator("mul");
+    const auto& mul = vxf::findOperator("mul");
     const auto args = vxf::ops::checkArgs(mul, {{"grid", "density"}, {"value", 4}, {"out", "bright"}});
     vxf::ops::OpContext context{set, args, nullptr};
     CHECK(mul.run(context).find("mul on 'bright'") != std::string::npos);
@@ -119,7 +119,7 @@ TEST_CASE("rename and copy: grids between files, resampled when asked; backgroun
     density->tree().setValueOn(openvdb::Coord(1), 1.0f);
     set.put(density);
     const auto run = [&](const char* name, const json& params) {
-        const auto& op = vxf::ops::findOperator(name);
+        const auto& op = vxf::findOperator(name);
         const auto args = vxf::ops::checkArgs(op, params);
         vxf::ops::OpContext context{set, args, nullptr};
         return op.run(context);

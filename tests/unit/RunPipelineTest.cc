@@ -2,7 +2,7 @@
 
 #include <vxf/io/ImageFile.h>
 #include <vxf/io/VoxelSetFile.h>
-#include <vxf/pipeline/Scene.h>
+#include <vxf/pipeline/SceneFile.h>
 
 #include "TestSupport.h"
 

@@ -288,3 +288,25 @@ TEST_CASE("with a Henyey-Greenstein phase each pass scales by the reduced albedo
         }
     }
 }
+
+TEST_CASE("passes 0 runs none: scatter zero, illumination the direct light, for every kernel", "[scatter]")
+{
+    const vxf::Material m = vxf::test::albedoMaterial(8.0, 0.9);
+    for (const auto kernel : {vxf::ScatterKernel::Sweep, vxf::ScatterKernel::Gather}) {
+        for (const bool accelerate : {true, false}) {
+            vxf::VoxelSet set = uniformSphere(m, 1.0);
+            const vxf::Medium medium(set, m);
+            vxf::ScatterOptions options;
+            options.passes = 0;
+            options.pass.kernel = kernel;
+            options.accelerate = accelerate;
+            const auto report = vxf::scatter(set, medium, options);
+            CHECK(report.passes.empty());
+            CHECK(report.stopReason == "passes 0: no multiple scattering (single scattering alone)");
+            const auto scattered = set.get<openvdb::Vec3SGrid>("scatter");
+            CHECK(scattered->activeVoxelCount() == set.get<openvdb::Vec3SGrid>("scatter_source")->activeVoxelCount());
+            for (auto it = scattered->cbeginValueOn(); it; ++it) REQUIRE(*it == openvdb::Vec3f(0.0f));
+            CHECK(vxf::test::identicalGrids(*set.get<openvdb::Vec3SGrid>("illumination"), *set.get<openvdb::Vec3SGrid>("direct")));
+        }
+    }
+}

@@ -2,7 +2,7 @@
 
 #include <vxf/core/ProceduralMesh.h>
 #include <vxf/light/DirectLight.h>
-#include <vxf/light/Medium.h>
+#include <vxf/transport/Medium.h>
 #include <vxf/voxelize/Voxelize.h>
 
 #include "TestSupport.h"

@@ -1,5 +1,5 @@
 // Every stage and every operator gives the same output with 1 and with 2 threads.
-#include <vxf/ops/Registry.h>
+#include <vxf/pipeline/Operators.h>
 
 #include <vxf/io/ImageFile.h>
 #include <vxf/io/VoxelSetFile.h>
@@ -66,7 +66,7 @@ TEST_CASE("every stage and every operator gives the same output with 1 and 2 thr
     // A file for `copy` to read, on another lattice (resampled).
     {
         vxf::VoxelSet other;
-        const auto& voxelize = vxf::ops::findOperator("voxelize");
+        const auto& voxelize = vxf::findOperator("voxelize");
         const auto args = vxf::ops::checkArgs(voxelize, {{"mesh", "builtin:box"}, {"dim", 20}});
         vxf::ops::OpContext context{other, args, nullptr};
         voxelize.run(context);
@@ -76,7 +76,7 @@ TEST_CASE("every stage and every operator gives the same output with 1 and 2 thr
     const auto chain = everyOperator(scene, dir.path("image.exr"), dir.path("other.vdb"));
     std::set<std::string> covered;
     for (const auto& [name, params] : chain) covered.insert(name);
-    for (const auto& op : vxf::ops::registry()) {
+    for (const auto& op : vxf::operators()) {
         INFO("operator missing from the chain: " << op.name);
         CHECK(covered.count(op.name));
     }
@@ -84,7 +84,7 @@ TEST_CASE("every stage and every operator gives the same output with 1 and 2 thr
     vxf::VoxelSet one, two;
     for (const auto& [name, params] : chain) {
         INFO(name << " " << params.dump());
-        const auto& op = vxf::ops::findOperator(name);
+        const auto& op = vxf::findOperator(name);
         const auto args = vxf::ops::checkArgs(op, params);
         std::vector<openvdb::Vec3f> image;
         for (int threads : {1, 2}) {

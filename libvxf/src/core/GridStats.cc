@@ -1,6 +1,11 @@
 #include <vxf/core/GridStats.h>
 
+#include <openvdb/openvdb.h>
+
 #include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
 
 namespace vxf {
 
@@ -14,6 +19,61 @@ GridStats gridStats(const openvdb::GridBase& grid)
     stats.memoryBytes = tree.memUsage();
     stats.activeBBox = grid.evalActiveVoxelBoundingBox();
     return stats;
+}
+
+namespace {
+
+template <typename T>
+openvdb::Vec3d asVec3(const T& v)
+{
+    return openvdb::Vec3d(double(v));
+}
+template <typename T>
+openvdb::Vec3d asVec3(const openvdb::math::Vec3<T>& v)
+{
+    return openvdb::Vec3d(double(v[0]), double(v[1]), double(v[2]));
+}
+
+template <typename GridT>
+ValueRange rangeOf(const GridT& grid, int channels)
+{
+    ValueRange r;
+    openvdb::Vec3d sum(0.0);
+    double count = 0.0;
+    for (auto it = grid.cbeginValueOn(); it; ++it) {
+        const openvdb::Vec3d v = asVec3(*it);
+        if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2])) {
+            r.nonFinite += it.getVoxelCount();
+            continue;
+        }
+        const double n = double(it.getVoxelCount());
+        if (count == 0.0) r.min = r.max = v;
+        for (int c = 0; c < 3; ++c) {
+            r.min[c] = std::min(r.min[c], v[c]);
+            r.max[c] = std::max(r.max[c], v[c]);
+        }
+        sum += v * n;
+        count += n;
+    }
+    if (count > 0.0) {
+        r.channels = channels;
+        r.mean = sum / count;
+    }
+    return r;
+}
+
+} // namespace
+
+ValueRange valueRange(const openvdb::GridBase& grid)
+{
+    if (const auto* g = dynamic_cast<const openvdb::FloatGrid*>(&grid)) return rangeOf(*g, 1);
+    if (const auto* g = dynamic_cast<const openvdb::DoubleGrid*>(&grid)) return rangeOf(*g, 1);
+    if (const auto* g = dynamic_cast<const openvdb::Int32Grid*>(&grid)) return rangeOf(*g, 1);
+    if (const auto* g = dynamic_cast<const openvdb::Int64Grid*>(&grid)) return rangeOf(*g, 1);
+    if (const auto* g = dynamic_cast<const openvdb::Vec3SGrid*>(&grid)) return rangeOf(*g, 3);
+    if (const auto* g = dynamic_cast<const openvdb::Vec3DGrid*>(&grid)) return rangeOf(*g, 3);
+    if (const auto* g = dynamic_cast<const openvdb::Vec3IGrid*>(&grid)) return rangeOf(*g, 3);
+    return {};
 }
 
 std::string formatBytes(std::uint64_t bytes)

@@ -1,9 +1,10 @@
 #include <vxf/light/DirectLight.h>
 
-#include <vxf/light/Phase.h>
+#include <vxf/core/GridRoles.h>
 #include <vxf/light/VolumeEmission.h>
+#include <vxf/transport/Phase.h>
 
-#include "../scatter/SweepLattice.h"
+#include "../transport/SweepLattice.h"
 
 #include <vxf/core/Hash.h>
 
@@ -454,11 +455,11 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
     auto direct = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
     direct->setTransform(density.transformPtr()->copy());
     direct->tree().topologyUnion(density.tree());
-    direct->setName("direct");
+    direct->setName(grids::kDirect);
     auto source = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
     source->setTransform(density.transformPtr()->copy());
     source->tree().topologyUnion(density.tree());
-    source->setName("scatter_source");
+    source->setName(grids::kScatterSource);
     if (!options.coarseTiles) {
         direct->tree().voxelizeActiveTiles();
         source->tree().voxelizeActiveTiles();
@@ -474,7 +475,7 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
     openvdb::Vec3SGrid::Ptr anisotropy;
     if (anisotropic) {
         anisotropy = source->deepCopy(); // its values are all 0 yet
-        anisotropy->setName(kSourceAnisotropyGrid);
+        anisotropy->setName(grids::kSourceAnisotropy);
     }
 
     // Work items: leaf voxels (per leaf) and active tiles (value at the tile centre).
@@ -601,7 +602,7 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
     if (anisotropy) {
         set.put(anisotropy);
     } else {
-        set.remove(kSourceAnisotropyGrid); // a set lit before with another phase
+        set.remove(grids::kSourceAnisotropy); // a set lit before with another phase
     }
     return report;
 }

@@ -1,5 +1,6 @@
 #include <vxf/light/InteriorField.h>
 
+#include <vxf/core/GridRoles.h>
 #include <vxf/core/MaskedTrilinear.h>
 
 #include <openvdb/tools/Interpolation.h>
@@ -22,7 +23,7 @@ constexpr float kNoLog = -std::numeric_limits<float>::infinity();
 openvdb::Vec3SGrid::Ptr sourceFromFluence(const Medium& medium, const openvdb::Vec3SGrid& phi)
 {
     auto j = phi.deepCopy();
-    j->setName("scatter_source");
+    j->setName(grids::kScatterSource);
     openvdb::tree::LeafManager<openvdb::Vec3STree> leaves(j->tree());
     leaves.foreach([&](openvdb::Vec3STree::LeafNodeType& leaf, std::size_t) {
         Medium::Sampler sampler(medium);

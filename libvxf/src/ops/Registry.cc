@@ -11,14 +11,6 @@
 #include <vxf/ops/Gradient.h>
 #include <vxf/ops/Normalize.h>
 #include <vxf/ops/Select.h>
-#include <vxf/pipeline/LightScene.h>
-#include <vxf/pipeline/SceneGeometry.h>
-#include <vxf/scatter/Scatter.h>
-#include <vxf/voxelize/Voxelize.h>
-#include <vxf/core/ProceduralMesh.h>
-#include <vxf/io/ImageFile.h>
-#include <vxf/io/MeshFile.h>
-#include <vxf/render/Render.h>
 
 #include <fmt/format.h>
 
@@ -28,6 +20,7 @@
 namespace vxf::ops {
 
 using nlohmann::json;
+using namespace params;
 
 // ---------------------------------------------------------------------------------------------
 // Args
@@ -237,34 +230,6 @@ json parseParamText(const Operator& op, const Param& p, const std::string& text)
 // The operators
 
 namespace {
-
-Param number(std::string name, std::string summary, json def, double lo = -INFINITY, double hi = INFINITY)
-{
-    return {std::move(name), ParamType::Number, std::move(summary), std::move(def), lo, hi, {}, {}};
-}
-Param integer(std::string name, std::string summary, json def, double lo, double hi)
-{
-    return {std::move(name), ParamType::Integer, std::move(summary), std::move(def), lo, hi, {}, {}};
-}
-Param flag(std::string name, std::string summary) { return {std::move(name), ParamType::Boolean, std::move(summary), false, -INFINITY, INFINITY, {}, {}}; }
-Param text(std::string name, std::string summary, json def = nullptr)
-{
-    return {std::move(name), ParamType::Text, std::move(summary), std::move(def), -INFINITY, INFINITY, {}, {}};
-}
-Param choice(std::string name, std::string summary, std::vector<std::string> choices, json def)
-{
-    return {std::move(name), ParamType::Choice, std::move(summary), std::move(def), -INFINITY, INFINITY, std::move(choices), {}};
-}
-Param typed(std::string name, ParamType type, std::string summary, json def = nullptr)
-{
-    return {std::move(name), type, std::move(summary), std::move(def), -INFINITY, INFINITY, {}, {}};
-}
-
-Param when(Param p, std::string condition)
-{
-    p.when = std::move(condition);
-    return p;
-}
 
 Param gridParam(const char* summary = "the grid to work on") { return text("grid", summary); }
 Param outParam() { return text("out", "(optional) write the result as this grid instead of replacing the input"); }
@@ -588,128 +553,34 @@ std::vector<Operator> makeRegistry()
             return fmt::format("copied '{}' as '{}'", ctx.args.text("grid"), g->getName());
         }});
 
-    // Pipeline stages, so a graph can run the whole method.
-    Operator voxelizeStage{"voxelize", "a mesh (file or builtin:NAME) to `surface` and `density` (a source node: no input)",
-        {text("mesh", "mesh file (.obj .ply .off .stl) or builtin:candle|sphere|box"),
-            integer("dim", "voxels along the mesh's longest side (ignored with voxel_size)", 128, 1, 1 << 20),
-            number("voxel_size", "(optional) voxel size in world units", nullptr, 1e-30),
-            number("band", "narrow band half width, voxels", 3.0, 1.0, 1000.0)},
-        [](OpContext& ctx) {
-            const std::string mesh = ctx.args.text("mesh");
-            SceneObject object;
-            object.name = "mesh";
-            object.mesh = mesh;
-            object.objectToWorld = openvdb::Mat4d::identity();
-            VoxelizeOptions o;
-            o.voxelSize = ctx.args.has("voxel_size") ? ctx.args.number("voxel_size") : 0.0;
-            o.dim = o.voxelSize > 0.0 ? 0 : ctx.args.integer("dim");
-            o.bandWidth = float(ctx.args.number("band"));
-            ctx.set = voxelize(objectMesh(object), o, ctx.interrupter);
-            return fmt::format("voxelized {} ({})", mesh, count(*ctx.set.find("density")));
-        }};
-    voxelizeStage.source = true;
-    ops.push_back(voxelizeStage);
-
-    ops.push_back({"light", "the light stage: `direct` and `scatter_source` from a scene's lights, material and occluders",
-        {text("scene", "scene file (schemas/scene.schema.json)"),
-            number("step", "march step, voxels (0: the scene's scatter.step, 1 unless set there, as vxf run lights it)", 0.0, 0.0, 64.0),
-            number("cutoff", "stop marching below this transmittance", 1e-4, 0.0, 0.5),
-            flag("march", "every light by a march per voxel and sample (the reference; slow) instead of one optical-depth sweep "
-                          "per direction for directional and environment lights")},
-        [](OpContext& ctx) {
-            const double step = ctx.args.number("step");
-            if (step > 0.0 && step < 0.01) {
-                throw UsageError(fmt::format("light: parameter 'step' {} is below 0.01 voxels (0 takes the scene's)", step));
-            }
-            const Scene scene = loadScene(ctx.args.text("scene"));
-            DirectLightOptions o;
-            o.march.step = step > 0.0 ? step : scene.settings.step;
-            o.march.cutoff = ctx.args.number("cutoff");
-            o.sweep = !ctx.args.flag("march");
-            const auto report = lightScene(ctx.set, scene, o, ctx.interrupter);
-            return fmt::format("lit by {} lights", report.lights.size());
-        }});
-
-    ops.push_back({"scatter", "the scatter stage: passes of source iteration into `scatter` and `illumination` (material from the file)",
-        {integer("passes", "at most this many", 16, 0, 10000), integer("directions", "per voxel", 64, 1, 65536),
-            number("step", "march step, voxels", 1.0, 0.01, 64.0),
-            number("cutoff", "a march stops below this transmittance and adds the light beyond", 1e-3, 1e-12, 0.5),
-            number("tolerance", "stop when the rest of the series is known to within this fraction of the sum, and add it", 1e-3, 0.0, 1.0),
-            number("band", "adaptive band, world units (0: full resolution)", 0.0, 0.0), flag("extrapolate", "add the geometric tail"),
-            flag("keep_passes", "keep scatter_pass_K"),
-            integer("fine_passes", "passes at full resolution before the rest run on a coarser lattice (0: all)", 0, 0, 10000),
-            integer("coarse_factor", "how much coarser (2, 4 or 8)", 4, 2, 8),
-            choice("kernel", "gather (a march per voxel and direction) or sweep (one upwind sweep over the tree per direction)", {"gather", "sweep"}, "gather"),
-            flag("no_accelerate", "plain source iteration (one scattering order per pass) instead of accelerated sweeps (a diffusion correction) or gathers (corrected by accelerated sweeps)")},
-        [](OpContext& ctx) {
-            ScatterOptions o;
-            o.pass.kernel = scatterKernelNamed(ctx.args.text("kernel"));
-            o.accelerate = !ctx.args.flag("no_accelerate");
-            o.finePasses = ctx.args.integer("fine_passes");
-            o.coarseFactor = ctx.args.integer("coarse_factor");
-            o.passes = ctx.args.integer("passes");
-            o.pass.directions = ctx.args.integer("directions");
-            o.pass.step = ctx.args.number("step");
-            o.pass.cutoff = ctx.args.number("cutoff");
-            o.tolerance = ctx.args.number("tolerance");
-            o.band = ctx.args.number("band");
-            o.extrapolateTail = ctx.args.flag("extrapolate");
-            o.keepPasses = ctx.args.flag("keep_passes");
-            const Medium medium(ctx.set, recordedMaterial(ctx.set));
-            const auto report = scatter(ctx.set, medium, o, ctx.interrupter);
-            return fmt::format("{} passes ({})", report.passes.size(), report.stopReason);
-        }});
-
-    ops.push_back({"render", "the renderer: writes an OpenEXR image (and a PNG preview) of the voxel set with a scene's camera; the set passes on unchanged",
-        {text("scene", "scene file (camera, lights, objects, render settings)"), text("image", "the .exr to write"),
-            text("png", "(optional) an sRGB PNG preview to write"), integer("width", "(optional) override the scene's width", nullptr, 1, 32768),
-            integer("height", "(optional) override the scene's height", nullptr, 1, 32768),
-            integer("samples", "(optional) override the samples per pixel", nullptr, 1, 65536),
-            integer("max_samples", "(optional) override the scene's max_samples: adaptive, up to this many rays in a pixel whose first ones disagree", nullptr, 0, 65536),
-            number("noise_level", "(optional) override the scene's noise_level: the relative standard error a pixel may keep", nullptr, 1e-6, 1.0)},
-        [](OpContext& ctx) {
-            const Scene scene = loadScene(ctx.args.text("scene"));
-            RenderOptions o = renderOptionsFrom(scene.settings);
-            if (ctx.args.has("width")) o.width = ctx.args.integer("width");
-            if (ctx.args.has("height")) o.height = ctx.args.integer("height");
-            if (ctx.args.has("samples")) o.samples = ctx.args.integer("samples");
-            if (ctx.args.has("max_samples")) o.maxSamples = ctx.args.integer("max_samples");
-            if (ctx.args.has("noise_level")) o.noiseLevel = ctx.args.number("noise_level");
-            const Medium medium(ctx.set, recordedMaterial(ctx.set));
-            const SceneRayScenes meshes = sceneRayScenes(scene);
-            const RenderedImage image = vxf::render(ctx.set, medium, scene, o, {&meshes.visible, &meshes.occluders, &meshes.media}, ctx.interrupter);
-            writeExr(ctx.args.text("image"), image);
-            if (ctx.args.has("png")) writePng(ctx.args.text("png"), image);
-            return fmt::format("rendered {}x{} to {}", o.width, o.height, ctx.args.text("image"));
-        }});
     return ops;
 }
 
 } // namespace
 
-const std::vector<Operator>& registry()
+const std::vector<Operator>& artistOperators()
 {
     static const std::vector<Operator> ops = makeRegistry();
     return ops;
 }
 
-const Operator& findOperator(const std::string& name)
+const Operator& findOperatorIn(const std::vector<Operator>& operators, const std::string& name)
 {
-    for (const auto& op : registry()) {
+    for (const auto& op : operators) {
         if (op.name == name) return op;
     }
     std::string names;
-    for (const auto& op : registry()) names += (names.empty() ? "" : ", ") + op.name;
+    for (const auto& op : operators) names += (names.empty() ? "" : ", ") + op.name;
     throw UsageError(fmt::format("no operator named '{}' (there are: {})", name, names));
 }
 
 // ---------------------------------------------------------------------------------------------
 // Generated documents
 
-std::string operatorTableMarkdown()
+std::string operatorTableMarkdown(const std::vector<Operator>& operators)
 {
     std::string out = "| operator | what it does | parameters |\n|---|---|---|\n";
-    for (const auto& op : registry()) {
+    for (const auto& op : operators) {
         std::string params;
         for (const auto& p : op.params) {
             std::string def = p.defaultValue.is_null() ? (p.summary.rfind("(optional)", 0) == 0 ? "optional" : "required") : "default " + p.defaultValue.dump();
@@ -752,11 +623,11 @@ json paramSchema(const Param& p)
 
 } // namespace
 
-json pipelineSchema()
+json pipelineSchema(const std::vector<Operator>& operators)
 {
     json opNames = json::array();
     json cases = json::array();
-    for (const auto& op : registry()) {
+    for (const auto& op : operators) {
         opNames.push_back(op.name);
         json props = json::object();
         json required = json::array();

@@ -1,5 +1,6 @@
 #include <vxf/ops/Select.h>
 
+#include <vxf/core/GridRoles.h>
 #include "Dispatch.h"
 #include "Topology.h"
 
@@ -13,7 +14,7 @@ namespace {
 openvdb::BoolGrid::Ptr selectWhere(const openvdb::GridBase& grid, const std::function<bool(const openvdb::Coord&)>& keep)
 {
     auto mask = openvdb::BoolGrid::create(false);
-    mask->setName("mask");
+    mask->setName(grids::kMask);
     mask->setTransform(grid.transform().copy());
     const openvdb::MaskTree::Ptr topology = detail::activeTopology(grid);
     auto out = mask->getAccessor();

@@ -5,7 +5,7 @@
 #include <vxf/io/ContentHash.h>
 #include <vxf/io/JsonDocument.h>
 #include <vxf/io/VoxelSetFile.h>
-#include <vxf/ops/Registry.h>
+#include <vxf/pipeline/Operators.h>
 
 #include <fmt/format.h>
 
@@ -22,7 +22,7 @@ namespace fs = std::filesystem;
 
 const json& pipelineSchemaJson()
 {
-    static const json schema = ops::pipelineSchema();
+    static const json schema = pipelineSchema();
     return schema;
 }
 
@@ -56,7 +56,7 @@ public:
             }
             const ops::Operator* op = nullptr;
             try {
-                op = &ops::findOperator(node["op"].get<std::string>());
+                op = &findOperator(node["op"].get<std::string>());
             } catch (const UsageError& e) {
                 fail(it.key(), e.what());
             }
@@ -163,7 +163,7 @@ private:
             if (node.contains("input")) set = readVoxelSet(ensure(node["input"].get<std::string>()));
             json params = node["params"];
             if (node.contains("with")) params["with_file"] = ensure(node["with"].get<std::string>());
-            const ops::Operator& op = ops::findOperator(node["op"].get<std::string>());
+            const ops::Operator& op = findOperator(node["op"].get<std::string>());
             const ops::Args args(op.name, params);
             ops::OpContext context{set, args, mInterrupter};
             try {

@@ -1,5 +1,6 @@
 #include <vxf/pipeline/LightScene.h>
 
+#include <vxf/core/GridRoles.h>
 #include <vxf/pipeline/SceneGeometry.h>
 #include <vxf/pipeline/SceneMedium.h>
 
@@ -11,7 +12,7 @@ DirectLightReport lightScene(VoxelSet& set, const Scene& scene, DirectLightOptio
 {
     const Material material = sceneMaterial(scene);
     attachMaterialGrids(set, material);
-    if (mediaCount(scene) > 1 && !(set.find("sigma_a") && set.find("sigma_s"))) {
+    if (mediaCount(scene) > 1 && !(set.find(grids::kSigmaA) && set.find(grids::kSigmaS))) {
         throw UsageError(fmt::format("{}: the scene has {} media but the voxel set has no per-voxel sigma_a and sigma_s; "
                                      "voxelize them together (vxf run, or the graph's voxelize with this scene)",
             scene.path, mediaCount(scene)));

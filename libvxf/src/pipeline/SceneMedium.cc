@@ -1,5 +1,6 @@
 #include <vxf/pipeline/SceneMedium.h>
 
+#include <vxf/core/GridRoles.h>
 #include <vxf/io/VoxelSetFile.h>
 #include <vxf/pipeline/SceneGeometry.h>
 
@@ -111,7 +112,7 @@ VoxelSet volumeMedium(const SceneObject& object)
         openvdb::tools::resampleToMatch<openvdb::tools::BoxSampler>(*density, *target);
         density = target;
     }
-    density->setName("density");
+    density->setName(grids::kDensity);
     density->setGridClass(openvdb::GRID_FOG_VOLUME);
     VoxelSet set(density->transformPtr());
     set.put(density);
@@ -163,8 +164,8 @@ VoxelSet voxelizeMedia(const Scene& scene, const VoxelizeOptions& options, Inter
     openvdb::Vec3SGrid::Ptr sigmaA, sigmaS;
     for (std::size_t i = 0; i < media.size(); ++i) {
         VoxelSet one = voxelize(meshes[i], onLattice, interrupter);
-        auto s = one.get<openvdb::FloatGrid>("surface");
-        auto d = one.get<openvdb::FloatGrid>("density");
+        auto s = one.get<openvdb::FloatGrid>(grids::kSurface);
+        auto d = one.get<openvdb::FloatGrid>(grids::kDensity);
         // σ_i(x) = density_i(x)·σ_i on density_i's topology (tiles stay tiles).
         const Material& m = *media[i]->material;
         const auto coefficients = [&d](const openvdb::Vec3d& sigma) {
@@ -190,10 +191,10 @@ VoxelSet voxelizeMedia(const Scene& scene, const VoxelizeOptions& options, Inter
         }
     }
     VoxelSet set(surface->transformPtr());
-    surface->setName("surface");
-    density->setName("density");
-    sigmaA->setName("sigma_a");
-    sigmaS->setName("sigma_s");
+    surface->setName(grids::kSurface);
+    density->setName(grids::kDensity);
+    sigmaA->setName(grids::kSigmaA);
+    sigmaS->setName(grids::kSigmaS);
     set.put(surface);
     set.put(density);
     set.put(sigmaA);

@@ -1,15 +1,16 @@
 #include <vxf/render/Render.h>
 
 #include <vxf/core/GridLookup.h>
+#include <vxf/core/GridRoles.h>
 #include <vxf/core/Hash.h>
 #include <vxf/light/DirectLight.h>
 #include <vxf/light/InteriorField.h>
 #include <vxf/light/LightSampler.h>
-#include <vxf/light/Phase.h>
-#include <vxf/light/Transmittance.h>
-#include <vxf/light/UniformBricks.h>
 #include <vxf/light/VolumeEmission.h>
 #include <vxf/scatter/SourceField.h>
+#include <vxf/transport/Phase.h>
+#include <vxf/transport/Transmittance.h>
+#include <vxf/transport/UniformBricks.h>
 
 #include <openvdb/tools/RayIntersector.h>
 
@@ -509,7 +510,7 @@ struct RenderContext
         : set(set_)
         , medium(medium_)
         , actual(medium_.actual())
-        , firstMoment(medium_.material().phaseG != 0.0 && set_.find(kScatterAnisotropyGrid))
+        , firstMoment(medium_.material().phaseG != 0.0 && set_.find(grids::kScatterAnisotropy))
         , grids(firstMoment ? medium_ : medium_.isotropic())
         , scene(scene_)
         , options(options_)
@@ -532,7 +533,7 @@ struct RenderContext
         }
         volumeMedium = levelSetObject && levelSetObject->isVolume();
         if (!useMeshes && !volumeMedium) {
-            levelSet = set.get<openvdb::FloatGrid>("surface");
+            levelSet = set.get<openvdb::FloatGrid>(grids::kSurface);
             if (levelSet->getGridClass() != openvdb::GRID_LEVEL_SET) throw Error("grid 'surface' must be a level set");
             levelSetIntersector.emplace(*levelSet);
         }
@@ -548,13 +549,13 @@ struct RenderContext
         for (const Light& l : scene.lights) {
             if (l.type == Light::Type::Volume && l.power() != openvdb::Vec3d(0.0)) emitters.emplace_back(l);
         }
-        if (!options.directFromLights && set.find("direct")) directField.emplace(grids, *set.get<openvdb::Vec3SGrid>("direct"));
-        if (set.find("scatter")) {
-            scatterField.emplace(grids, *sourceFromFluence(grids, *set.get<openvdb::Vec3SGrid>("scatter")), SourceField::Near::Layers);
+        if (!options.directFromLights && set.find(grids::kDirect)) directField.emplace(grids, *set.get<openvdb::Vec3SGrid>(grids::kDirect));
+        if (set.find(grids::kScatter)) {
+            scatterField.emplace(grids, *sourceFromFluence(grids, *set.get<openvdb::Vec3SGrid>(grids::kScatter)), SourceField::Near::Layers);
         }
         if (firstMoment) {
-            scatterAnisotropy = set.get<openvdb::Vec3SGrid>(kScatterAnisotropyGrid);
-            if (set.find(kSourceAnisotropyGrid)) sourceAnisotropy = set.get<openvdb::Vec3SGrid>(kSourceAnisotropyGrid);
+            scatterAnisotropy = set.get<openvdb::Vec3SGrid>(grids::kScatterAnisotropy);
+            if (set.find(grids::kSourceAnisotropy)) sourceAnisotropy = set.get<openvdb::Vec3SGrid>(grids::kSourceAnisotropy);
             for (const auto& grid : {scatterAnisotropy, sourceAnisotropy}) { // read in the medium's index space
                 if (grid && grid->transform() != medium.transform()) {
                     throw Error(fmt::format("grid '{}' does not share the transform of 'density'", grid->getName()));

@@ -1,7 +1,7 @@
 // vxf — diffusion synthetic acceleration's correction on a sweep lattice (private to libvxf).
 #pragma once
 
-#include "SweepLattice.h"
+#include "../transport/SweepLattice.h"
 
 #include <openvdb/math/ConjGradient.h>
 

@@ -1,6 +1,7 @@
 #include <vxf/scatter/Scatter.h>
 
-#include <vxf/light/Phase.h>
+#include <vxf/core/GridRoles.h>
+#include <vxf/transport/Phase.h>
 
 #include <vxf/scatter/AdaptiveBand.h>
 #include <vxf/scatter/CoarseLevel.h>
@@ -241,14 +242,14 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
     // lit with the moment in the share 1 − g* that leaves isotropically under the relation (a
     // volume light's emission scaled alike).
     const double restG = transport.material().phaseG;
-    const bool litWithMoment = restG != 0.0 && set.find(kSourceAnisotropyGrid);
+    const bool litWithMoment = restG != 0.0 && set.find(grids::kSourceAnisotropy);
     const bool carriesMoment = solveWhole && sweeps && litWithMoment;
     const Medium medium = carriesMoment ? transport : transport.isotropic();
     const float sourceScale = litWithMoment && !carriesMoment ? float(1.0 - restG) : 1.0f;
     openvdb::Vec3SGrid::Ptr sum, j;
     int k = options.fromPass;
     if (k == 0) {
-        j = set.get<openvdb::Vec3SGrid>("scatter_source");
+        j = set.get<openvdb::Vec3SGrid>(grids::kScatterSource);
         if (options.band > 0.0 || sourceScale != 1.0f) j = j->deepCopy(); // the file's scatter_source stays as it was
         if (sourceScale != 1.0f) {
             openvdb::tools::foreach(j->beginValueAll(), [sourceScale](const openvdb::Vec3SGrid::ValueAllIter& it) { it.setValue(*it * sourceScale); });
@@ -267,7 +268,7 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
         report.band = coarsenBeyondBand(*j, medium.density(), options.band);
     }
 
-    const bool scatters = maxChannel(medium.material().sigmaS) > 0.0 || set.find("sigma_s");
+    const bool scatters = maxChannel(medium.material().sigmaS) > 0.0 || set.find(grids::kSigmaS);
     if (options.finePasses > 0 && options.coarseFactor != 2 && options.coarseFactor != 4 && options.coarseFactor != 8) {
         throw UsageError(fmt::format("coarse factor must be 2, 4 or 8, got {}", options.coarseFactor));
     }
@@ -275,6 +276,9 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
     SweepMoments moments; // of an anisotropic rest
     if (!scatters) {
         report.stopReason = "the medium does not scatter (sigma_s = 0)";
+    } else if (options.passes == 0 && options.fromPass == 0) {
+        // No pass: single scattering alone (the image's direct layer), `scatter` zero.
+        report.stopReason = "passes 0: no multiple scattering (single scattering alone)";
     } else if (solveWhole) {
         // The whole sum at once: sweeps or gathers with diffusion synthetic acceleration.
         SweepSolveOptions solve;
@@ -285,9 +289,9 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
         solve.gather = options.pass;
         SweepSolveReport solved;
         if (carriesMoment) {
-            moments.source = set.get<openvdb::Vec3SGrid>(kSourceAnisotropyGrid).get();
+            moments.source = set.get<openvdb::Vec3SGrid>(grids::kSourceAnisotropy).get();
             if (moments.source->transform() != j->transform()) { // read on the source's voxels
-                throw Error(fmt::format("grid '{}' does not share the transform of 'scatter_source'", kSourceAnisotropyGrid));
+                throw Error(fmt::format("grid '{}' does not share the transform of 'scatter_source'", grids::kSourceAnisotropy));
             }
         }
         sum = sweepSolve(medium, *j, solve, solved, interrupter, &moments);
@@ -595,18 +599,18 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
         }
     }
 
-    sum->setName("scatter");
+    sum->setName(grids::kScatter);
     set.put(sum);
     if (moments.scattered) {
         set.put(moments.scattered);
     } else {
-        set.remove(kScatterAnisotropyGrid); // isotropic now
+        set.remove(grids::kScatterAnisotropy); // isotropic now
     }
-    if (auto direct = set.find("direct")) {
+    if (auto direct = set.find(grids::kDirect)) {
         auto illumination = openvdb::gridPtrCast<openvdb::Vec3SGrid>(direct)->deepCopy();
         auto addend = sum->deepCopy();
         openvdb::tools::compSum(*illumination, *addend);
-        set.put(named(illumination, "illumination"));
+        set.put(named(illumination, grids::kIllumination));
     }
     return report;
 }

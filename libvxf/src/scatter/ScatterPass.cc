@@ -4,7 +4,7 @@
 #include <vxf/core/Hash.h>
 #include <vxf/core/RandomRotation.h>
 #include <vxf/core/SphericalFibonacci.h>
-#include <vxf/light/Transmittance.h>
+#include <vxf/transport/Transmittance.h>
 #include <vxf/scatter/SourceField.h>
 #include <vxf/scatter/SweepPass.h>
 

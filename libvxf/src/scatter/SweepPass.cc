@@ -1,6 +1,6 @@
 #include <vxf/scatter/SweepPass.h>
 
-#include "SweepLattice.h"
+#include "PassSource.h"
 
 #include <vxf/core/Hash.h>
 #include <vxf/core/RandomRotation.h>
@@ -57,7 +57,7 @@ openvdb::Vec3SGrid::Ptr sweepPass(const Medium& medium, const openvdb::Vec3SGrid
     std::vector<openvdb::Vec3f> fluence(lattice.voxelCount(), openvdb::Vec3f(0.0f)), skin;
     if (options.directions >= 1) {
         const std::vector<openvdb::Vec3d> directions = sweepDirections(options.directions, options.rotationSeed);
-        std::vector<openvdb::Vec3f> j = options.source == ScatterPassOptions::SourceRead::Continued ? lattice.readPassSource(medium, source)
+        std::vector<openvdb::Vec3f> j = options.source == ScatterPassOptions::SourceRead::Continued ? detail::readPassSource(lattice, medium, source)
                                                                                                       : lattice.read(source);
         lattice.sweep(lattice.sweepSource(std::move(j)), directions, 4.0 * M_PI / double(directions.size()), fluence, &skin,
             interrupter);

@@ -1,11 +1,12 @@
 #include <vxf/scatter/SweepSolve.h>
 
+#include <vxf/core/GridRoles.h>
 #include "DiffusionCorrection.h"
-#include "SweepLattice.h"
+#include "PassSource.h"
 
 #include <vxf/core/Error.h>
 #include <vxf/light/InteriorField.h>
-#include <vxf/light/Phase.h>
+#include <vxf/transport/Phase.h>
 #include <vxf/scatter/SweepPass.h>
 
 #include <fmt/format.h>
@@ -150,7 +151,7 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
     report.setupSeconds = secondsSince(start);
 
     const std::vector<openvdb::Vec3f> j0 = gather ? std::vector<openvdb::Vec3f>()
-        : options.source == ScatterPassOptions::SourceRead::Continued ? lattice.readPassSource(medium, source) : lattice.read(source); // (the gather reads the grid)
+        : options.source == ScatterPassOptions::SourceRead::Continued ? detail::readPassSource(lattice, medium, source) : lattice.read(source); // (the gather reads the grid)
     const std::vector<openvdb::Vec3f>& sigmaS = lattice.sigmaS();
     const std::vector<openvdb::Vec3d> directions = sweepDirections(std::max(options.directions, 1), options.rotationSeed);
     const double weight = 4.0 * M_PI / double(directions.size());
@@ -398,10 +399,10 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
             }
         });
         moments->scattered = lattice.write(a, source);
-        moments->scattered->setName(kScatterAnisotropyGrid);
+        moments->scattered->setName(grids::kScatterAnisotropy);
     }
     auto grid = lattice.write(lattice.withSkin(phi, skin, corrected ? &shift : nullptr), source);
-    grid->setName("scatter");
+    grid->setName(grids::kScatter);
     return grid;
 }
 

@@ -1,11 +1,10 @@
 #include <vxf/view/ViewSession.h>
 
-#include <vxf/light/Phase.h>
-
+#include <vxf/core/GridRoles.h>
 #include <vxf/core/GridStats.h>
 #include <vxf/io/AtomicFile.h>
 #include <vxf/io/VoxelSetFile.h>
-#include <vxf/ops/Registry.h>
+#include <vxf/pipeline/Operators.h>
 
 #include <openvdb/tools/GridTransformer.h>
 #include <openvdb/tools/VolumeToMesh.h>
@@ -148,7 +147,7 @@ nlohmann::json ViewSession::describe() const
     }
     // Shown first: the light's result where there is one, else the first float or vec3 grid.
     std::string shown;
-    for (const char* name : {"scatter", "illumination", "direct", "density"}) {
+    for (const char* name : {grids::kScatter, grids::kIllumination, grids::kDirect, grids::kDensity}) {
         const auto grid = mCurrent.find(name);
         if (shown.empty() && grid && channelsOf(*grid) > 0) shown = name;
     }
@@ -298,7 +297,7 @@ SurfaceMesh ViewSession::surfaceMesh(std::size_t triangleBudget) const
 {
     std::lock_guard<std::mutex> lock(mMutex);
     SurfaceMesh mesh;
-    const auto surface = openvdb::gridPtrCast<openvdb::FloatGrid>(mCurrent.find("surface"));
+    const auto surface = openvdb::gridPtrCast<openvdb::FloatGrid>(mCurrent.find(grids::kSurface));
     if (!surface || surface->getGridClass() != openvdb::GRID_LEVEL_SET) return mesh;
     std::vector<openvdb::Vec3s> points;
     std::vector<openvdb::Vec3I> triangles;
@@ -343,7 +342,7 @@ void ViewSession::checkEdit(const std::string& name, const nlohmann::json& param
 
 void ViewSession::run(VoxelSet& set, const std::string& name, const nlohmann::json& params, std::string* report)
 {
-    const ops::Operator& op = ops::findOperator(name);
+    const ops::Operator& op = findOperator(name);
     const ops::Args args = ops::checkArgs(op, params);
     ops::OpContext context{set, args, nullptr};
     const std::string r = op.run(context);
@@ -400,7 +399,7 @@ ViewSession::Rendered ViewSession::render(const std::string& scenePath, int widt
     std::lock_guard<std::mutex> lock(mMutex);
     const auto start = std::chrono::steady_clock::now();
     Rendered result;
-    static const std::set<std::string> upstream = {"surface", "density", "direct", "scatter_source", kSourceAnisotropyGrid};
+    static const std::set<std::string> upstream = {grids::kSurface, grids::kDensity, grids::kDirect, grids::kScatterSource, grids::kSourceAnisotropy};
     bool scatterInputEdited = false;
     nlohmann::json steps = nlohmann::json::array();
     for (const Step& s : mSteps) {
@@ -412,7 +411,7 @@ ViewSession::Rendered ViewSession::render(const std::string& scenePath, int widt
         }
     }
     VoxelSet set = mCurrent;
-    if (scatterInputEdited && mCurrent.find("scatter")) {
+    if (scatterInputEdited && mCurrent.find(grids::kScatter)) {
         if (mScatteredFor != steps.dump()) {
             // The file's own scatter parameters where it recorded them (`vxf scatter`), else sweeps.
             nlohmann::json params = nlohmann::json::object();

@@ -1,5 +1,7 @@
 #include <vxf/voxelize/Voxelize.h>
 
+#include <vxf/core/GridRoles.h>
+
 #include <openvdb/tools/LevelSetUtil.h>
 #include <openvdb/tools/MeshToVolume.h>
 #include <openvdb/tools/Prune.h>
@@ -115,7 +117,7 @@ VoxelSet voxelize(const TriangleMesh& mesh, const VoxelizeOptions& options, Inte
         checkInterrupt(interrupter);
     }
     if (!surface) throw Interrupted();
-    surface->setName("surface");
+    surface->setName(grids::kSurface);
     surface->setGridClass(openvdb::GRID_LEVEL_SET);
 
     openvdb::FloatGrid::Ptr density;
@@ -141,7 +143,7 @@ VoxelSet voxelize(const TriangleMesh& mesh, const VoxelizeOptions& options, Inte
         });
         openvdb::tools::pruneInactive(density->tree());
         openvdb::tools::prune(density->tree()); // leaves of 1 become tiles
-        density->setName("density");
+        density->setName(grids::kDensity);
         density->setGridClass(openvdb::GRID_FOG_VOLUME);
     }
 

@@ -25,6 +25,23 @@ const std::vector<GridRole>& gridRoles();
 /// (such grids are carried through every stage untouched).
 const GridRole* findGridRole(const std::string& gridName);
 
+/// The grid names of the roles, written once (schemas/voxelset.md).
+namespace grids {
+inline constexpr const char* kSurface = "surface";
+inline constexpr const char* kDensity = "density";
+inline constexpr const char* kSigmaA = "sigma_a";
+inline constexpr const char* kSigmaS = "sigma_s";
+inline constexpr const char* kDirect = "direct";
+inline constexpr const char* kScatterSource = "scatter_source";
+/// The light stage's mean direction of the scattered light's travel (an anisotropic phase).
+inline constexpr const char* kSourceAnisotropy = "scatter_source_anisotropy";
+inline constexpr const char* kScatter = "scatter";
+/// The scatter stage's mean direction of the multiply scattered light's travel.
+inline constexpr const char* kScatterAnisotropy = "scatter_anisotropy";
+inline constexpr const char* kIllumination = "illumination";
+inline constexpr const char* kMask = "mask";
+} // namespace grids
+
 /// Metadata key for the units of a grid's values.
 inline constexpr const char* kUnitsMetaKey = "vxf:units";
 

@@ -20,6 +20,18 @@ struct GridStats
 /// Statistics of @a grid's tree; reads only, O(nodes).
 GridStats gridStats(const openvdb::GridBase& grid);
 
+/// The range of a grid's active values (an active tile counting once per voxel it covers).
+struct ValueRange
+{
+    int channels = 0; ///< 1 (float, double, int), 3 (vec3), 0: not a numeric grid, or no active value
+    openvdb::Vec3d min{0.0}, max{0.0}, mean{0.0}; ///< per channel (only [0] for one channel)
+    openvdb::Index64 nonFinite = 0; ///< active values that are NaN or infinite (left out of the range)
+};
+
+/// The range of @a grid's active values: float, double, int32, int64 and their vec3 grids;
+/// other types (bool, points) have none. Reads only, O(active values).
+ValueRange valueRange(const openvdb::GridBase& grid);
+
 /// "12.3 MiB"-style byte count.
 std::string formatBytes(std::uint64_t bytes);
 

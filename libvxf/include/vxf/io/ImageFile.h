@@ -1,7 +1,7 @@
 // vxf — writing rendered images: multi-layer OpenEXR and an sRGB PNG preview.
 #pragma once
 
-#include <vxf/render/Render.h>
+#include <vxf/core/RenderedImage.h>
 
 #include <string>
 

@@ -4,8 +4,8 @@
 #include <vxf/core/Interrupter.h>
 #include <vxf/core/RayScene.h>
 #include <vxf/light/LightSampler.h>
-#include <vxf/light/Transmittance.h>
-#include <vxf/pipeline/Scene.h>
+#include <vxf/transport/Transmittance.h>
+#include <vxf/core/Scene.h>
 
 #include <string>
 #include <vector>

@@ -2,7 +2,7 @@
 #pragma once
 
 #include <vxf/core/GridLookup.h>
-#include <vxf/light/Medium.h>
+#include <vxf/transport/Medium.h>
 
 #include <memory>
 #include <optional>

@@ -1,7 +1,7 @@
 // vxf — how the light of one scene light arrives at a point: a set of directional samples.
 #pragma once
 
-#include <vxf/pipeline/Scene.h>
+#include <vxf/core/Scene.h>
 
 #include <cstdint>
 #include <limits>

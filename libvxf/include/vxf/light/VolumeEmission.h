@@ -1,7 +1,7 @@
 // vxf — a volume light's emission: a grid of radiance per unit length (a fire's flame, a glow).
 #pragma once
 
-#include <vxf/pipeline/Scene.h>
+#include <vxf/core/Scene.h>
 
 #include <openvdb/openvdb.h>
 

@@ -6,7 +6,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -83,12 +85,13 @@ struct Operator
     bool source = false; ///< builds its voxel set from nothing (voxelize): no input node
 };
 
-/// Every operator, in the order help lists them: the artist operators, then the pipeline
-/// stages a graph can run (voxelize, light, scatter).
-const std::vector<Operator>& registry();
+/// The artist operators, in the order help lists them. The pipeline stages a graph runs
+/// (voxelize, light, scatter, render) are registered above them: vxf::operators()
+/// (vxf/pipeline/Operators.h) holds both.
+const std::vector<Operator>& artistOperators();
 
-/// The operator named @a name; vxf::UsageError listing the names otherwise.
-const Operator& findOperator(const std::string& name);
+/// The operator of @a operators named @a name; vxf::UsageError listing the names otherwise.
+const Operator& findOperatorIn(const std::vector<Operator>& operators, const std::string& name);
 
 /// Check @a values (a JSON object) against @a op: unknown parameters, parameters unused in the
 /// chosen mode (Param::when), wrong types, values out of range or not among the choices, and
@@ -103,11 +106,46 @@ nlohmann::json parseParamText(const Operator& op, const Param& param, const std:
 /// Human-readable type of a parameter ("number in [0, 1]", "one of box|distance", …).
 std::string describeType(const Param& param);
 
-/// The README's operator table (markdown), generated from the registry.
-std::string operatorTableMarkdown();
+/// The operator table (markdown) of @a operators.
+std::string operatorTableMarkdown(const std::vector<Operator>& operators);
 
 /// schemas/pipeline.schema.json, generated from the registry: a graph of named nodes, each an
 /// operator with its checked parameters (or a file), and the outputs wanted.
-nlohmann::json pipelineSchema();
+nlohmann::json pipelineSchema(const std::vector<Operator>& operators);
+
+/// Declaring parameters: Param{name, type, summary, default, range} spelled per type.
+namespace params {
+
+using json = nlohmann::json;
+
+inline Param number(std::string name, std::string summary, json def, double lo = -INFINITY, double hi = INFINITY)
+{
+    return {std::move(name), ParamType::Number, std::move(summary), std::move(def), lo, hi, {}, {}};
+}
+inline Param integer(std::string name, std::string summary, json def, double lo, double hi)
+{
+    return {std::move(name), ParamType::Integer, std::move(summary), std::move(def), lo, hi, {}, {}};
+}
+inline Param flag(std::string name, std::string summary) { return {std::move(name), ParamType::Boolean, std::move(summary), false, -INFINITY, INFINITY, {}, {}}; }
+inline Param text(std::string name, std::string summary, json def = nullptr)
+{
+    return {std::move(name), ParamType::Text, std::move(summary), std::move(def), -INFINITY, INFINITY, {}, {}};
+}
+inline Param choice(std::string name, std::string summary, std::vector<std::string> choices, json def)
+{
+    return {std::move(name), ParamType::Choice, std::move(summary), std::move(def), -INFINITY, INFINITY, std::move(choices), {}};
+}
+inline Param typed(std::string name, ParamType type, std::string summary, json def = nullptr)
+{
+    return {std::move(name), type, std::move(summary), std::move(def), -INFINITY, INFINITY, {}, {}};
+}
+
+inline Param when(Param p, std::string condition)
+{
+    p.when = std::move(condition);
+    return p;
+}
+
+} // namespace params
 
 } // namespace vxf::ops

@@ -2,7 +2,7 @@
 #pragma once
 
 #include <vxf/light/DirectLight.h>
-#include <vxf/pipeline/Scene.h>
+#include <vxf/core/Scene.h>
 
 namespace vxf {
 

@@ -2,7 +2,7 @@
 #pragma once
 
 #include <vxf/core/Interrupter.h>
-#include <vxf/pipeline/Scene.h>
+#include <vxf/core/Scene.h>
 
 #include <string>
 #include <vector>

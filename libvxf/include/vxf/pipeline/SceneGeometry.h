@@ -3,7 +3,7 @@
 
 #include <vxf/core/RayScene.h>
 #include <vxf/core/TriangleMesh.h>
-#include <vxf/pipeline/Scene.h>
+#include <vxf/core/Scene.h>
 
 #include <string>
 #include <vector>

@@ -3,7 +3,7 @@
 
 #include <vxf/core/Interrupter.h>
 #include <vxf/core/VoxelSet.h>
-#include <vxf/pipeline/Scene.h>
+#include <vxf/core/Scene.h>
 #include <vxf/voxelize/Voxelize.h>
 
 namespace vxf {

@@ -3,8 +3,9 @@
 
 #include <vxf/core/Interrupter.h>
 #include <vxf/core/RayScene.h>
-#include <vxf/light/Medium.h>
-#include <vxf/pipeline/Scene.h>
+#include <vxf/transport/Medium.h>
+#include <vxf/core/RenderedImage.h>
+#include <vxf/core/Scene.h>
 
 #include <string>
 #include <vector>
@@ -35,16 +36,6 @@ struct RenderOptions
     openvdb::Vec3d background{0.0};
     double step = 1.0;          ///< march step, voxels
     double cutoff = 1e-4;       ///< stop marching below this transmittance
-};
-
-/// Image layers, row-major from the top-left pixel.
-struct RenderedImage
-{
-    int width = 0, height = 0;
-    std::vector<openvdb::Vec3f> combined, surface, direct, scatter, normal;
-    std::vector<float> alpha, depth; ///< depth: distance along the camera ray to the surface (0 where it misses)
-    std::vector<float> samples;      ///< camera rays per pixel (more where adaptive sampling refined it)
-    std::size_t refinedPixels = 0;   ///< pixels that got more than RenderOptions::samples rays
 };
 
 /// "P% of the pixels refined to M samples", or empty when adaptive sampling refined none.

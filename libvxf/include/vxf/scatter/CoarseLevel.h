@@ -2,7 +2,7 @@
 #pragma once
 
 #include <vxf/core/VoxelSet.h>
-#include <vxf/light/Medium.h>
+#include <vxf/transport/Medium.h>
 
 #include <openvdb/openvdb.h>
 

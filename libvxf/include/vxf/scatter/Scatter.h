@@ -6,7 +6,7 @@
 #include <vxf/scatter/SweepSolve.h>
 
 #include <vxf/core/VoxelSet.h>
-#include <vxf/pipeline/Scene.h>
+#include <vxf/core/Scene.h>
 
 #include <string>
 #include <vector>
@@ -15,7 +15,7 @@ namespace vxf {
 
 struct ScatterOptions
 {
-    int passes = 16;          ///< at most this many passes
+    int passes = 16;          ///< at most this many passes (0: none, `scatter` zero: single scattering alone)
     /// Stop when the rest of the series, φ_K·r/(1−r) with r the last pass's energy ratio (per
     /// channel), is known to within this fraction of the sum so far, and add it (0: never).
     /// Near albedo 1 the passes settle into the slowest mode long before the rest is small.

@@ -2,7 +2,7 @@
 #pragma once
 
 #include <vxf/core/Interrupter.h>
-#include <vxf/light/Medium.h>
+#include <vxf/transport/Medium.h>
 
 #include <cstdint>
 #include <string>

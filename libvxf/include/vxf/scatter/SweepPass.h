@@ -2,7 +2,7 @@
 #pragma once
 
 #include <vxf/core/Interrupter.h>
-#include <vxf/light/Medium.h>
+#include <vxf/transport/Medium.h>
 #include <vxf/scatter/ScatterPass.h>
 
 #include <cstdint>

@@ -131,14 +131,6 @@ private:
     }
 };
 
-/// The angular moment the transport keeps for the rest of the phase (g* ≠ 0 only), as the mean
-/// direction of travel a = F/φ of the light (world space, |a| ≤ 1, one vector for the three
-/// channels: F and φ their means), so that a source emits J(ω) = J·RestPhase(a, ω) toward ω:
-/// the light stage's source J0 (its scattered share; a volume light's emission has none) and
-/// the scattered fluence the solve writes, which the camera reads toward itself. Scaling a
-/// fluence grid leaves its anisotropy as it is; a set with g = 0 has neither grid.
-inline constexpr const char* kSourceAnisotropyGrid = "scatter_source_anisotropy";
-inline constexpr const char* kScatterAnisotropyGrid = "scatter_anisotropy";
 
 /// The mean of a colour's channels: what one anisotropy vector stands for.
 inline double greyOf(const openvdb::Vec3d& c) { return (c[0] + c[1] + c[2]) / 3.0; }

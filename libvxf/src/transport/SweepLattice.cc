@@ -2,7 +2,6 @@
 
 #include <vxf/core/Error.h>
 #include <vxf/core/Hash.h>
-#include <vxf/scatter/SourceField.h>
 
 #include <openvdb/tree/LeafManager.h>
 
@@ -353,16 +352,6 @@ std::vector<openvdb::Vec3f> SweepLattice::withSkin(const std::vector<openvdb::Ve
         out[v] = skinFluence[s] + (shift ? (*shift)[v] : openvdb::Vec3f(0.0f));
     }
     return out;
-}
-
-std::vector<openvdb::Vec3f> SweepLattice::readPassSource(const Medium& medium, const openvdb::Vec3SGrid& source) const
-{
-    std::vector<openvdb::Vec3f> j = read(source);
-    if (!medium.surface()) return j;
-    const SourceField field(medium, source, SourceField::Near::Lattice);
-    tbb::enumerable_thread_specific<SourceField::Sampler> samplers([&field] { return SourceField::Sampler(field); });
-    skinAtCentres(j, [&](const openvdb::Coord& c) { return openvdb::Vec3f(samplers.local().sample(c.asVec3d())); });
-    return j;
 }
 
 void SweepLattice::skinAtCentres(std::vector<openvdb::Vec3f>& values,

@@ -1,6 +1,6 @@
-#include <vxf/pipeline/Scene.h>
+#include <vxf/pipeline/SceneFile.h>
 
-#include <vxf/light/Phase.h>
+#include <vxf/transport/Phase.h>
 
 #include <vxf/core/Error.h>
 #include <vxf/io/JsonDocument.h>
@@ -16,14 +16,6 @@
 #include <sstream>
 
 namespace vxf {
-
-openvdb::Vec3d Material::albedo() const
-{
-    const openvdb::Vec3d t = sigmaT();
-    openvdb::Vec3d a(0.0);
-    for (int c = 0; c < 3; ++c) a[c] = t[c] > 0.0 ? sigmaS[c] / t[c] : 0.0;
-    return a;
-}
 
 namespace {
 

@@ -1,4 +1,5 @@
-// vxf — scene files (schemas/scene.schema.json): objects, materials, lights, camera, settings.
+// vxf — a scene's objects, materials, lights, camera and settings: the types every stage reads
+// (the scene file's reader is vxf/pipeline/SceneFile.h; its schema schemas/scene.schema.json).
 #pragma once
 
 #include <openvdb/Types.h>
@@ -18,7 +19,7 @@ struct Material
     std::string sigmaAGrid, sigmaSGrid; ///< their names in gridsFile ("" if not given)
     /// Henyey-Greenstein asymmetry of the phase function, in [−kMaxPhaseG, kMaxPhaseG]: 0
     /// isotropic, > 0 forward (smoke, clouds, skin), < 0 backward. Medium takes the transport's
-    /// coefficients reduced by it (vxf/light/Phase.h); the camera's single scattering the phase.
+    /// coefficients reduced by it (vxf/transport/Phase.h); the camera's single scattering the phase.
     double phaseG = 0.0;
 
     openvdb::Vec3d sigmaT() const { return sigmaA + sigmaS; }
@@ -121,18 +122,5 @@ struct Scene
     Camera camera;
     SceneSettings settings;
 };
-
-/// Read a scene file: JSON syntax errors name the line and column, schema violations
-/// name the field (as a JSON pointer, e.g. /lights/1/cone_angle) and what was expected,
-/// and geometric nonsense (a zero direction, an up vector along the view) is refused.
-/// Relative mesh and grid paths are resolved against the scene file's folder.
-/// Throws vxf::InputError.
-Scene loadScene(const std::string& path);
-
-/// Parse scene JSON text; @a path names it in messages and anchors relative paths.
-Scene parseScene(const std::string& text, const std::string& path);
-
-/// The JSON Schema scenes are checked against (schemas/scene.schema.json, embedded).
-const std::string& sceneSchemaText();
 
 } // namespace vxf

@@ -1,4 +1,4 @@
-#include <vxf/pipeline/Scene.h>
+#include <vxf/pipeline/SceneFile.h>
 
 #include <vxf/core/Error.h>
 #include <vxf/scatter/Scatter.h>

@@ -1,7 +1,7 @@
 // vxf — Beer-Lambert transmittance through the medium.
 #pragma once
 
-#include <vxf/light/Medium.h>
+#include <vxf/transport/Medium.h>
 
 #include <algorithm>
 #include <array>

@@ -1,4 +1,4 @@
-#include <vxf/light/UniformBricks.h>
+#include <vxf/transport/UniformBricks.h>
 
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>

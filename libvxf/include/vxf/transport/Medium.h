@@ -3,7 +3,7 @@
 
 #include <vxf/core/GridLookup.h>
 #include <vxf/core/VoxelSet.h>
-#include <vxf/pipeline/Scene.h>
+#include <vxf/core/Scene.h>
 
 #include <openvdb/tools/Interpolation.h>
 

@@ -3,8 +3,8 @@
 
 #include <vxf/core/Hash.h>
 #include <vxf/core/Interrupter.h>
-#include <vxf/light/Medium.h>
-#include <vxf/light/Phase.h>
+#include <vxf/transport/Medium.h>
+#include <vxf/transport/Phase.h>
 
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Interpolation.h>
@@ -79,12 +79,6 @@ public:
     /// @a grid's values at the lattice's voxels (per voxel; tiles and inactive values as the
     /// grid holds them at each voxel, only where @a grid is active, 0 elsewhere).
     std::vector<openvdb::Vec3f> read(const openvdb::Vec3SGrid& grid) const;
-    /// A pass's source (σs·φ/4π of a fluence whose skin voxels hold the light on the surface, as
-    /// withSkin and the gathers give it) as a sweep steps it, from centre to centre: read, its
-    /// skin voxels' values at their centres (skinAtCentres, from SourceField's lattice read).
-    /// Read as it is, the thick bunny's second order came out 7% below the gather's (the first
-    /// 1.7%).
-    std::vector<openvdb::Vec3f> readPassSource(const Medium& medium, const openvdb::Vec3SGrid& source) const;
     /// A Vec3f grid on @a topology's active topology and transform holding @a values (per
     /// voxel): its voxels their own value, an active tile the mean of its voxels. Non-finite
     /// values are written as 0.

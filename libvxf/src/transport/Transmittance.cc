@@ -1,6 +1,6 @@
-#include <vxf/light/Transmittance.h>
+#include <vxf/transport/Transmittance.h>
 
-#include <vxf/light/UniformBricks.h>
+#include <vxf/transport/UniformBricks.h>
 
 #include <vxf/core/RayScene.h>
 

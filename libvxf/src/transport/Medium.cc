@@ -1,7 +1,8 @@
-#include <vxf/light/Medium.h>
+#include <vxf/transport/Medium.h>
 
-#include <vxf/light/Phase.h>
-#include <vxf/light/UniformBricks.h>
+#include <vxf/core/GridRoles.h>
+#include <vxf/transport/Phase.h>
+#include <vxf/transport/UniformBricks.h>
 
 #include <vxf/core/RayScene.h>
 
@@ -65,7 +66,7 @@ openvdb::FloatGrid::ConstPtr marchSurface(const openvdb::FloatGrid::ConstPtr& su
 } // namespace
 
 Medium::Medium(const VoxelSet& set, const Material& material)
-    : mDensity(set.get<openvdb::FloatGrid>("density"))
+    : mDensity(set.get<openvdb::FloatGrid>(grids::kDensity))
     , mMaterial(material)
     , mActualMaterial(material)
 {
@@ -81,7 +82,7 @@ Medium::Medium(const VoxelSet& set, const Material& material)
             (std::string(name) == "sigma_a" ? mSigmaA : mSigmaS) = typed;
         }
     }
-    if (auto grid = set.find("surface")) {
+    if (auto grid = set.find(grids::kSurface)) {
         auto typed = openvdb::gridConstPtrCast<openvdb::FloatGrid>(grid);
         if (typed && typed->getGridClass() == openvdb::GRID_LEVEL_SET) {
             if (typed->transform() != mDensity->transform()) {
