@@ -80,12 +80,16 @@ public:
         mApp = parent.add_subcommand("info", "List the grids of .vdb files with their vxf roles, stage and provenance.");
         mApp->add_option("files", mFiles, ".vdb files")->required();
         mApp->add_flag("--json", mJson, "Print JSON instead of a table");
+        mApp->add_flag("--force", mForce, "List a file whose grids no longer match the checksums vxf wrote with them, with a warning "
+                                          "naming the damaged grids, instead of refusing it");
     }
 
     void run() override
     {
         for (const auto& path : mFiles) {
-            const VoxelSet set = readVoxelSet(path);
+            std::vector<std::string> damaged;
+            const VoxelSet set = readVoxelSet(path, VoxelSetReadOptions{mForce, &damaged});
+            for (const auto& name : damaged) warn(fmt::format("{}: grid '{}' is damaged (its checksum does not match)", path, name));
             const nlohmann::json info = describe(set);
             if (mJson) {
                 std::cout << info.dump(2) << "\n";
@@ -136,7 +140,7 @@ public:
 
 private:
     std::vector<std::string> mFiles;
-    bool mJson = false;
+    bool mJson = false, mForce = false;
 };
 
 } // namespace

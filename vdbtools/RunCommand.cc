@@ -39,6 +39,7 @@ public:
             if (object.isVolume() || !told.insert(object.mesh).second) continue;
             for (const auto& warning : objectMeshWarnings(object)) warn(fmt::format("{}: {}", object.mesh, warning));
         }
+        for (const auto& warning : report.warnings) warn(warning);
         for (const auto& stage : report.stages) {
             std::cout << fmt::format("  {:<9} {:<7} {:>7.2f} s  {}\n", stage.stage, stage.action, stage.seconds, stage.why);
         }

@@ -709,16 +709,16 @@ TEST_CASE("vxf op runs operators on real files, records them, and vxf graph repl
     CHECK_FALSE(fs::exists(dir.path("x.vdb")));
 }
 
-TEST_CASE("the README operator table and the pipeline schema are what the registry generates", "[cli][ops][drift]")
+TEST_CASE("the operator table of docs/cli.md and the pipeline schema are what the registry generates", "[cli][ops][drift]")
 {
     const auto table = run(fmt::format("{} op --markdown", binary("vxf")));
     REQUIRE(table.status == 0);
-    const std::string readme = slurp(source("README.md"));
+    const std::string readme = slurp(source("docs/cli.md"));
     const std::string begin = "<!-- operators:begin -->\n", end = "<!-- operators:end -->";
     const auto from = readme.find(begin), to = readme.find(end);
     REQUIRE(from != std::string::npos);
     REQUIRE(to != std::string::npos);
-    INFO("run scripts/generate to refresh the README and schemas/pipeline.schema.json");
+    INFO("run scripts/generate to refresh docs/cli.md and schemas/pipeline.schema.json");
     CHECK(readme.substr(from + begin.size(), to - from - begin.size()) == table.out);
     const auto schema = run(fmt::format("{} op --schema", binary("vxf")));
     REQUIRE(schema.status == 0);
@@ -894,4 +894,30 @@ TEST_CASE("an output that cannot be written is refused before any work, and a co
         CHECK_THAT(over.err, Catch::Contains("is the input"));
         CHECK(slurp(dir.path("s.vdb")) == before);
     }
+}
+
+TEST_CASE("vxf run recomputes a cache entry it cannot read (truncated, or a grid damaged) with a warning", "[cli][run][cache]")
+{
+    TempDir dir;
+    vxf::test::spit(dir.path("s.json"), R"({"objects": [{"mesh": "builtin:sphere", "material": {"albedo": 0.8, "mean_free_path": 0.3}}],
+      "lights": [{"type": "point", "position": [0, 0, 3]}], "camera": {"position": [0, -4, 0], "look_at": [0, 0, 0]},
+      "voxelize": {"dim": 16}, "scatter": {"kernel": "sweep", "directions": 8}, "render": {"width": 16, "height": 12, "samples": 1}})");
+    const std::string command = fmt::format("{} run {} --out {}", binary("vxf"), quoted(dir.path("s.json")), quoted(dir.path("out")));
+    REQUIRE(run(command).status == 0);
+    const std::string light = cachedStage(dir.path("out/cache"), "light-");
+    REQUIRE_FALSE(light.empty());
+    // A machine killed before the file system wrote it all: half the file.
+    const std::string whole = slurp(light);
+    vxf::test::spit(light, whole.substr(0, whole.size() / 2));
+    fs::remove(cachedStage(dir.path("out/cache"), "scatter-")); // so that the light entry is read
+    const auto rerun = run(command);
+    INFO(rerun.out << rerun.err);
+    CHECK(rerun.status == 0);
+    CHECK_THAT(rerun.err, Catch::Contains("warning: cache entry " + light + " could not be read") &&
+                              Catch::Contains("removed, and its stage recomputed"));
+    CHECK(rerun.out.find("light     ran") != std::string::npos);
+    CHECK(slurp(light) == whole); // recomputed to the same bytes
+    const auto third = run(command);
+    CHECK(third.err.empty());
+    CHECK(third.out.find("scatter   reused") != std::string::npos);
 }

@@ -48,7 +48,29 @@ json lightJson(const Light& l)
 
 } // namespace
 
-PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interrupter* interrupter)
+namespace {
+
+/// A cache entry that cannot be read (a machine killed while the file system had not written
+/// it all; a byte damaged on disk: the grids' checksums) is removed, and the run starts over,
+/// recomputing that stage and reusing the others.
+struct UnreadableCacheEntry
+{
+    std::string warning;
+};
+
+VoxelSet readCacheEntry(const fs::path& path)
+{
+    try {
+        return readVoxelSet(path.string());
+    } catch (const Error& e) {
+        std::error_code ignored;
+        fs::remove(path, ignored);
+        throw UnreadableCacheEntry{fmt::format("cache entry {} could not be read ({}): removed, and its stage recomputed",
+            path.string(), e.what())};
+    }
+}
+
+PipelineReport runPipelineOnce(const Scene& scene, const std::string& outDir, Interrupter* interrupter)
 {
     PipelineReport report;
     const Material material = sceneMaterial(scene);
@@ -125,7 +147,7 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
         record("light", "reused", "voxels, material and lights unchanged", lightFile, 0.0);
     } else {
         const double seconds = timed([&] {
-            if (set.empty()) set = readVoxelSet(voxelFile.string());
+            if (set.empty()) set = readCacheEntry(voxelFile);
             DirectLightOptions options;
             options.march.step = s.step;
             options.similarity = !carriesMoment;
@@ -157,7 +179,7 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
         } else {
             ScatterReport scattered;
             const double seconds = timed([&] {
-                VoxelSet lit = readVoxelSet(lightFile.string());
+                VoxelSet lit = readCacheEntry(lightFile);
                 const Medium medium(lit, material);
                 const ScatterOptions options = scatterOptionsFrom(s);
                 scattered = scatter(lit, medium, options, interrupter);
@@ -180,7 +202,7 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
     report.preview = (out / (stem + ".png")).string();
     std::string why = "images are always rendered from the (cached) volume";
     const double seconds = timed([&] {
-        const VoxelSet volume = readVoxelSet(volumeFile.string());
+        const VoxelSet volume = readCacheEntry(volumeFile);
         const Medium medium(volume, material);
         const RenderOptions options = renderOptionsFrom(s);
         const SceneRayScenes meshes = sceneRayScenes(scene);
@@ -191,6 +213,24 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
     });
     record("render", "ran", why, report.image, seconds);
     return report;
+}
+
+} // namespace
+
+PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interrupter* interrupter)
+{
+    std::vector<std::string> warnings;
+    // Each pass over an unreadable entry removes it; the chain has three entries to lose.
+    for (int attempt = 0;; ++attempt) {
+        try {
+            PipelineReport report = runPipelineOnce(scene, outDir, interrupter);
+            report.warnings = std::move(warnings);
+            return report;
+        } catch (const UnreadableCacheEntry& stale) {
+            if (attempt >= 3) throw Error(stale.warning);
+            warnings.push_back(stale.warning);
+        }
+    }
 }
 
 } // namespace vxf

@@ -4,6 +4,7 @@
 #include <vxf/core/VoxelSet.h>
 
 #include <string>
+#include <vector>
 
 namespace vxf {
 
@@ -13,14 +14,26 @@ struct VoxelSetWriteOptions
     bool compress = true;  ///< Blosc compression (+ active-mask compression, always on)
 };
 
+struct VoxelSetReadOptions
+{
+    /// Read grids whose data do not match the checksum vxf wrote with them (a file damaged on
+    /// disk) instead of throwing; their names go to @a damaged when given.
+    bool acceptDamaged = false;
+    std::vector<std::string>* damaged = nullptr;
+};
+
 /// Read every grid and the file metadata of the .vdb at @a path. The set's transform is
 /// that of the first grid with a vxf role (else the first grid); grids of other types or
 /// transforms are kept as they are. Throws vxf::Error naming the file when it is missing,
-/// not an OpenVDB file, or damaged.
+/// not an OpenVDB file, or damaged: a grid vxf wrote carries a checksum of its data
+/// ("vxf:checksum", io/GridChecksum.h) and one that no longer matches is named (files of other
+/// tools carry none and read as they are).
 VoxelSet readVoxelSet(const std::string& path);
+VoxelSet readVoxelSet(const std::string& path, const VoxelSetReadOptions& options);
 
 /// Write @a set to @a path atomically (temporary file + rename): the grids in order, with
-/// "vxf:units" grid metadata filled in from their roles and the file metadata of the set,
+/// "vxf:units" grid metadata filled in from their roles, "vxf:checksum" of each grid's data as
+/// written (halves when @a options.half), and the file metadata of the set,
 /// stamped with this vxf version. The caller's grids are not modified.
 void writeVoxelSet(const std::string& path, const VoxelSet& set, const VoxelSetWriteOptions& options = {});
 

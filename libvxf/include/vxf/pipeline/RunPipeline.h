@@ -23,6 +23,7 @@ struct PipelineReport
     std::vector<StageRecord> stages;
     std::string image, preview; ///< written image files ("" when no image was asked for)
     std::string volume;         ///< the last voxel set of the chain (in the cache)
+    std::vector<std::string> warnings; ///< cache entries that could not be read, removed and recomputed
 };
 
 /// Run @a scene's pipeline into @a outDir. Each stage's output is cached in
@@ -32,7 +33,9 @@ struct PipelineReport
 /// material does not scatter or no requested output needs it; lights with zero power are
 /// skipped by the light stage; passes stop at the scene's tolerance. Writes
 /// outDir/NAME.exr and NAME.png (NAME: the scene file's stem) when "image" is requested.
-/// Skip-or-run decisions and seconds are in the report, one record per stage.
+/// Skip-or-run decisions and seconds are in the report, one record per stage. A cache entry
+/// that cannot be read (truncated by a killed machine, or a grid damaged: its checksum) is
+/// removed and recomputed, with a warning in the report.
 /// Several media objects are voxelized together (voxelizeMedia); occluders cast shadows in
 /// the light stage and show in the render.
 PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interrupter* interrupter = nullptr);
