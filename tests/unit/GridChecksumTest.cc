@@ -9,7 +9,7 @@
 
 #include <fstream>
 
-TEST_CASE("a grid's checksum follows its data: values, topology, tiles, halves; not the threads", "[io][checksum]")
+TEST_CASE("a grid's checksum follows its data (values, topology, tiles, halves), not the thread count", "[io][checksum]")
 {
     auto grid = openvdb::FloatGrid::create(0.0f);
     for (int i = 0; i < 40; ++i) grid->tree().setValue(openvdb::Coord(i, 2 * i, -i), 0.1f * float(i));
@@ -37,7 +37,7 @@ TEST_CASE("a grid's checksum follows its data: values, topology, tiles, halves; 
     CHECK_FALSE(vxf::gridChecksum(*openvdb::points::PointDataGrid::create(), false));
 }
 
-TEST_CASE("a byte damaged on disk that OpenVDB still reads is named on read; other tools' files read as they are", "[io][checksum]")
+TEST_CASE("a byte damaged on disk that OpenVDB still reads is named on read, and other tools' files read as they are", "[io][checksum]")
 {
     vxf::test::TempDir dir;
     const vxf::VoxelSet set = vxf::test::uniformSphere(vxf::test::albedoMaterial(4.0, 0.9), 1.0);

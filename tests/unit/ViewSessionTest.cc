@@ -220,4 +220,20 @@ TEST_CASE("view: a render re-runs the scatter stage only after an edit of what i
     const auto again = session.render(dir.path("s.json"), 24, 18, dir.path("r4"));
     CHECK(again.ran.front() == "scatter (kept from the last render)");
     CHECK(brightness("r4") == halved);
+
+    // An edit of the scatter's input, then an edit of `scatter` itself: the stage re-runs after
+    // the first, and the second applies to its result (the render dropped it before).
+    session.apply("mul", {{"grid", "scatter"}, {"value", 0.0}});
+    const auto both = session.render(dir.path("s.json"), 24, 18, dir.path("r5"));
+    CHECK(both.ran == std::vector<std::string>{"scatter (kept from the last render)", "1 later steps", "render"});
+    CHECK(brightness("r5") < halved);
+
+    // A select among `density` reads it and writes only its mask: no scatter, and a later edit shows.
+    session.undo();
+    session.undo();
+    session.apply("select", {{"grid", "density"}, {"shape", "box"}, {"min", {-2, -2, -2}}, {"max", {2, 2, 2}}, {"out", "mask"}});
+    session.apply("mul", {{"grid", "scatter"}, {"value", 0.0}});
+    const auto selected = session.render(dir.path("s.json"), 24, 18, dir.path("r6"));
+    CHECK(selected.ran == std::vector<std::string>{"render"});
+    CHECK(brightness("r6") < before);
 }

@@ -394,25 +394,48 @@ nlohmann::json ViewSession::pipeline(const std::string& output) const
     return {{"nodes", nodes}, {"outputs", {{last, output}}}};
 }
 
+namespace {
+
+/// The grids an edit step writes (the operator's output; the grid it names when it edits that
+/// grid in place). select, diff, gradient, split and copy only read the grid they name.
+std::set<std::string> writtenGrids(const std::string& op, const nlohmann::json& params)
+{
+    const auto text = [&](const char* key) { return params.contains(key) && params[key].is_string() ? params[key].get<std::string>() : std::string(); };
+    std::set<std::string> out;
+    if (op == "select") out.insert(text("out").empty() ? grids::kMask : text("out"));
+    else if (op == "gradient") out.insert(text("out").empty() ? "gradient" : text("out"));
+    else if (op == "diff") out.insert(text("out").empty() ? text("grid") + "_diff" : text("out"));
+    else if (op == "split") for (const char* c : {".x", ".y", ".z"}) out.insert(text("grid") + c);
+    else if (op == "copy") out.insert(text("to").empty() ? text("grid") : text("to"));
+    else if (op == "rename") out = {text("grid"), text("to")};
+    else out.insert(text("out").empty() ? text("grid") : text("out"));
+    out.erase(std::string());
+    return out;
+}
+
+} // namespace
+
 ViewSession::Rendered ViewSession::render(const std::string& scenePath, int width, int height, const std::string& folder)
 {
     std::lock_guard<std::mutex> lock(mMutex);
     const auto start = std::chrono::steady_clock::now();
     Rendered result;
-    static const std::set<std::string> upstream = {grids::kSurface, grids::kDensity, grids::kDirect, grids::kScatterSource, grids::kSourceAnisotropy};
-    bool scatterInputEdited = false;
-    nlohmann::json steps = nlohmann::json::array();
-    for (const Step& s : mSteps) {
-        steps.push_back({s.op, s.params});
-        for (const char* key : {"grid", "out"}) {
-            if (s.params.contains(key) && s.params[key].is_string() && upstream.count(s.params[key].get<std::string>())) {
-                scatterInputEdited = true;
-            }
+    // The recorded steps in order: the scatter stage re-runs after the last step that wrote what
+    // it reads, and the steps after that one apply to its result (a hue edit of `scatter` after
+    // an edit of `density` shows in the render).
+    static const std::set<std::string> upstream = {grids::kSurface, grids::kDensity, grids::kDirect, grids::kScatterSource,
+        grids::kSourceAnisotropy, grids::kSigmaA, grids::kSigmaS};
+    std::size_t rescatterAfter = 0; // steps [0, rescatterAfter) come before the scatter stage re-runs
+    for (std::size_t i = 0; i < mSteps.size(); ++i) {
+        for (const std::string& g : writtenGrids(mSteps[i].op, mSteps[i].params)) {
+            if (upstream.count(g)) rescatterAfter = i + 1;
         }
     }
     VoxelSet set = mCurrent;
-    if (scatterInputEdited && mCurrent.find(grids::kScatter)) {
-        if (mScatteredFor != steps.dump()) {
+    if (rescatterAfter > 0 && mCurrent.find(grids::kScatter)) {
+        nlohmann::json before = nlohmann::json::array();
+        for (std::size_t i = 0; i < rescatterAfter; ++i) before.push_back({mSteps[i].op, mSteps[i].params});
+        if (mScatteredFor != before.dump()) {
             // The file's own scatter parameters where it recorded them (`vxf scatter`), else sweeps.
             nlohmann::json params = nlohmann::json::object();
             const nlohmann::json recorded = nlohmann::json::parse(mOriginal.paramsJson(), nullptr, false);
@@ -424,20 +447,23 @@ ViewSession::Rendered ViewSession::render(const std::string& scenePath, int widt
                 if (recorded.value("accelerate", true) == false) params["no_accelerate"] = true;
             }
             if (params.empty()) params = {{"kernel", "sweep"}};
-            VoxelSet scattered = deepCopy(mCurrent);
+            const VoxelSet edited = replay(std::vector<Step>(mSteps.begin(), mSteps.begin() + std::ptrdiff_t(rescatterAfter)));
+            VoxelSet scattered = deepCopy(edited);
             try {
                 run(scattered, "scatter", params, nullptr);
             } catch (const UsageError&) { // recorded values this version no longer takes
-                scattered = deepCopy(mCurrent);
+                scattered = deepCopy(edited);
                 run(scattered, "scatter", {{"kernel", "sweep"}}, nullptr);
             }
             mScattered = scattered;
-            mScatteredFor = steps.dump();
+            mScatteredFor = before.dump();
             result.ran.push_back("scatter");
         } else {
             result.ran.push_back("scatter (kept from the last render)");
         }
-        set = mScattered;
+        set = deepCopy(mScattered);
+        for (std::size_t i = rescatterAfter; i < mSteps.size(); ++i) run(set, mSteps[i].op, mSteps[i].params, nullptr);
+        if (rescatterAfter < mSteps.size()) result.ran.push_back(fmt::format("{} later steps", mSteps.size() - rescatterAfter));
     }
     fs::create_directories(folder);
     result.png = (fs::path(folder) / "view.png").string();
