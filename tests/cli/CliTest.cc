@@ -922,3 +922,45 @@ TEST_CASE("vxf run recomputes a cache entry it cannot read (truncated or damaged
     CHECK(third.err.empty());
     CHECK(third.out.find("scatter   reused") != std::string::npos);
 }
+
+TEST_CASE("two runs on one cache compute each stage once: the second waits for the first's entries", "[cli][run][cache]")
+{
+    TempDir dir;
+    vxf::test::spit(dir.path("s.json"), R"({"objects": [{"mesh": "builtin:sphere", "material": {"albedo": 0.99, "mean_free_path": 0.02}}],
+      "lights": [{"type": "point", "position": [0, 0, 3]}], "camera": {"position": [0, -4, 0], "look_at": [0, 0, 0]},
+      "voxelize": {"dim": 40}, "scatter": {"kernel": "gather", "directions": 32}, "render": {"width": 16, "height": 12, "samples": 1}})");
+    const std::string command = fmt::format("{} run {} --out {}", binary("vxf"), quoted(dir.path("s.json")), quoted(dir.path("out")));
+    const auto both = run(fmt::format("({} > {} 2>&1 & {} > {} 2>&1 & wait)", command, quoted(dir.path("a.txt")), command, quoted(dir.path("b.txt"))));
+    REQUIRE(both.status == 0);
+    const std::string a = slurp(dir.path("a.txt")), b = slurp(dir.path("b.txt"));
+    INFO(a << "\n" << b);
+    for (const char* stage : {"voxelize  ran", "light     ran", "scatter   ran"}) {
+        const auto count = [&](const std::string& text) { return text.find(stage) != std::string::npos ? 1 : 0; };
+        CHECK(count(a) + count(b) == 1);
+    }
+    CHECK(a.find("wrote ") != std::string::npos);
+    CHECK(b.find("wrote ") != std::string::npos);
+}
+
+TEST_CASE("a FIFO, a device, a folder or a symbolic link loop is refused by name, never read", "[cli][input]")
+{
+    TempDir dir;
+    const std::string vxf = binary("vxf");
+    REQUIRE(run("mkfifo " + quoted(dir.path("fifo.json")) + " " + quoted(dir.path("fifo.off"))).status == 0);
+    REQUIRE(run("ln -s loop1 " + quoted(dir.path("loop2")) + " && ln -s loop2 " + quoted(dir.path("loop1"))).status == 0);
+    const auto refused = [&](const std::string& command, const std::string& why) {
+        // `timeout`: a reader that opened the FIFO would wait for a writer forever.
+        const auto r = run("timeout 20 " + command);
+        INFO(command << "\n" << r.err);
+        CHECK((r.status == 1 || r.status == 2));
+        CHECK_THAT(r.err, Catch::Contains(why));
+    };
+    refused(fmt::format("{} run {}", vxf, quoted(dir.path("fifo.json"))), "is not a regular file");
+    refused(fmt::format("{} run {}", vxf, quoted(dir.root().string())), "is a folder, not a file");
+    refused(fmt::format("{} run {}", vxf, quoted(dir.path("loop1"))), "a loop of symbolic links");
+    refused(fmt::format("{} run /dev/zero", vxf), "is not a regular file");
+    refused(fmt::format("{} voxelize {} -o {} --dim 8", vxf, quoted(dir.path("fifo.off")), quoted(dir.path("x.vdb"))), "is not a regular file");
+    refused(fmt::format("{} graph /dev/zero", vxf), "is not a regular file");
+    refused(fmt::format("{} {} {}", binary("vxf2vdb"), "/dev/zero", quoted(dir.path("x.vdb"))), "is not a regular file");
+    refused(fmt::format("{} info {}", vxf, quoted(dir.path("fifo.off"))), "is not a regular file");
+}

@@ -146,7 +146,7 @@ TEST_CASE("mesh defects are repaired or reported, never silent", "[io][mesh]")
 TEST_CASE("unreadable meshes give errors naming the file", "[io][mesh]")
 {
     TempDir dir;
-    CHECK_THROWS_WITH(vxf::readMesh(dir.path("missing.off")), Catch::EndsWith("missing.off: cannot open mesh file"));
+    CHECK_THROWS_WITH(vxf::readMesh(dir.path("missing.off")), Catch::EndsWith("missing.off: no such file"));
     spit(dir.path("mesh.xyz"), "1 2 3\n");
     CHECK_THROWS_WITH(vxf::readMesh(dir.path("mesh.xyz")), Catch::Contains("unsupported mesh format '.xyz'"));
     spit(dir.path("garbage.off"), "this is not an OFF file\n");

@@ -157,7 +157,7 @@ TEST_CASE("bad scenes are refused with the field at fault", "[pipeline][scene]")
         Catch::StartsWith("/scenes/test.json: /objects/0/material/phase/g: "));
     CHECK(errorOf(edited(R"("mean_free_path": 0.5})", R"("mean_free_path": 0.5, "phase": {"g": 0.6}})")) ==
           "/scenes/test.json: /objects/2/material/phase/g: 0 differs from medium 'grape''s 0.6: every medium of a scene has the same phase");
-    CHECK_THROWS_WITH(vxf::loadScene("/nonexistent/scene.json"), "/nonexistent/scene.json: cannot open scene file");
+    CHECK_THROWS_WITH(vxf::loadScene("/nonexistent/scene.json"), "/nonexistent/scene.json: no such file");
 }
 
 TEST_CASE("a material's phase: Henyey-Greenstein g, and single scattering marched to the lights unless the scene says", "[pipeline][scene][phase]")

@@ -1,6 +1,7 @@
 #include <vxf/io/ImageFile.h>
 
 #include <vxf/io/AtomicFile.h>
+#include <vxf/io/InputFile.h>
 
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>
@@ -58,6 +59,7 @@ void writeExr(const std::string& path, const RenderedImage& image, bool half)
 
 RgbImage readExr(const std::string& path)
 {
+    requireRegularFile(path);
     RgbImage image;
     try {
         Imf::InputFile file(path.c_str());

@@ -1,6 +1,7 @@
 #include <vxf/io/MeshFile.h>
 
 #include <vxf/core/Error.h>
+#include <vxf/io/InputFile.h>
 
 #include <CGAL/exceptions.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
@@ -249,6 +250,7 @@ TriangleMesh readMesh(const std::string& path, const MeshReadOptions& options, M
         throw Error(fmt::format("{}: unsupported mesh format '{}' (expected one of .obj .ply .off .stl)",
             path, ext));
     }
+    requireRegularFile(path);
     if (!std::ifstream(path).good()) throw Error(fmt::format("{}: cannot open mesh file", path));
 
     StepTimer timer(report);

@@ -3,6 +3,7 @@
 #include <vxf/core/GridRoles.h>
 #include <vxf/io/AtomicFile.h>
 #include <vxf/io/GridChecksum.h>
+#include <vxf/io/InputFile.h>
 
 #include <openvdb/io/Stream.h>
 
@@ -77,9 +78,7 @@ VoxelSet readVoxelSet(const std::string& path, const VoxelSetReadOptions& option
 {
     initializeOpenVDB();
     std::error_code ec;
-    if (!std::filesystem::is_regular_file(path, ec)) {
-        throw Error(fmt::format("{}: no such file", path));
-    }
+    requireRegularFile(path);
     openvdb::GridPtrVecPtr grids;
     openvdb::MetaMap::Ptr metadata;
     const std::uintmax_t bytes = std::filesystem::file_size(path, ec);

@@ -1,6 +1,7 @@
 #include <vxf/io/VxfText.h>
 
 #include <vxf/io/AtomicFile.h>
+#include <vxf/io/InputFile.h>
 
 #include <openvdb/tools/SignedFloodFill.h>
 
@@ -204,6 +205,7 @@ struct ColumnWriter
 VoxelSet readVxfText(const std::string& path, Interrupter* interrupter)
 {
     InterruptStep step(interrupter, "reading text VXF");
+    requireRegularFile(path);
     std::ifstream in(path, std::ios::binary);
     if (!in) throw Error(fmt::format("{}: cannot open", path));
     std::error_code ec;

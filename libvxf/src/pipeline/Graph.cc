@@ -3,6 +3,7 @@
 #include <vxf/core/Error.h>
 #include <vxf/io/AtomicFile.h>
 #include <vxf/io/ContentHash.h>
+#include <vxf/io/InputFile.h>
 #include <vxf/io/JsonDocument.h>
 #include <vxf/io/VoxelSetFile.h>
 #include <vxf/pipeline/Operators.h>
@@ -16,6 +17,9 @@
 #include <set>
 
 namespace vxf {
+
+/// A pipeline graph is a page of JSON; a file past this is not one.
+constexpr std::uintmax_t kMaxGraphBytes = std::uintmax_t(64) << 20;
 
 using nlohmann::json;
 namespace fs = std::filesystem;
@@ -42,7 +46,7 @@ public:
         , mCache(cacheDir)
         , mInterrupter(interrupter)
     {
-        const json document = parseJsonText(readFileBytes(path), path);
+        const json document = parseJsonText(readBoundedFile(path, kMaxGraphBytes, "a pipeline graph"), path);
         static const JsonSchema schema(pipelineSchemaJson(), "schemas/pipeline.schema.json");
         schema.check(document, path);
         mNodes = document["nodes"];
@@ -202,7 +206,7 @@ void recordStep(const std::string& graphPath, const std::string& op, const json&
     const std::string& output)
 {
     json graph = {{"nodes", json::object()}, {"outputs", json::object()}};
-    if (fs::exists(graphPath)) graph = parseJsonText(readFileBytes(graphPath), graphPath);
+    if (fs::exists(graphPath)) graph = parseJsonText(readBoundedFile(graphPath, kMaxGraphBytes, "a pipeline graph"), graphPath);
     const fs::path folder = fs::absolute(graphPath).parent_path();
     const auto relative = [&](const std::string& p) {
         const fs::path abs = fs::absolute(p).lexically_normal();

@@ -17,6 +17,12 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <optional>
+#include <thread>
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
 
 namespace vxf {
 
@@ -70,6 +76,47 @@ VoxelSet readCacheEntry(const fs::path& path)
     }
 }
 
+/// An exclusive lock on a cache entry's computation (flock on a hidden `.ENTRY.lock` beside
+/// it, released when the process ends, however it ends): two runs sharing a cache compute each
+/// entry once, the second waiting for the first's file. Waits in steps of 100 ms so that an
+/// interrupt stops the wait. A cache folder that takes no lock file is computed as before.
+class CacheLock
+{
+public:
+    CacheLock(const fs::path& entry, Interrupter* interrupter)
+    {
+        const fs::path path = entry.parent_path() / ("." + entry.filename().string() + ".lock");
+        mFd = ::open(path.c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0644);
+        if (mFd < 0) return;
+        while (::flock(mFd, LOCK_EX | LOCK_NB) != 0) {
+            if (errno != EWOULDBLOCK && errno != EINTR) break;
+            if (interrupter && interrupter->wasInterrupted(-1)) {
+                ::close(mFd);
+                throw Interrupted();
+            }
+            std::this_thread::sleep_for(std::chrono::milliseconds(100));
+        }
+    }
+    ~CacheLock()
+    {
+        if (mFd >= 0) ::close(mFd);
+    }
+    CacheLock(const CacheLock&) = delete;
+    CacheLock& operator=(const CacheLock&) = delete;
+
+private:
+    int mFd = -1;
+};
+
+/// Whether @a entry is in the cache: when it is not, after waiting for a run that computes it
+/// (holding its lock in @a lock from then on, for this run's own computation).
+bool inCache(const fs::path& entry, std::optional<CacheLock>& lock, Interrupter* interrupter)
+{
+    if (fs::exists(entry)) return true;
+    lock.emplace(entry, interrupter);
+    return fs::exists(entry);
+}
+
 PipelineReport runPipelineOnce(const Scene& scene, const std::string& outDir, Interrupter* interrupter)
 {
     PipelineReport report;
@@ -107,7 +154,8 @@ PipelineReport runPipelineOnce(const Scene& scene, const std::string& outDir, In
     const std::string voxelHash = hashOf(voxelInputs);
     const fs::path voxelFile = cache / ("voxelize-" + voxelHash + ".vdb");
     VoxelSet set;
-    if (fs::exists(voxelFile)) {
+    std::optional<CacheLock> lock;
+    if (inCache(voxelFile, lock, interrupter)) {
         record("voxelize", "reused", "mesh and voxel settings unchanged", voxelFile, 0.0);
     } else {
         const double seconds = timed([&] {
@@ -121,6 +169,7 @@ PipelineReport runPipelineOnce(const Scene& scene, const std::string& outDir, In
         });
         record("voxelize", "ran", "no cached voxel set for these inputs", voxelFile, seconds);
     }
+    lock.reset();
 
     // Light: the voxel set, the material, the lights.
     json lights = json::array();
@@ -143,7 +192,7 @@ PipelineReport runPipelineOnce(const Scene& scene, const std::string& outDir, In
     }
     const std::string lightHash = hashOf(lightInputs);
     const fs::path lightFile = cache / ("light-" + lightHash + ".vdb");
-    if (fs::exists(lightFile)) {
+    if (inCache(lightFile, lock, interrupter)) {
         record("light", "reused", "voxels, material and lights unchanged", lightFile, 0.0);
     } else {
         const double seconds = timed([&] {
@@ -158,6 +207,7 @@ PipelineReport runPipelineOnce(const Scene& scene, const std::string& outDir, In
         record("light", "ran", "no cached lighting for these inputs", lightFile, seconds);
         set = VoxelSet();
     }
+    lock.reset();
 
     // Scatter, only when it matters.
     fs::path volumeFile = lightFile;
@@ -174,7 +224,7 @@ PipelineReport runPipelineOnce(const Scene& scene, const std::string& outDir, In
         // (every field scatterOptionsFrom reads)
         volumeHash = hashOf(scatterInputs);
         volumeFile = cache / ("scatter-" + volumeHash + ".vdb");
-        if (fs::exists(volumeFile)) {
+        if (inCache(volumeFile, lock, interrupter)) {
             record("scatter", "reused", "lighting and scatter settings unchanged", volumeFile, 0.0);
         } else {
             ScatterReport scattered;
@@ -188,6 +238,7 @@ PipelineReport runPipelineOnce(const Scene& scene, const std::string& outDir, In
             });
             record("scatter", "ran", fmt::format("{} passes: {}", scattered.passes.size(), scattered.stopReason), volumeFile, seconds);
         }
+        lock.reset();
     }
 
     report.volume = volumeFile.string();

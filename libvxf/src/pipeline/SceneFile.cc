@@ -1,5 +1,6 @@
 #include <vxf/pipeline/SceneFile.h>
 
+#include <vxf/io/InputFile.h>
 #include <vxf/transport/Phase.h>
 
 #include <vxf/core/Error.h>
@@ -16,6 +17,9 @@
 #include <sstream>
 
 namespace vxf {
+
+/// A scene is a page of JSON; a file past this is not one.
+constexpr std::uintmax_t kMaxSceneBytes = std::uintmax_t(64) << 20;
 
 namespace {
 
@@ -305,11 +309,7 @@ Scene parseScene(const std::string& text, const std::string& path)
 
 Scene loadScene(const std::string& path)
 {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw Error(fmt::format("{}: cannot open scene file", path));
-    std::stringstream buffer;
-    buffer << in.rdbuf();
-    return parseScene(buffer.str(), path);
+    return parseScene(readBoundedFile(path, kMaxSceneBytes, "a scene file"), path);
 }
 
 } // namespace vxf

@@ -35,7 +35,8 @@ struct PipelineReport
 /// outDir/NAME.exr and NAME.png (NAME: the scene file's stem) when "image" is requested.
 /// Skip-or-run decisions and seconds are in the report, one record per stage. A cache entry
 /// that cannot be read (truncated by a killed machine, or a grid damaged: its checksum) is
-/// removed and recomputed, with a warning in the report.
+/// removed and recomputed, with a warning in the report. Runs sharing a cache compute each
+/// entry once: a run finding another computing an entry waits for its file (a lock per entry).
 /// Several media objects are voxelized together (voxelizeMedia); occluders cast shadows in
 /// the light stage and show in the render.
 PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interrupter* interrupter = nullptr);
