@@ -964,3 +964,26 @@ TEST_CASE("a FIFO, a device, a folder or a symbolic link loop is refused by name
     refused(fmt::format("{} {} {}", binary("vxf2vdb"), "/dev/zero", quoted(dir.path("x.vdb"))), "is not a regular file");
     refused(fmt::format("{} info {}", vxf, quoted(dir.path("fifo.off"))), "is not a regular file");
 }
+
+TEST_CASE("two scenes of one file name in one --out: the second is refused before any work, no image lost", "[cli][run][output]")
+{
+    TempDir dir;
+    fs::create_directories(dir.path("a"));
+    fs::create_directories(dir.path("b"));
+    const std::string scene = R"({"objects": [{"mesh": "builtin:sphere", "material": {"albedo": 0.5, "mean_free_path": 1}}],
+      "lights": [{"type": "point", "position": [0, 0, 3]}], "camera": {"position": [0, -4, 0], "look_at": [0, 0, 0]},
+      "voxelize": {"dim": 12}, "render": {"width": 8, "height": 6, "samples": 1}})";
+    vxf::test::spit(dir.path("a/s.json"), scene);
+    vxf::test::spit(dir.path("b/s.json"), scene);
+    const auto runScene = [&](const std::string& which) {
+        return run(fmt::format("{} run {} --out {}", binary("vxf"), quoted(dir.path(which + "/s.json")), quoted(dir.path("out"))));
+    };
+    REQUIRE(runScene("a").status == 0);
+    const std::string image = slurp(dir.path("out/s.exr"));
+    CHECK(runScene("a").status == 0); // the same scene again: its own name
+    const auto other = runScene("b");
+    CHECK(other.status == 2);
+    CHECK_THAT(other.err, Catch::Contains("is rendered there from " + fs::weakly_canonical(dir.path("a/s.json")).string()));
+    CHECK(other.out.find("ran") == std::string::npos); // nothing computed
+    CHECK(slurp(dir.path("out/s.exr")) == image);
+}

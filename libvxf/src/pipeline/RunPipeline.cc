@@ -1,5 +1,6 @@
 #include <vxf/pipeline/RunPipeline.h>
 
+#include <vxf/io/AtomicFile.h>
 #include <vxf/io/ContentHash.h>
 #include <vxf/io/ImageFile.h>
 #include <vxf/io/VoxelSetFile.h>
@@ -108,6 +109,28 @@ private:
     int mFd = -1;
 };
 
+/// Claim OUT/STEM.exr for the scene at @a scenePath: a hidden `.STEM.scene` beside it names the
+/// scene that renders there, and another scene of the same file stem is refused before any work
+/// (two scenes named s.json in one --out both printed "wrote out/s.exr", and one image was lost).
+void claimImageName(const fs::path& out, const std::string& stem, const std::string& scenePath)
+{
+    const fs::path claim = out / ("." + stem + ".scene");
+    const std::string mine = fs::weakly_canonical(fs::absolute(scenePath)).string();
+    std::ifstream in(claim);
+    std::string theirs;
+    if (in && std::getline(in, theirs) && !theirs.empty() && theirs != mine) {
+        throw UsageError(fmt::format("{}: {} is rendered there from {}; give this scene another --out (or rename it)",
+            out.string(), (out / (stem + ".exr")).string(), theirs));
+    }
+    if (theirs != mine) {
+        writeAtomically(claim.string(), [&](const std::string& tmp) {
+            std::ofstream file(tmp);
+            file << mine << "\n";
+            if (!file) throw Error(fmt::format("{}: cannot write", claim.string()));
+        });
+    }
+}
+
 /// Whether @a entry is in the cache: when it is not, after waiting for a run that computes it
 /// (holding its lock in @a lock from then on, for this run's own computation).
 bool inCache(const fs::path& entry, std::optional<CacheLock>& lock, Interrupter* interrupter)
@@ -127,6 +150,8 @@ PipelineReport runPipelineOnce(const Scene& scene, const std::string& outDir, In
 
     const fs::path out(outDir), cache = out / "cache";
     fs::create_directories(cache);
+    const std::string stem = fs::path(scene.path).stem().string().empty() ? "scene" : fs::path(scene.path).stem().string();
+    if (wants("image") && !scene.path.empty()) claimImageName(out, stem, scene.path);
     const auto timed = [](auto&& f) {
         const auto start = std::chrono::steady_clock::now();
         f();
@@ -248,7 +273,6 @@ PipelineReport runPipelineOnce(const Scene& scene, const std::string& outDir, In
         record("render", "skipped", "no image requested", "", 0.0);
         return report;
     }
-    const std::string stem = fs::path(scene.path).stem().string().empty() ? "scene" : fs::path(scene.path).stem().string();
     report.image = (out / (stem + ".exr")).string();
     report.preview = (out / (stem + ".png")).string();
     std::string why = "images are always rendered from the (cached) volume";
