@@ -77,18 +77,16 @@ private:
     /// scene's medium has a transform that therefore does not apply.
     VoxelSet placedInput(const Scene& scene, Interrupter* interrupter) const
     {
-        VoxelSet set = readVoxelSet(mInput);
         const SceneObject* moved = nullptr;
         for (const SceneObject& o : scene.objects) {
             if (o.role == SceneObject::Role::Medium && o.objectToWorld != openvdb::Mat4d::identity()) moved = &o;
         }
-        if (!moved) return set;
         std::error_code error;
-        if (moved->isVolume() && std::filesystem::equivalent(moved->volume, mInput, error)) {
-            VoxelSet placed = voxelizeMedia(scene, VoxelizeOptions{}, interrupter);
-            placed.metadata() = set.metadata();
-            return placed;
+        if (moved && moved->isVolume() && std::filesystem::equivalent(moved->volume, mInput, error)) {
+            return voxelizeMedia(scene, VoxelizeOptions{}, interrupter); // reads the file once, placed
         }
+        VoxelSet set = readVoxelSet(mInput);
+        if (!moved) return set;
         const std::string params = set.paramsJson();
         const bool fromRun = set.stage() == "voxelize" && params.find("\"media\"") != std::string::npos;
         if (!fromRun) {

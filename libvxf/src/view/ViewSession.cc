@@ -461,7 +461,8 @@ ViewSession::Rendered ViewSession::render(const std::string& scenePath, int widt
         } else {
             result.ran.push_back("scatter (kept from the last render)");
         }
-        set = deepCopy(mScattered);
+        // Later steps edit a copy (the kept scatter stays as the stage made it); none: read as it is.
+        set = rescatterAfter < mSteps.size() ? deepCopy(mScattered) : mScattered;
         for (std::size_t i = rescatterAfter; i < mSteps.size(); ++i) run(set, mSteps[i].op, mSteps[i].params, nullptr);
         if (rescatterAfter < mSteps.size()) result.ran.push_back(fmt::format("{} later steps", mSteps.size() - rescatterAfter));
     }
