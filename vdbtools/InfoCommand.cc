@@ -87,10 +87,12 @@ public:
     void run() override
     {
         for (const auto& path : mFiles) {
-            std::vector<std::string> damaged;
-            const VoxelSet set = readVoxelSet(path, VoxelSetReadOptions{mForce, &damaged});
+            std::vector<std::string> damaged, skipped;
+            const VoxelSet set = readVoxelSet(path, VoxelSetReadOptions{mForce, &damaged, &skipped});
             for (const auto& name : damaged) warn(fmt::format("{}: grid '{}' is damaged (its checksum does not match)", path, name));
-            const nlohmann::json info = describe(set);
+            for (const auto& grid : skipped) warn(fmt::format("{}: grid {} skipped: not a voxel grid vxf reads", path, grid));
+            nlohmann::json info = describe(set);
+            if (!skipped.empty()) info["skipped_grids"] = skipped;
             if (mJson) {
                 std::cout << info.dump(2) << "\n";
                 continue;

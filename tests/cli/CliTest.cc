@@ -987,3 +987,44 @@ TEST_CASE("two scenes of one file name in one --out: the second is refused befor
     CHECK(other.out.find("ran") == std::string::npos); // nothing computed
     CHECK(slurp(dir.path("out/s.exr")) == image);
 }
+
+TEST_CASE("every crafted .vdb that overflowed OpenVDB 10.0.1's reader is a clear error through every command that reads a .vdb",
+    "[cli][input][vdb]")
+{
+    // Inputs found by fuzzing (tests/regress/fuzz/vdb_info): under OpenVDB's own chunk reader
+    // each aborted `vxf info` and the converters ("free(): invalid pointer") and crashed `vxf run`
+    // and `vxf op copy --from_file` (SIGSEGV).
+    TempDir dir;
+    const std::string vxf = binary("vxf");
+    REQUIRE(run(vxf + " voxelize builtin:sphere -o " + quoted(dir.path("s.vdb")) + " --dim 12 -q").status == 0);
+    for (const char* name : {"blosc_raw_chunk_longer_than_node", "blosc_raw_chunk_longer_than_node_2"}) {
+        const std::string crafted = dir.path(std::string(name) + ".vdb");
+        fs::copy_file(source("tests/regress/fuzz/vdb_info/") + name, crafted);
+        vxf::test::spit(dir.path("scene.json"), fmt::format(R"({{
+  "objects": [{{"name": "smoke", "volume": {}, "grid": "density", "material": {{"albedo": 0.9, "mean_free_path": 0.5}}}}],
+  "lights": [{{"type": "directional", "direction": [0, 0, -1], "intensity": 3}}],
+  "camera": {{"position": [0, -4, 0], "look_at": [0, 0, 0], "fov": 40}},
+  "render": {{"width": 8, "height": 6, "samples": 1}}
+}})", nlohmann::json(crafted).dump()));
+        const std::vector<std::string> commands{
+            fmt::format("{} info {}", vxf, quoted(crafted)),
+            fmt::format("{} info --json {}", vxf, quoted(crafted)),
+            fmt::format("{} {} {}", binary("vdb2vxf"), quoted(crafted), quoted(dir.path("out.vxf"))),
+            fmt::format("{} {} {} --grid density", binary("vdb2vol"), quoted(crafted), quoted(dir.path("out.vol"))),
+            fmt::format("{} op copy {} -o {} --grid density --from_file {} --to other", vxf, quoted(dir.path("s.vdb")),
+                quoted(dir.path("out.vdb")), quoted(crafted)),
+            fmt::format("{} light {} --scene {} -o {}", vxf, quoted(crafted), quoted(dir.path("scene.json")), quoted(dir.path("out.vdb"))),
+            fmt::format("{} run {} --out {}", vxf, quoted(dir.path("scene.json")), quoted(dir.path("runs"))),
+            fmt::format("{} view {} --no-browser --port 0", vxf, quoted(crafted)),
+        };
+        for (const auto& command : commands) {
+            const auto r = run("timeout 60 " + command);
+            INFO(command << "\n" << r.out << r.err);
+            CHECK(r.status == 1);
+            CHECK_THAT(r.err, Catch::Contains(crafted) && Catch::Contains("not a readable OpenVDB file"));
+        }
+        CHECK_FALSE(fs::exists(dir.path("out.vdb")));
+        CHECK_FALSE(fs::exists(dir.path("out.vxf")));
+        CHECK_FALSE(fs::exists(dir.path("out.vol")));
+    }
+}

@@ -20,9 +20,14 @@ struct VoxelSetReadOptions
     /// disk) instead of throwing; their names go to @a damaged when given.
     bool acceptDamaged = false;
     std::vector<std::string>* damaged = nullptr;
+    /// Grids the file holds that are not voxel grids (point data, strings) are skipped; their
+    /// "NAME (TYPE)" go here when given.
+    std::vector<std::string>* skipped = nullptr;
 };
 
-/// Read every grid and the file metadata of the .vdb at @a path. The set's transform is
+/// Read every voxel grid and the file metadata of the .vdb at @a path, every size the file
+/// declares checked before it is used (io/src/VdbArchiveReader.h: no file makes the reader
+/// write outside its buffers or allocate more than the file can describe). The set's transform is
 /// that of the first grid with a vxf role (else the first grid); grids of other types or
 /// transforms are kept as they are. Throws vxf::Error naming the file when it is missing,
 /// not an OpenVDB file, or damaged: a grid vxf wrote carries a checksum of its data
