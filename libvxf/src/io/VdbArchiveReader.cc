@@ -1,6 +1,7 @@
 #include "VdbArchiveReader.h"
 
 #include <openvdb/io/Archive.h>
+#include <openvdb/io/Compression.h>
 #include <openvdb/io/DelayedLoadMetadata.h>
 #include <openvdb/io/GridDescriptor.h>
 #include <openvdb/io/io.h>
@@ -11,6 +12,8 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <set>
+#include <vector>
 
 namespace vxf::detail {
 
@@ -106,17 +109,31 @@ void checkMetaMap(Lookahead& ahead, const char* what)
     }
 }
 
-/// The voxel grid types vxf reads: their trees hold fixed-size values only.
-bool isVoxelGridType(const std::string& type)
+/// How a voxel grid type's tree lies in a file: every one is a Tree4<T, 5, 4, 3>, its values
+/// of valueBytes each, or halfBytes when stored as halves (0: not a real type, never halved).
+struct TreeLayout
 {
-    static const std::array<std::string, 9> types{openvdb::FloatGrid::gridType(), openvdb::DoubleGrid::gridType(),
-        openvdb::Int32Grid::gridType(), openvdb::Int64Grid::gridType(), openvdb::BoolGrid::gridType(),
-        openvdb::MaskGrid::gridType(), openvdb::Vec3SGrid::gridType(), openvdb::Vec3DGrid::gridType(),
-        openvdb::Vec3IGrid::gridType()};
-    for (const auto& t : types) {
-        if (t == type) return true;
+    std::size_t valueBytes = 0, halfBytes = 0;
+};
+
+/// The voxel grid types vxf reads, whose trees hold fixed-size values only; nullptr for others.
+const TreeLayout* voxelTreeLayout(const std::string& type)
+{
+    static const std::array<std::pair<std::string, TreeLayout>, 9> types{{
+        {openvdb::FloatGrid::gridType(), {4, 2}},
+        {openvdb::DoubleGrid::gridType(), {8, 2}},
+        {openvdb::Int32Grid::gridType(), {4, 0}},
+        {openvdb::Int64Grid::gridType(), {8, 0}},
+        {openvdb::BoolGrid::gridType(), {1, 0}},
+        {openvdb::MaskGrid::gridType(), {1, 0}}, // its tiles and inactive values are bools
+        {openvdb::Vec3SGrid::gridType(), {12, 6}},
+        {openvdb::Vec3DGrid::gridType(), {24, 6}},
+        {openvdb::Vec3IGrid::gridType(), {12, 0}},
+    }};
+    for (const auto& [name, layout] : types) {
+        if (name == type) return &layout;
     }
-    return false;
+    return nullptr;
 }
 
 /// GridDescriptor's layout, as GridDescriptor::read takes it.
@@ -156,6 +173,113 @@ void checkGridHead(Lookahead& ahead, const std::string& grid)
     (void)ahead.string("a grid's transform type");
 }
 
+/// A tree's topology as RootNode, InternalNode and LeafNode::readTopology read it (format 222
+/// on), followed through to its end before OpenVDB allocates a node of it: a node that throws
+/// while it reads is lost with everything below it (RootNode::readTopology holds it by a raw
+/// pointer), and a root child whose origin repeats replaces the first without freeing it.
+class TopologyAhead
+{
+public:
+    TopologyAhead(Lookahead& ahead, std::istream& in, const TreeLayout& layout, bool fromHalf, std::uint32_t compression)
+        : mAhead(ahead)
+        , mIn(in)
+        , mLayout(layout)
+        , mFromHalf(fromHalf)
+        , mCompression(compression)
+    {
+    }
+
+    void check()
+    {
+        (void)mAhead.value<std::int32_t>("a tree's buffer count");
+        mAhead.skip(mLayout.valueBytes, "a tree's background");
+        const auto tiles = mAhead.value<std::uint32_t>("a tree's root tile count");
+        const auto children = mAhead.value<std::uint32_t>("a tree's root child count");
+        mAhead.skip(std::uint64_t(tiles) * (3 * sizeof(std::int32_t) + mLayout.valueBytes + 1), "a tree's root tiles");
+        std::set<std::array<std::int32_t, 3>> origins;
+        for (std::uint32_t n = 0; n < children; ++n) {
+            std::array<std::int32_t, 3> origin{};
+            for (auto& c : origin) c = mAhead.value<std::int32_t>("a root child's origin");
+            for (const auto c : origin) {
+                if (c % 4096 != 0) {
+                    throw openvdb::IoError(fmt::format("a root child's origin ({}, {}, {}) is not a multiple of 4096 voxels",
+                        origin[0], origin[1], origin[2]));
+                }
+            }
+            if (!origins.insert(origin).second) {
+                throw openvdb::IoError(fmt::format("the root child at ({}, {}, {}) appears twice", origin[0], origin[1], origin[2]));
+            }
+            internalNode(5);
+        }
+    }
+
+private:
+    /// InternalNode<ChildT, log2Dim>::readTopology: child mask, value mask, the node's values,
+    /// then each child's topology; a leaf's (LeafNode<T, 3>) is its 64-byte mask.
+    void internalNode(int log2Dim)
+    {
+        const std::size_t values = std::size_t(1) << (3 * log2Dim), maskBytes = values / 8;
+        std::vector<std::uint64_t> childMask(maskBytes / 8), valueMask(maskBytes / 8);
+        readMask(childMask, "a node's child mask");
+        readMask(valueMask, "a node's value mask");
+        compressedValues(values, count(valueMask), maskBytes);
+        const std::uint64_t children = count(childMask);
+        for (std::uint64_t c = 0; c < children; ++c) {
+            if (log2Dim == 5) {
+                internalNode(4);
+            } else {
+                mAhead.skip(64, "a leaf's value mask");
+            }
+        }
+    }
+
+    void readMask(std::vector<std::uint64_t>& words, const char* what)
+    {
+        for (auto& w : words) w = mAhead.value<std::uint64_t>(what);
+    }
+
+    static std::uint64_t count(const std::vector<std::uint64_t>& words)
+    {
+        std::uint64_t n = 0;
+        for (const auto w : words) n += std::uint64_t(__builtin_popcountll(w));
+        return n;
+    }
+
+    /// io::readCompressedValues: a flag saying which inactive values and selection mask follow,
+    /// then the active values alone (mask compression) or all of them, as one chunk. The chunk
+    /// is read by the same checked reader OpenVDB will call (VdbChunkReaders.cc), into scratch.
+    void compressedValues(std::size_t values, std::uint64_t active, std::size_t maskBytes)
+    {
+        enum : std::int8_t { kOneInactive = 2, kMaskOnly = 3, kMaskOneInactive = 4, kMaskTwoInactive = 5, kAllValues = 6 };
+        const auto flag = mAhead.value<std::int8_t>("a node's value compression flag");
+        if (flag == kOneInactive || flag == kMaskOneInactive || flag == kMaskTwoInactive) {
+            mAhead.skip(mLayout.valueBytes * (flag == kMaskTwoInactive ? 2 : 1), "a node's inactive values");
+        }
+        if (flag == kMaskOnly || flag == kMaskOneInactive || flag == kMaskTwoInactive) mAhead.skip(maskBytes, "a node's selection mask");
+        const std::uint64_t count = (mCompression & openvdb::io::COMPRESS_ACTIVE_MASK) && flag != kAllValues ? active : values;
+        const bool halves = mFromHalf && mLayout.halfBytes > 0;
+        if (halves && count == 0) return; // io::HalfReader reads no chunk for no values
+        const std::size_t bytes = std::size_t(count) * (halves ? mLayout.halfBytes : mLayout.valueBytes);
+        if (mCompression & (openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ZIP)) {
+            mScratch.resize(std::max<std::size_t>(bytes, 1));
+            if (mCompression & openvdb::io::COMPRESS_BLOSC) {
+                openvdb::io::bloscFromStream(mIn, mScratch.data(), bytes);
+            } else {
+                openvdb::io::unzipFromStream(mIn, mScratch.data(), bytes);
+            }
+        } else {
+            mAhead.skip(bytes, "a node's values");
+        }
+    }
+
+    Lookahead& mAhead;
+    std::istream& mIn;
+    TreeLayout mLayout;
+    bool mFromHalf;
+    std::uint32_t mCompression;
+    std::vector<char> mScratch;
+};
+
 class CheckedArchiveReader : public openvdb::io::Archive
 {
 public:
@@ -167,8 +291,8 @@ public:
                 unsigned(openvdb::OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION), openvdb::OPENVDB_FILE_VERSION));
         }
         // What Stream does: tag the stream with the versions and compression the header gave.
-        auto streamMetadata = std::make_shared<openvdb::io::StreamMetadata>();
-        openvdb::io::setStreamMetadataPtr(in, streamMetadata, /*transfer=*/false);
+        auto fileMetadata = std::make_shared<openvdb::io::StreamMetadata>();
+        openvdb::io::setStreamMetadataPtr(in, fileMetadata, /*transfer=*/false);
         openvdb::io::setVersion(in, libraryVersion(), fileVersion());
         openvdb::io::setDataCompression(in, compression());
 
@@ -187,7 +311,8 @@ public:
         for (std::int32_t i = 0; i < count; ++i) {
             Lookahead ahead(in, fileBytes);
             const DescriptorAhead d = checkDescriptor(ahead);
-            if (!isVoxelGridType(d.type)) {
+            const TreeLayout* layout = voxelTreeLayout(d.type);
+            if (!layout) {
                 const std::uint64_t at = ahead.position();
                 if (d.endPos <= 0 || std::uint64_t(d.endPos) < at || std::uint64_t(d.endPos) > fileBytes) {
                     throw openvdb::IoError(fmt::format("grid '{}' is of type {}, not a voxel grid vxf reads, and its "
@@ -204,7 +329,7 @@ public:
             openvdb::io::GridDescriptor gd;
             openvdb::GridBase::Ptr grid = gd.read(in);
             if (!grid) throw openvdb::IoError(fmt::format("grid '{}' of type {} could not be created", d.name, d.type));
-            Archive::readGrid(grid, gd, in);
+            readGrid(in, fileBytes, gd, *grid, *layout, fileMetadata);
             // Delayed-load metadata was read as opaque bytes (initializeVdbReading); it describes
             // this file's layout, so it would be wrong in any file vxf writes.
             grid->removeMeta(openvdb::GridBase::META_FILE_DELAYED_LOAD);
@@ -214,6 +339,37 @@ public:
         }
         for (const auto& gd : descriptors) connectInstance(gd, named);
         return archive;
+    }
+
+private:
+    /// What Archive::readGrid does (OpenVDB 10's io/Archive.cc), with the tree's topology
+    /// followed to its end (TopologyAhead) between the transform and the tree.
+    void readGrid(std::istream& in, std::uint64_t fileBytes, const openvdb::io::GridDescriptor& gd, openvdb::GridBase& grid,
+        const TreeLayout& layout, openvdb::io::StreamMetadata::Ptr fileMetadata) const
+    {
+        readGridCompression(in);
+        // Per grid, a copy of the file's stream metadata, restored after.
+        auto gridMetadata = std::make_shared<openvdb::io::StreamMetadata>(*fileMetadata);
+        gridMetadata->setCompression(openvdb::io::getDataCompression(in));
+        gridMetadata->setHalfFloat(grid.saveFloatAsHalf());
+        openvdb::io::setStreamMetadataPtr(in, gridMetadata, /*transfer=*/false);
+        openvdb::io::setGridClass(in, openvdb::GRID_UNKNOWN);
+        openvdb::io::setGridBackgroundValuePtr(in, nullptr);
+        grid.readMeta(in);
+        gridMetadata->gridMetadata() = static_cast<openvdb::MetaMap&>(grid);
+        openvdb::io::setGridClass(in, grid.getGridClass());
+        grid.readTransform(in);
+        if (!gd.isInstance()) {
+            {
+                Lookahead ahead(in, fileBytes);
+                TopologyAhead(ahead, in, layout, grid.saveFloatAsHalf(), openvdb::io::getDataCompression(in)).check();
+                ahead.rewind();
+            }
+            grid.readTopology(in);
+            grid.readBuffers(in);
+        }
+        openvdb::io::setStreamMetadataPtr(in, fileMetadata, /*transfer=*/false);
+        openvdb::io::setDataCompression(in, compression());
     }
 };
 
