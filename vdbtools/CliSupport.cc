@@ -7,6 +7,8 @@
 #include <fmt/format.h>
 
 #include <atomic>
+#include <cstdlib>
+#include <new>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
@@ -75,6 +77,21 @@ extern "C" void onStopSignal(int signal)
     gSignal.store(signal);
 }
 
+/// Address space held back for the way out of an allocation that fails: under a memory limit
+/// (`ulimit -v`, a farm slot's h_vmem) the unwinding itself allocates (OpenVDB's Tree::clear in
+/// the destructors of meshToVolume's thread-local trees), and a second std::bad_alloc there,
+/// inside a destructor, ends the process in std::terminate. The first failure frees this block
+/// and throws; the unwinding then finds room, and the command reports "out of memory".
+constexpr std::size_t kUnwindReserveBytes = std::size_t(64) << 20;
+std::atomic<void*> gUnwindReserve{nullptr};
+
+void releaseUnwindReserve()
+{
+    std::free(gUnwindReserve.exchange(nullptr));
+    std::set_new_handler(nullptr);
+    throw std::bad_alloc();
+}
+
 void printError(const std::string& message)
 {
     std::string prefix = gTool + ": ";
@@ -84,6 +101,20 @@ void printError(const std::string& message)
 } // namespace
 
 const std::string& currentCommand() { return gCommand; }
+
+void addMaxMemoryOption(CLI::App& app, std::string& value)
+{
+    for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+        if (sub->get_name() == "info") continue;
+        if (!sub->get_subcommands([](CLI::App*) { return true; }).empty()) {
+            addMaxMemoryOption(*sub, value);
+            continue;
+        }
+        sub->add_option("--max-memory", value,
+            "The memory this command may use (e.g. 8G, 512M); each stage estimates its peak before it allocates and stops "
+            "with the estimate above it. Default: the memory this machine has available");
+    }
+}
 
 void warn(const std::string& message) { printError("warning: " + message); }
 
@@ -95,6 +126,8 @@ int runMain(CLI::App& app, int argc, char** argv, const std::function<void()>& r
     // Past a file size limit (ulimit -f) a write fails with EFBIG, reported as an error with
     // the previous output intact, instead of killing the process beside a half-written file.
     std::signal(SIGXFSZ, SIG_IGN);
+    gUnwindReserve.store(std::malloc(kUnwindReserveBytes)); // never touched: address space, not memory
+    std::set_new_handler(releaseUnwindReserve);
     try {
         try {
             app.parse(argc, argv);
@@ -126,7 +159,8 @@ int runMain(CLI::App& app, int argc, char** argv, const std::function<void()>& r
         printError(fmt::format("OpenVDB: {}", e.what()));
         return 1;
     } catch (const std::bad_alloc&) {
-        printError("out of memory");
+        printError("out of memory: an allocation failed beyond what the stage's estimate foresaw (lower the resolution, or "
+                   "give the process more memory)");
         return 1;
     } catch (const std::exception& e) {
         printError(e.what());

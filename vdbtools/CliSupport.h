@@ -49,6 +49,11 @@ extern const CLI::Validator ZeroOrMore;
 /// A file to write, checked before any work: its folder exists and it is not a folder itself
 /// (a missing folder was reported only after the whole computation).
 extern const CLI::Validator OutputFile;
+
+/// `--max-memory SIZE` on every subcommand of @a app that allocates (all but `info`; an
+/// operator's own subcommand under `op`), into @a value: the budget each stage checks its
+/// estimated peak against (core/MemoryBudget.h).
+void addMaxMemoryOption(CLI::App& app, std::string& value);
 /// A usage error when @a output is the file @a input (a converter would replace its own input
 /// with another format).
 void refuseOutputOverInput(const std::string& input, const std::string& output);

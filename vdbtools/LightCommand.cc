@@ -57,6 +57,7 @@ public:
         writeVoxelSet(mOutput, set, mWrite);
         if (mQuiet) return;
         std::cout << fmt::format("lit {} -> {} ({} active voxels)\n", mInput, mOutput, gridStats(*set.find("direct")).activeVoxels);
+        for (const auto& warning : report.warnings) warn(warning);
         for (const auto& light : report.lights) {
             if (light.skipped) {
                 std::cout << fmt::format("  {:<16} skipped: {}\n", light.name, light.why);

@@ -2,6 +2,7 @@
 #include "CliSupport.h"
 #include "Commands.h"
 
+#include <vxf/core/MemoryBudget.h>
 #include <vxf/core/VoxelSet.h>
 
 int main(int argc, char** argv)
@@ -23,7 +24,10 @@ int main(int argc, char** argv)
     commands.push_back(makeGraphCommand(app));
     commands.push_back(makeViewCommand(app));
     commands.push_back(makeDemoCommand(app));
+    std::string maxMemory;
+    addMaxMemoryOption(app, maxMemory);
     return runMain(app, argc, argv, [&] {
+        if (!maxMemory.empty()) vxf::setMemoryBudget(vxf::parseMemorySize(maxMemory));
         for (auto& command : commands) {
             if (command->selected()) command->run();
         }

@@ -1028,3 +1028,43 @@ TEST_CASE("every crafted .vdb that overflowed OpenVDB 10.0.1's reader is a clear
         CHECK_FALSE(fs::exists(dir.path("out.vol")));
     }
 }
+
+TEST_CASE("every command that allocates estimates its peak first: above --max-memory, a ulimit or the machine it stops at once with the estimate",
+    "[cli][memory]")
+{
+    TempDir dir;
+    const std::string vxf = binary("vxf");
+    const auto tiny = run(fmt::format("{} voxelize builtin:sphere --dim 64 -o {} --max-memory 1M", vxf, quoted(dir.path("s.vdb"))));
+    CHECK(tiny.status == 1);
+    CHECK_THAT(tiny.err, Catch::Contains("voxelize needs about") && Catch::Contains("narrow-band voxels × 56 bytes") &&
+                             Catch::Contains("more than the memory budget of 1.0 MiB (--max-memory)"));
+    CHECK_FALSE(fs::exists(dir.path("s.vdb")));
+    CHECK(run(fmt::format("{} voxelize builtin:sphere --dim 64 -o {} --max-memory 8X", vxf, quoted(dir.path("s.vdb")))).status == 2);
+
+    // An image of 32768² pixels: refused before a pixel is allocated (about 60 MB resident, against 160 GiB).
+    REQUIRE(run(fmt::format("{} voxelize builtin:sphere --dim 24 -q -o {}", vxf, quoted(dir.path("s.vdb")))).status == 0);
+    vxf::test::spit(dir.path("s.json"), R"({"objects": [{"name": "ball", "mesh": "builtin:sphere", "material": {"albedo": 0.9, "mean_free_path": 0.5}}],
+ "lights": [{"type": "point", "position": [0, -3, 2], "intensity": 10}],
+ "camera": {"position": [0, -4, 0], "look_at": [0, 0, 0], "fov": 40},
+ "render": {"width": 32, "height": 24, "samples": 1}})");
+    const auto huge = run(fmt::format("/usr/bin/time -f 'peak %M KB' {} render {} --volume {} -o {} --width 32768 --height 32768", vxf,
+        quoted(dir.path("s.json")), quoted(dir.path("s.vdb")), quoted(dir.path("big.exr"))));
+    CHECK(huge.status == 1);
+    CHECK_THAT(huge.err, Catch::Contains("render needs about") && Catch::Contains("1.07e+09 pixels × 160 bytes"));
+    const auto peak = huge.err.rfind("peak ");
+    REQUIRE(peak != std::string::npos);
+    CHECK(std::stol(huge.err.substr(peak + 5)) < 400 * 1024);
+    CHECK_FALSE(fs::exists(dir.path("big.exr")));
+
+    // Under an address-space limit the default budget is what the limit leaves: a clear error,
+    // not an allocation failing inside OpenVDB (which ended in std::terminate, SIGABRT).
+    const auto limited = run(fmt::format("bash -c 'ulimit -v 2000000 && exec {} voxelize builtin:sphere --dim 4096 -o {}'", vxf,
+        dir.path("big.vdb")));
+    CHECK(limited.status == 1);
+    CHECK_THAT(limited.err, Catch::Contains("voxelize needs about") && Catch::Contains("the memory this machine has available"));
+    // And through a whole run: the stage that would pass the budget names itself.
+    const auto whole = run(fmt::format("{} run {} --out {} --max-memory 101M", vxf, quoted(dir.path("s.json")), quoted(dir.path("out"))));
+    CHECK(whole.status == 1);
+    CHECK_THAT(whole.err, Catch::Contains("needs about") && Catch::Contains("(--max-memory)"));
+    CHECK_FALSE(fs::exists(dir.path("out/s.exr")));
+}

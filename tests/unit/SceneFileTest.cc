@@ -140,6 +140,12 @@ TEST_CASE("bad scenes are refused with the field at fault", "[pipeline][scene]")
           "/scenes/test.json: /objects/1/surface/emission: only an occluder or an emitter emits (a medium's glow is a volume light)");
     CHECK(errorOf(edited(R"("cone_softness": 5)", R"("cone_softness": 25)")) ==
           "/scenes/test.json: /lights/1/cone_softness: the soft edge (25 degrees) must fit inside half the cone (20 degrees)");
+    // A light beyond what float grids carry once multiplied by 1/r² and σs (it scattered to all
+    // zeros before), and one just inside.
+    CHECK(errorOf(edited(R"("color": [1, 0.5, 0.25], "intensity": 4)", R"("color": [1, 0.5, 0.25], "intensity": 1e37)")) ==
+          "/scenes/test.json: /lights/0/intensity: intensity × colour is 1e+37, beyond the 1e+20 vxf carries (its grids hold 32-bit "
+          "floats, up to 3.4e38, and the stages multiply a light by distances and densities); scale the scene's units instead");
+    CHECK(errorOf(edited(R"("color": [1, 0.5, 0.25], "intensity": 4)", R"("color": [1, 0.5, 0.25], "intensity": 1e20)")) == "(no error)");
     // Volume objects (a .vdb's density grid): media only, without a surface; a mesh or a volume, not both.
     CHECK(errorOf(edited(R"({"mesh": "builtin:box", "role": "occluder"})", R"({"volume": "smoke.vdb", "role": "occluder"})")) ==
           "/scenes/test.json: /objects/1/role: a volume object is a medium (its grid is the medium's density); an opaque object needs a mesh");

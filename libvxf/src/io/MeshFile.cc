@@ -270,9 +270,13 @@ TriangleMesh readMesh(const std::string& path, const MeshReadOptions& options, M
     }
     report.inputPoints = points.size();
     report.inputPolygons = polygons.size();
-    for (const auto& p : points) {
-        if (!std::isfinite(p.x()) || !std::isfinite(p.y()) || !std::isfinite(p.z())) {
-            throw Error(fmt::format("{}: a vertex has a non-finite coordinate", path));
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        const auto& p = points[i];
+        const bool finite = std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z());
+        if (!finite || std::abs(p.x()) > kMaxMeshCoordinate || std::abs(p.y()) > kMaxMeshCoordinate ||
+            std::abs(p.z()) > kMaxMeshCoordinate) {
+            throw Error(fmt::format("{}: vertex {} (counting from 0) at ({:.6g}, {:.6g}, {:.6g}) is {}", path, i, p.x(), p.y(), p.z(),
+                finite ? fmt::format("beyond ±{:.0e}, the coordinates vxf voxelizes", kMaxMeshCoordinate) : "not a finite point"));
         }
     }
     for (const auto& polygon : polygons) {

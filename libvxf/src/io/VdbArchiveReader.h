@@ -24,7 +24,8 @@ struct VdbArchive
 /// from the file: a string, a metadata value or a grid descriptor must fit in the bytes left
 /// (@a fileBytes in all), and a fixed-size metadata value must declare its own size, so that
 /// the look-ahead and OpenVDB read the same bytes. Grids of the voxel types (float, double,
-/// int32, int64, bool, mask, Vec3 of float, double and int) are read; others are skipped.
+/// int32, int64, bool, mask, Vec3 of float and double) are read; others (points, strings,
+/// Vec3 of int) are skipped.
 /// OpenVDB's delayed-load metadata (for reading a file piecewise, which vxf never does; its
 /// reader sizes buffers from counts it does not check) is read as opaque bytes and dropped.
 /// Files of format versions 222 (OpenVDB 1.0) to 224 (every later OpenVDB) are read.

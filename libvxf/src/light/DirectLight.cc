@@ -1,6 +1,8 @@
 #include <vxf/light/DirectLight.h>
 
 #include <vxf/core/GridRoles.h>
+#include <vxf/core/GridStats.h>
+#include <vxf/core/MemoryBudget.h>
 #include <vxf/light/VolumeEmission.h>
 #include <vxf/transport/Phase.h>
 
@@ -11,6 +13,7 @@
 #include <openvdb/tools/Morphology.h>
 #include <openvdb/tree/LeafManager.h>
 
+#include <fmt/format.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
@@ -428,7 +431,21 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
     const DirectLightOptions& options, Interrupter* interrupter)
 {
     InterruptStep step(interrupter, "lighting");
+    requireMemory("light", stageMemory(kStageFixedBytes, double(medium.density().activeVoxelCount()), kLightBytesPerVoxel));
     DirectLightReport report;
+    {
+        // A medium of zero (or negative) density absorbs, scatters and glows nothing: a volume
+        // object reading the wrong grid, or a grid its writer left empty, renders black.
+        const auto& density = medium.density();
+        const ValueRange range = valueRange(density);
+        const double highest = range.channels > 0 ? range.max[0] : 0.0;
+        if (!(highest > 0.0)) {
+            report.warnings.push_back(fmt::format("the medium's density ('{}', {} active voxels) has no positive value{}: nothing "
+                                                  "absorbs, scatters or glows, and the image shows surfaces only",
+                density.getName(), density.activeVoxelCount(),
+                density.activeVoxelCount() > 0 ? fmt::format(" (largest {:.4g})", highest) : std::string()));
+        }
+    }
     std::vector<LightSampler> active;
     std::vector<int> activeIndex; // per report entry: its index in `active`, or -1
     std::vector<VolumeEmission> emission; // volume lights

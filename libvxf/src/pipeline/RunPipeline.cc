@@ -225,7 +225,8 @@ PipelineReport runPipelineOnce(const Scene& scene, const std::string& outDir, In
             DirectLightOptions options;
             options.march.step = s.step;
             options.similarity = !carriesMoment;
-            lightScene(set, scene, options, interrupter);
+            const DirectLightReport lit = lightScene(set, scene, options, interrupter);
+            report.warnings.insert(report.warnings.end(), lit.warnings.begin(), lit.warnings.end());
             set.setProvenance("light", lightInputs.dump());
             writeVoxelSet(lightFile.string(), set);
         });
@@ -299,7 +300,7 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
     for (int attempt = 0;; ++attempt) {
         try {
             PipelineReport report = runPipelineOnce(scene, outDir, interrupter);
-            report.warnings = std::move(warnings);
+            report.warnings.insert(report.warnings.begin(), warnings.begin(), warnings.end());
             return report;
         } catch (const UnreadableCacheEntry& stale) {
             if (attempt >= 3) throw Error(stale.warning);

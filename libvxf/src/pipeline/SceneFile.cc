@@ -111,6 +111,20 @@ public:
         return m;
     }
 
+    /// The light's strength must leave room in 32-bit floats for what the stages multiply it
+    /// by (1/r² near a point light, σs, the passes' sums): a light of 1e37 scattered to all
+    /// zeros (overflowing to infinity, then dropped as non-finite) without a word.
+    void checkPower(const Light& l, const std::string& where) const
+    {
+        const double power = std::abs(l.intensity) * std::max({l.color[0], l.color[1], l.color[2]});
+        if (!(power <= kMaxLightPower)) {
+            fail(where + "/intensity", fmt::format("intensity × colour is {:.3g}, beyond the {:.0e} vxf carries (its grids hold "
+                                                   "32-bit floats, up to 3.4e38, and the stages multiply a light by distances and "
+                                                   "densities); scale the scene's units instead",
+                                           power, kMaxLightPower));
+        }
+    }
+
     Light light(const json& j, const std::string& where) const
     {
         static const std::map<std::string, Light::Type> types = {{"point", Light::Type::Point},
@@ -121,6 +135,7 @@ public:
         l.name = j.value("name", fmt::format("{}{}", j["type"].get<std::string>(), where.substr(where.rfind('/') + 1)));
         if (j.contains("color")) l.color = rgb(j["color"]);
         l.intensity = j.value("intensity", 1.0);
+        checkPower(l, where);
         const std::string falloff = j.value("falloff", std::string("inverse_square"));
         l.falloff = falloff == "linear" ? Light::Falloff::Linear
                     : falloff == "none" ? Light::Falloff::None
@@ -157,6 +172,7 @@ public:
         l.grid = j["grid"].get<std::string>();
         if (j.contains("color")) l.color = rgb(j["color"]);
         l.intensity = j.value("intensity", 1.0);
+        checkPower(l, "/objects/" + object.name + "/emission");
         l.gridToWorld = object.objectToWorld;
         return l;
     }

@@ -2,6 +2,7 @@
 
 #include <vxf/core/GridLookup.h>
 #include <vxf/core/GridRoles.h>
+#include <vxf/core/MemoryBudget.h>
 #include <vxf/core/Hash.h>
 #include <vxf/light/DirectLight.h>
 #include <vxf/light/InteriorField.h>
@@ -850,6 +851,8 @@ RenderedImage render(const VoxelSet& set, const Medium& medium, const Scene& sce
     if (options.width < 1 || options.height < 1 || options.samples < 1) {
         throw UsageError(fmt::format("image size {}x{} with {} samples per pixel is empty", options.width, options.height, options.samples));
     }
+    requireMemory("render", stageMemory(kStageFixedBytes, double(medium.density().activeVoxelCount()), kRenderBytesPerVoxel,
+                                double(options.width) * double(options.height), kRenderBytesPerPixel));
     const RenderContext context(set, medium, scene, options, meshes);
 
     RenderedImage image;

@@ -1,6 +1,7 @@
 #include <vxf/scatter/Scatter.h>
 
 #include <vxf/core/GridRoles.h>
+#include <vxf/core/MemoryBudget.h>
 #include <vxf/transport/Phase.h>
 
 #include <vxf/scatter/AdaptiveBand.h>
@@ -233,6 +234,7 @@ std::vector<openvdb::Vec3d> cycleStep(const std::vector<std::vector<openvdb::Vec
 
 ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptions& options, Interrupter* interrupter)
 {
+    requireMemory("scatter", stageMemory(kStageFixedBytes, double(transport.density().activeVoxelCount()), kScatterBytesPerVoxel));
     ScatterReport report;
     const bool solveWhole = options.accelerate && options.fromPass == 0 && !options.keepPasses && options.finePasses == 0;
     const bool sweeps = options.pass.kernel == ScatterKernel::Sweep;

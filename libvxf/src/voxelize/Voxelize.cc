@@ -1,6 +1,8 @@
 #include <vxf/voxelize/Voxelize.h>
 
 #include <vxf/core/GridRoles.h>
+#include <vxf/core/GridStats.h>
+#include <vxf/core/MemoryBudget.h>
 
 #include <openvdb/tools/LevelSetUtil.h>
 #include <openvdb/tools/MeshToVolume.h>
@@ -89,14 +91,15 @@ VoxelSet voxelize(const TriangleMesh& mesh, const VoxelizeOptions& options, Inte
         }
         area += 0.5 * (mesh.points[t[1]] - mesh.points[t[0]]).cross(mesh.points[t[2]] - mesh.points[t[0]]).length();
     }
-    // What meshToVolume will allocate, before it does: the surface in voxels times the band's width.
+    // What meshToVolume will allocate, before it does: the surface in voxels times the band's
+    // width, each voxel about kVoxelizeBytesPerBandVoxel at its peak.
     const double bandVoxels = area / (voxelSize * voxelSize) * 2.0 * double(options.bandWidth);
-    if (!(bandVoxels <= kMaxBandVoxels)) {
-        throw UsageError(fmt::format("voxel size {:.4g} with a band of {} voxels would make about {:.2g} narrow-band voxels "
-                                     "(the mesh's area {:.4g} is {:.3g} voxels), more than the {:.0e} vxf allows (about 12 GB); "
-                                     "use a smaller dim or a larger voxel size",
-            voxelSize, options.bandWidth, bandVoxels, area, area / (voxelSize * voxelSize), kMaxBandVoxels));
-    }
+    MemoryEstimate estimate = stageMemory(kStageFixedBytes, bandVoxels, kVoxelizeBytesPerBandVoxel);
+    estimate.how = fmt::format("the mesh's area {:.4g} is {:.3g} voxels of size {:.4g}, times a band of 2 × {} voxels: {:.3g} "
+                               "narrow-band voxels × {:.0f} bytes + {}",
+        area, area / (voxelSize * voxelSize), voxelSize, options.bandWidth, bandVoxels, kVoxelizeBytesPerBandVoxel,
+        formatBytes(std::uint64_t(kStageFixedBytes)));
+    requireMemory("voxelize", estimate);
 
     // Points relative to the shifted origin, rounded to float and mapped to index space as
     // tools::meshToLevelSet does (so a mesh near the origin gives exactly its voxels).

@@ -59,6 +59,11 @@ struct SceneObject
     SurfaceShading surface;           ///< diffuse 0.5 by default for occluders, 0 for media and emitters
 };
 
+/// The strongest light a scene may hold (intensity × its largest colour channel, in the light's
+/// own units): 18 orders of magnitude below float's 3.4e38, for what the stages multiply a light
+/// by (1/r² near a point light, σs, the passes' sums).
+inline constexpr double kMaxLightPower = 1e20;
+
 struct Light
 {
     enum class Type { Point, Spot, Directional, Area, Volume, Environment };

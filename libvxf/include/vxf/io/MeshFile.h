@@ -11,6 +11,11 @@
 
 namespace vxf {
 
+/// The largest vertex coordinate readMesh accepts (world units): voxelizing runs in float index
+/// space, where a mesh reaching past this has lost every digit of its shape (and its area in
+/// voxels overflows).
+inline constexpr double kMaxMeshCoordinate = 1e15;
+
 struct MeshReadOptions
 {
     /// Close each hole (border loop) with a flat triangulation so the interior is defined.

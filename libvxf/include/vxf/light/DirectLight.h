@@ -60,6 +60,9 @@ struct DirectLightReport
         openvdb::Vec3d fluenceSum{0.0}; ///< Σ over active voxels of its φ0 (energy check)
     };
     std::vector<PerLight> lights;
+    /// What the user should know of the medium (a density with no positive value: the image
+    /// will show surfaces only).
+    std::vector<std::string> warnings;
 };
 
 /// T·V for one light sample seen from world point @a xWorld: the medium's transmittance along
@@ -83,6 +86,11 @@ openvdb::Vec3d sampleTransmittance(const LightSample& sample, Medium::Sampler& s
 openvdb::Vec3d lightFluence(const LightSampler& light, Medium::Sampler& sampler, const Medium& medium,
     const openvdb::Coord& voxel, const MarchOptions& options, const RayScene* occluders = nullptr,
     openvdb::Vec3d* flux = nullptr);
+
+/// The light stage's peak per active voxel of the medium's density (tiles' voxels counted):
+/// 773 MiB for the bunny's 3.67M at dim 256 (docs/performance.md), less the fixed part,
+/// rounded up. computeDirectLight checks it against the memory budget before it allocates.
+inline constexpr double kLightBytesPerVoxel = 200.0;
 
 /// The light stage. Adds to @a set:
 /// - `direct` (Vec3f): φ0 = Σ lights, at every active voxel of `density` (active tiles are

@@ -23,7 +23,9 @@ struct PipelineReport
     std::vector<StageRecord> stages;
     std::string image, preview; ///< written image files ("" when no image was asked for)
     std::string volume;         ///< the last voxel set of the chain (in the cache)
-    std::vector<std::string> warnings; ///< cache entries that could not be read, removed and recomputed
+    /// Cache entries that could not be read (removed and recomputed), and the light stage's
+    /// warnings when it ran (a medium with no positive density).
+    std::vector<std::string> warnings;
 };
 
 /// Run @a scene's pipeline into @a outDir. Each stage's output is cached in

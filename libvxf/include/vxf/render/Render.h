@@ -52,6 +52,13 @@ struct RenderMeshes
     const RayScene* media = nullptr;     ///< the media only: where camera and shadow rays cross the surface (may be null)
 };
 
+/// The render stage's peak per active voxel of the medium's density and per pixel (its layers,
+/// sample tables and the EXR written): 1,322 MiB at dim 256 and 1280x720, 367 MiB at dim 128
+/// (docs/performance.md), less the fixed part, rounded up. render checks them against the
+/// memory budget before it allocates (a 32768² image is refused at once).
+inline constexpr double kRenderBytesPerVoxel = 300.0;
+inline constexpr double kRenderBytesPerPixel = 160.0;
+
 /// Render the voxel set @a set with @a scene's camera, lights and object shading.
 /// Camera rays hit the scene's meshes through Embree (@a meshes.visible), or with no meshes
 /// the `surface` level set (OpenVDB's LevelSetRayIntersector, so a .vdb alone renders; its

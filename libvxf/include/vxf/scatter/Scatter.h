@@ -83,6 +83,11 @@ ScatterOptions scatterOptionsFrom(const SceneSettings& settings);
 /// Σ over active values of a Vec3f grid, active tiles weighted by their voxel count.
 openvdb::Vec3d gridEnergy(const openvdb::Vec3SGrid& grid);
 
+/// The scatter stage's peak per active voxel of the medium's density: 976 MiB for the bunny's
+/// 3.67M at dim 256 solved whole by accelerated sweeps (docs/performance.md), less the fixed
+/// part, rounded up. scatter checks it against the memory budget before it allocates.
+inline constexpr double kScatterBytesPerVoxel = 260.0;
+
 /// Run scattering passes on @a set: J_k = σs·φ_k/(4π) feeds pass k+1 (J_0 is `scatter_source`,
 /// read from the set, so an artist may have edited it). @a medium is the transport's (Medium):
 /// with a forward phase (material().phaseG = g* ≠ 0) and a source lit with its moment

@@ -17,9 +17,9 @@ struct VoxelizeOptions
     openvdb::math::Transform::ConstPtr lattice;
 };
 
-/// The most narrow-band voxels voxelize makes (estimated before anything is allocated, see
-/// voxelize): meshToVolume holds about 12 bytes per band voxel at its peak, so about 12 GB.
-inline constexpr double kMaxBandVoxels = 1e9;
+/// meshToVolume's peak per narrow-band voxel (822 MB for the bunny's 14.9M at dim 1024,
+/// issue 59), what voxelize checks against the memory budget before it allocates.
+inline constexpr double kVoxelizeBytesPerBandVoxel = 56.0;
 /// The smallest voxel size (world units): OpenVDB's transforms refuse a scale whose cube is
 /// below 3e-15.
 inline constexpr double kMinVoxelSize = 1.5e-5;
@@ -42,8 +42,9 @@ double resolveVoxelSize(const openvdb::BBoxd& bounds, const VoxelizeOptions& opt
 /// trilinear lookups cross ½ there), inactive 0 outside. The index space is voxelLattice() of the
 /// mesh's bounds, or options.lattice.
 /// Before allocating, the band's voxels are estimated as the surface's area in voxels times the
-/// band's full width (2·bandWidth; the interior is tiles): above kMaxBandVoxels, or a voxel size
-/// below kMinVoxelSize, is a vxf::UsageError naming the numbers, not an allocation that fails.
+/// band's full width (2·bandWidth; the interior is tiles): a peak (kVoxelizeBytesPerBandVoxel
+/// each) above the memory budget (core/MemoryBudget.h) is a vxf::Error naming the numbers, a
+/// voxel size below kMinVoxelSize a vxf::UsageError, not an allocation that fails.
 /// Results do not depend on the number of threads. Throws vxf::UsageError for bad options,
 /// vxf::Error for an empty mesh, vxf::Interrupted when cancelled.
 VoxelSet voxelize(const TriangleMesh& mesh, const VoxelizeOptions& options, Interrupter* interrupter = nullptr);

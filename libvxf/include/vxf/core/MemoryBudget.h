@@ -1,0 +1,42 @@
+// vxf — the memory a command may use, and each stage's estimate of its peak against it.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+namespace vxf {
+
+/// The bytes this machine can give a process now: /proc/meminfo's MemAvailable, or less where
+/// the process's cgroup (v2 memory.max less memory.current) or its address-space limit
+/// (RLIMIT_AS, `ulimit -v`, less what it has mapped) leaves less; 0 if none can be read.
+std::uint64_t availableMemory();
+
+/// "8G", "512M", "1.5T", "64K" (binary units: G = 2^30 bytes; a trailing "B" or "iB" is
+/// accepted) or a plain number of bytes. Throws vxf::UsageError naming @a text.
+std::uint64_t parseMemorySize(const std::string& text);
+
+/// The budget every stage checks its estimated peak against (`--max-memory`). Until set (or
+/// after setMemoryBudget(0)), the memory available when first asked (availableMemory();
+/// unbounded if that is unknown).
+void setMemoryBudget(std::uint64_t bytes);
+std::uint64_t memoryBudget();
+
+/// What a stage holds whatever its size: the process, its libraries and thread pools, small
+/// tables (about 60 MiB measured at dim 32; rounded up).
+inline constexpr double kStageFixedBytes = 100.0 * 1024 * 1024;
+
+/// A stage's peak estimate: a fixed part (the process, libraries, small tables) plus what it
+/// holds per voxel and per pixel, measured on the bunny (docs/performance.md, bench/pipeline).
+struct MemoryEstimate
+{
+    double bytes = 0.0;
+    std::string how; ///< what the estimate counts, for the message
+};
+MemoryEstimate stageMemory(double fixedBytes, double voxels, double bytesPerVoxel, double pixels = 0.0,
+    double bytesPerPixel = 0.0);
+
+/// Throws vxf::Error when @a estimate passes the budget, before the stage allocates:
+/// "STAGE needs about 9.1 GiB at its peak (…), more than the memory budget of 8 GiB (…)".
+void requireMemory(const std::string& stage, const MemoryEstimate& estimate);
+
+} // namespace vxf
