@@ -81,8 +81,10 @@ extern "C" void onStopSignal(int signal)
 /// (`ulimit -v`, a farm slot's h_vmem) the unwinding itself allocates (OpenVDB's Tree::clear in
 /// the destructors of meshToVolume's thread-local trees), and a second std::bad_alloc there,
 /// inside a destructor, ends the process in std::terminate. The first failure frees this block
-/// and throws; the unwinding then finds room, and the command reports "out of memory".
-constexpr std::size_t kUnwindReserveBytes = std::size_t(64) << 20;
+/// and throws; the unwinding then finds room, and the command reports "out of memory" (the
+/// sphere at dim 8192 under `ulimit -v 3000000`: 64 MiB was not enough, the other threads
+/// still voxelizing took it; 512 MiB is).
+constexpr std::size_t kUnwindReserveBytes = std::size_t(512) << 20;
 std::atomic<void*> gUnwindReserve{nullptr};
 
 void releaseUnwindReserve()

@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cstring>
 #include <cmath>
 #include <filesystem>
 
@@ -1062,9 +1063,82 @@ TEST_CASE("every command that allocates estimates its peak first: above --max-me
         dir.path("big.vdb")));
     CHECK(limited.status == 1);
     CHECK_THAT(limited.err, Catch::Contains("voxelize needs about") && Catch::Contains("the memory this machine has available"));
+    // Past the estimate (a budget raised above the limit): the allocation that fails inside
+    // OpenVDB's meshToVolume is a clear error, not std::terminate from its unwinding (SIGABRT).
+    const auto beyond = run(fmt::format("bash -c 'ulimit -v 1500000 && exec {} voxelize builtin:sphere --dim 4096 -o {} --max-memory 100G'",
+        vxf, dir.path("big.vdb")));
+    CHECK(beyond.status == 1);
+    CHECK_THAT(beyond.err, Catch::Contains("out of memory"));
+    CHECK_FALSE(fs::exists(dir.path("big.vdb")));
     // And through a whole run: the stage that would pass the budget names itself.
     const auto whole = run(fmt::format("{} run {} --out {} --max-memory 101M", vxf, quoted(dir.path("s.json")), quoted(dir.path("out"))));
     CHECK(whole.status == 1);
     CHECK_THAT(whole.err, Catch::Contains("needs about") && Catch::Contains("(--max-memory)"));
     CHECK_FALSE(fs::exists(dir.path("out/s.exr")));
+}
+
+TEST_CASE("no stage output goes negative on its own: the candle through both kernels and both render modes", "[cli][run][numbers]")
+{
+    // Issue 59 saw scatter.B down to -0.00092 on the demo candle with no edit; every grid and
+    // every image layer (but normals) of the unedited pipeline must stay at or above zero.
+    TempDir dir;
+    std::string scene = slurp(source("examples/candle.json"));
+    const auto replace = [&](const std::string& from, const std::string& to) {
+        const auto at = scene.find(from);
+        REQUIRE(at != std::string::npos);
+        scene.replace(at, from.size(), to);
+    };
+    replace(R"("width": 640, "height": 360, "samples": 4)", R"("width": 160, "height": 90, "samples": 2)");
+    for (const char* kernel : {"sweep", "gather"}) {
+        for (const char* mode : {"view", "gather"}) {
+            CAPTURE(kernel, mode);
+            std::string variant = scene;
+            variant.replace(variant.find(R"("kernel": "sweep")"), std::strlen(R"("kernel": "sweep")"), fmt::format(R"("kernel": "{}")", kernel));
+            variant.replace(variant.find(R"("mode": "view")"), std::strlen(R"("mode": "view")"), fmt::format(R"("mode": "{}")", mode));
+            vxf::test::spit(dir.path("candle.json"), variant);
+            const auto r = run(fmt::format("{} run {} --out {}", binary("vxf"), quoted(dir.path("candle.json")), quoted(dir.path("out"))));
+            INFO(r.out << r.err);
+            REQUIRE(r.status == 0);
+            const vxf::VoxelSet set = vxf::readVoxelSet(cachedStage(dir.path("out/cache"), "scatter-"));
+            for (const char* name : {"direct", "scatter_source", "scatter", "illumination"}) {
+                const auto grid = set.get<openvdb::Vec3SGrid>(name);
+                REQUIRE(grid);
+                float lowest = 0.0f;
+                for (auto it = grid->cbeginValueOn(); it; ++it) lowest = std::min({lowest, (*it)[0], (*it)[1], (*it)[2]});
+                CAPTURE(name);
+                CHECK(lowest >= 0.0f);
+            }
+            Imf::InputFile exr(dir.path("out/candle.exr").c_str());
+            const Imath::Box2i window = exr.header().dataWindow();
+            const int width = window.max.x - window.min.x + 1, height = window.max.y - window.min.y + 1;
+            for (auto c = exr.header().channels().begin(); c != exr.header().channels().end(); ++c) {
+                const std::string channel = c.name();
+                if (channel.rfind("normal.", 0) == 0) continue;
+                std::vector<float> values(std::size_t(width) * std::size_t(height));
+                Imf::FrameBuffer frame;
+                frame.insert(channel, Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(values.data()), sizeof(float), sizeof(float) * width));
+                exr.setFrameBuffer(frame);
+                exr.readPixels(window.min.y, window.max.y);
+                CAPTURE(channel);
+                CHECK(*std::min_element(values.begin(), values.end()) >= 0.0f);
+            }
+        }
+    }
+}
+
+TEST_CASE("a density with no positive value is lit with a warning, never silently black", "[cli][light][numbers]")
+{
+    TempDir dir;
+    const std::string vxf = binary("vxf");
+    REQUIRE(run(fmt::format("{} voxelize builtin:sphere --dim 16 -q -o {}", vxf, quoted(dir.path("s.vdb")))).status == 0);
+    REQUIRE(run(fmt::format("{} op mul {} -o {} --grid density --value 0", vxf, quoted(dir.path("s.vdb")), quoted(dir.path("z.vdb")))).status == 0);
+    vxf::test::spit(dir.path("s.json"), R"({"objects": [{"name": "ball", "mesh": "builtin:sphere", "material": {"albedo": 0.9, "mean_free_path": 0.5}}],
+ "lights": [{"type": "point", "position": [0, -3, 2], "intensity": 10}],
+ "camera": {"position": [0, -4, 0], "look_at": [0, 0, 0], "fov": 40}})");
+    const auto empty = run(fmt::format("{} light {} --scene {} -o {}", vxf, quoted(dir.path("z.vdb")), quoted(dir.path("s.json")), quoted(dir.path("l.vdb"))));
+    CHECK(empty.status == 0);
+    CHECK_THAT(empty.err, Catch::Contains("warning: the medium's density ('density', ") && Catch::Contains("has no positive value (largest 0)"));
+    const auto lit = run(fmt::format("{} light {} --scene {} -o {}", vxf, quoted(dir.path("s.vdb")), quoted(dir.path("s.json")), quoted(dir.path("l.vdb"))));
+    CHECK(lit.status == 0);
+    CHECK(lit.err.find("no positive value") == std::string::npos);
 }
