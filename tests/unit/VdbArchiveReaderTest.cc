@@ -136,6 +136,7 @@ TEST_CASE("a size in a .vdb's metadata that the file cannot hold, or a fixed-siz
 
 TEST_CASE("a .vdb with point data beside its volumes (as Houdini writes) reads the volumes and names the points it skipped", "[io][vdb]")
 {
+    openvdb::initialize(); // the point attribute types (readVoxelSet initializes too, but later)
     vxf::test::TempDir dir;
     const std::vector<openvdb::Vec3R> positions{{0, 0, 0}, {0.5, 0.25, 1}, {1, 1, 1}};
     const openvdb::points::PointAttributeVector<openvdb::Vec3R> wrapper(positions);

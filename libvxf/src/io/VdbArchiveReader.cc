@@ -192,7 +192,10 @@ public:
 
     void check()
     {
-        (void)mAhead.value<std::int32_t>("a tree's buffer count");
+        // Every OpenVDB since 1.0 writes one buffer; TreeBase::readTopology warns on stderr at
+        // any other count and reads on as if it were one.
+        const auto buffers = mAhead.value<std::int32_t>("a tree's buffer count");
+        if (buffers != 1) throw openvdb::IoError(fmt::format("a tree declares {} buffers where OpenVDB writes 1", buffers));
         mAhead.skip(mLayout.valueBytes, "a tree's background");
         const auto tiles = mAhead.value<std::uint32_t>("a tree's root tile count");
         const auto children = mAhead.value<std::uint32_t>("a tree's root child count");
