@@ -28,8 +28,7 @@ int main(int argc, char** argv)
         if (!g) throw UsageError(fmt::format("{}: no grid named '{}'", input, grid));
         const MitsubaVolumeInfo info = writeMitsubaVolume(output, *g, pad);
         std::cout << fmt::format("{} '{}' -> {}: {}x{}x{}, {} channel(s), bounds ({:.6g}, {:.6g}, {:.6g}) - ({:.6g}, {:.6g}, {:.6g})\n",
-            input, grid, output, info.resolution.x(), info.resolution.y(), info.resolution.z(), info.channels,
-            info.bounds.min().x(), info.bounds.min().y(), info.bounds.min().z(), info.bounds.max().x(), info.bounds.max().y(),
-            info.bounds.max().z());
+            input, grid, output, info.resolution.x(), info.resolution.y(), info.resolution.z(), info.channels, info.bounds.min().x(),
+            info.bounds.min().y(), info.bounds.min().z(), info.bounds.max().x(), info.bounds.max().y(), info.bounds.max().z());
     });
 }

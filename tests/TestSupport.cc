@@ -83,7 +83,7 @@ std::string source(const std::string& relative) { return std::string(VXF_SOURCE_
 
 namespace {
 
-template<typename GridT>
+template <typename GridT>
 bool identicalTyped(const GridT& a, const GridT& b, std::string* why)
 {
     const auto say = [&](const std::string& text) {

@@ -152,7 +152,10 @@ int runMain(CLI::App& app, int argc, char** argv, const std::function<void()>& r
         return 2;
     } catch (const Interrupted&) {
         const int signal = gSignal.load();
-        printError(fmt::format("interrupted ({}); no output written", signal == SIGTERM ? "SIGTERM" : signal == SIGHUP ? "SIGHUP" : "SIGINT"));
+        printError(fmt::format("interrupted ({}); no output written",
+            signal == SIGTERM      ? "SIGTERM"
+                : signal == SIGHUP ? "SIGHUP"
+                                   : "SIGINT"));
         return 128 + signal;
     } catch (const Error& e) {
         printError(e.what());
@@ -170,7 +173,10 @@ int runMain(CLI::App& app, int argc, char** argv, const std::function<void()>& r
     }
 }
 
-TerminalProgress::TerminalProgress() : mEnabled(::isatty(STDERR_FILENO) == 1 && !std::getenv("CI")) {}
+TerminalProgress::TerminalProgress()
+    : mEnabled(::isatty(STDERR_FILENO) == 1 && !std::getenv("CI"))
+{
+}
 
 void TerminalProgress::start(const char* name)
 {

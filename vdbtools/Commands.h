@@ -45,7 +45,7 @@ namespace vxf::cli {
 /// What `vxf voxelize` does, shared with `vxf demo`.
 struct VoxelizeRequest
 {
-    std::string mesh;   ///< path, or a built-in name such as builtin:candle
+    std::string mesh; ///< path, or a built-in name such as builtin:candle
     std::string output; ///< .vdb path
     VoxelizeOptions voxelize;
     MeshReadOptions meshRead;

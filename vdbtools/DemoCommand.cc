@@ -43,8 +43,7 @@ public:
         const std::string volume = (std::filesystem::path(mOut) / "demo.vdb").string();
         std::filesystem::copy_file(report.volume, volume, std::filesystem::copy_options::overwrite_existing);
 
-        std::cout << fmt::format("demo: a wax candle lit by its flame (embedded scene, {} voxels along its height)\n",
-            scene.settings.dim);
+        std::cout << fmt::format("demo: a wax candle lit by its flame (embedded scene, {} voxels along its height)\n", scene.settings.dim);
         for (const auto& stage : report.stages) {
             std::cout << fmt::format("  {:<9} {:<7} {:>7.2f} s  {}\n", stage.stage, stage.action, stage.seconds, stage.why);
         }

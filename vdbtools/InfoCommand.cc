@@ -80,8 +80,9 @@ public:
         mApp = parent.add_subcommand("info", "List the grids of .vdb files with their vxf roles, stage and provenance.");
         mApp->add_option("files", mFiles, ".vdb files")->required();
         mApp->add_flag("--json", mJson, "Print JSON instead of a table");
-        mApp->add_flag("--force", mForce, "List a file whose grids no longer match the checksums vxf wrote with them, with a warning "
-                                          "naming the damaged grids, instead of refusing it");
+        mApp->add_flag("--force", mForce,
+            "List a file whose grids no longer match the checksums vxf wrote with them, with a warning "
+            "naming the damaged grids, instead of refusing it");
     }
 
     void run() override
@@ -98,20 +99,19 @@ public:
                 continue;
             }
             const std::string stage = set.stage();
-            std::cout << fmt::format("{}: {} grids{}\n", path, set.grids().size(),
-                stage.empty() ? " (no vxf provenance)" : fmt::format(", stage '{}'", stage));
+            std::cout << fmt::format(
+                "{}: {} grids{}\n", path, set.grids().size(), stage.empty() ? " (no vxf provenance)" : fmt::format(", stage '{}'", stage));
             for (const auto& [key, value] : info["metadata"].items()) {
                 std::cout << fmt::format("  {:<14} {}\n", key, value.is_string() ? value.get<std::string>() : value.dump());
             }
-            std::cout << fmt::format("  {:<16} {:<6} {:<6} {:<11} {:<15} {:>12} {:>8} {:>6}  {:<34} {:>10}  {:<36} {}\n", "grid",
-                "type", "stored", "class", "role", "active", "leaves", "tiles", "active bbox (index)", "memory",
-                "min / mean / max (active)", "units");
+            std::cout << fmt::format("  {:<16} {:<6} {:<6} {:<11} {:<15} {:>12} {:>8} {:>6}  {:<34} {:>10}  {:<36} {}\n", "grid", "type",
+                "stored", "class", "role", "active", "leaves", "tiles", "active bbox (index)", "memory", "min / mean / max (active)",
+                "units");
             for (const auto& g : info["grids"]) {
                 std::string bbox = "empty";
                 if (g.contains("bbox_min")) {
                     bbox = fmt::format("[{},{},{}]..[{},{},{}]", g["bbox_min"][0].get<int>(), g["bbox_min"][1].get<int>(),
-                        g["bbox_min"][2].get<int>(), g["bbox_max"][0].get<int>(), g["bbox_max"][1].get<int>(),
-                        g["bbox_max"][2].get<int>());
+                        g["bbox_min"][2].get<int>(), g["bbox_max"][0].get<int>(), g["bbox_max"][1].get<int>(), g["bbox_max"][2].get<int>());
                 }
                 const std::string role = g["role"].get<std::string>();
                 std::string range = "-";
@@ -122,8 +122,9 @@ public:
                         const double a = v[0].get<double>(), b = v[1].get<double>(), c = v[2].get<double>();
                         return largest ? std::max({a, b, c}) : (a + b + c) / 3.0;
                     };
-                    range = fmt::format("{:.4g} / {:.4g} / {:.4g}", g["min"].is_number() ? g["min"].get<double>()
-                        : std::min({g["min"][0].get<double>(), g["min"][1].get<double>(), g["min"][2].get<double>()}),
+                    range = fmt::format("{:.4g} / {:.4g} / {:.4g}",
+                        g["min"].is_number() ? g["min"].get<double>()
+                                             : std::min({g["min"][0].get<double>(), g["min"][1].get<double>(), g["min"][2].get<double>()}),
                         grey(g["mean"], false), grey(g["max"], true));
                 }
                 if (g.contains("non_finite_voxels")) range += fmt::format(" ({} non-finite)", g["non_finite_voxels"].get<std::uint64_t>());
@@ -131,12 +132,11 @@ public:
                     g["name"].get<std::string>(), g["value_type"].get<std::string>(), g["storage"].get<std::string>(),
                     g["class"].get<std::string>(), role.empty() ? "(passed through)" : role, g["active_voxels"].get<std::uint64_t>(),
                     g["leaf_nodes"].get<std::uint64_t>(), g["active_tiles"].get<std::uint64_t>(), bbox,
-                    formatBytes(g["memory_bytes"].get<std::uint64_t>()), range,
-                    g["metadata"].value(kUnitsMetaKey, std::string()),
+                    formatBytes(g["memory_bytes"].get<std::uint64_t>()), range, g["metadata"].value(kUnitsMetaKey, std::string()),
                     g["shares_transform"].get<bool>() ? "" : "  (own transform)");
             }
-            std::cout << fmt::format("  voxel size {:.6g}, transform {}\n", set.transform().voxelSize()[0],
-                set.transform().baseMap()->type());
+            std::cout << fmt::format(
+                "  voxel size {:.6g}, transform {}\n", set.transform().voxelSize()[0], set.transform().baseMap()->type());
         }
     }
 

@@ -28,8 +28,8 @@ public:
         mApp->add_option("input", mInput, "Voxel set with `density` (from vxf voxelize)")->required();
         mApp->add_option("--scene", mScene, "Scene file (schemas/scene.schema.json): material and lights")->required();
         mApp->add_option("-o,--output", mOutput, "Output .vdb (all input grids + direct + scatter_source)")->required()->check(OutputFile);
-        mStep = mApp->add_option("--step", mOptions.march.step,
-                        "March step in voxels (default: the scene's scatter.step, 1, as vxf run lights it)")
+        mStep = mApp->add_option(
+                        "--step", mOptions.march.step, "March step in voxels (default: the scene's scatter.step, 1, as vxf run lights it)")
                     ->check(CLI::Range(0.01, 64.0));
         mApp->add_option("--cutoff", mOptions.march.cutoff, "Stop marching below this transmittance (default 1e-4)")
             ->check(CLI::Range(0.0, 0.5));
@@ -64,8 +64,8 @@ public:
             } else if (!light.why.empty()) {
                 std::cout << fmt::format("  {:<16} {}\n", light.name, light.why);
             } else {
-                std::cout << fmt::format("  {:<16} sum of fluence over voxels ({:.4g}, {:.4g}, {:.4g})\n", light.name,
-                    light.fluenceSum[0], light.fluenceSum[1], light.fluenceSum[2]);
+                std::cout << fmt::format("  {:<16} sum of fluence over voxels ({:.4g}, {:.4g}, {:.4g})\n", light.name, light.fluenceSum[0],
+                    light.fluenceSum[1], light.fluenceSum[2]);
             }
         }
         std::cout << fmt::format("  seconds       {:.3f}\n", secondsSince(start));
@@ -92,11 +92,11 @@ private:
         const bool fromRun = set.stage() == "voxelize" && params.find("\"media\"") != std::string::npos;
         if (!fromRun) {
             warn(fmt::format("object '{}' of {} has a transform, which {} does not carry: it is lit where its file places it "
-                             "(vxf run, or voxelizing the scene's object, places it)", moved->name, mScene, mInput));
+                             "(vxf run, or voxelizing the scene's object, places it)",
+                moved->name, mScene, mInput));
         }
         return set;
     }
-
 
     std::string mInput, mScene, mOutput;
     DirectLightOptions mOptions;

@@ -43,10 +43,11 @@ public:
                                                                  : " [default " + p.defaultValue.dump() + "]";
                 const std::string help = fmt::format("{} ({}){}", p.summary, ops::describeType(p), def);
                 if (p.type == ops::ParamType::Boolean) {
-                    sub->add_flag_function("--" + p.name, [&call, name = p.name](std::int64_t) { call.values[name] = "true"; }, help);
+                    sub->add_flag_function(
+                        "--" + p.name, [&call, name = p.name](std::int64_t) { call.values[name] = "true"; }, help);
                 } else {
-                    sub->add_option_function<std::string>("--" + p.name,
-                        [&call, name = p.name](const std::string& v) { call.values[name] = v; }, help);
+                    sub->add_option_function<std::string>(
+                        "--" + p.name, [&call, name = p.name](const std::string& v) { call.values[name] = v; }, help);
                 }
             }
         }
@@ -83,12 +84,13 @@ private:
         if (!call.app->remaining().empty()) {
             std::string known;
             for (const auto& p : op.params) known += (known.empty() ? "" : ", ") + p.name;
-            throw UsageError(fmt::format("{}: unknown parameter or extra argument '{}' (it takes: {})", op.name,
-                call.app->remaining().front(), known));
+            throw UsageError(
+                fmt::format("{}: unknown parameter or extra argument '{}' (it takes: {})", op.name, call.app->remaining().front(), known));
         }
         if (!call.record.empty() && std::filesystem::weakly_canonical(call.input) == std::filesystem::weakly_canonical(call.output)) {
             throw UsageError(fmt::format("{}: --record needs an output file other than the input (a graph replaying it would "
-                                         "read its own output)", op.name));
+                                         "read its own output)",
+                op.name));
         }
         nlohmann::json params = nlohmann::json::object();
         for (const auto& [name, text] : call.values) {
@@ -137,8 +139,8 @@ public:
         TerminalProgress progress;
         const GraphReport report = runGraph(mPipeline, cache, &progress);
         for (const auto& n : report.nodes) {
-            std::cout << fmt::format("  {:<16} {:<7} {:>7.3f} s  {}{}\n", n.node, n.action, n.seconds, n.why,
-                n.report.empty() ? "" : ": " + n.report);
+            std::cout << fmt::format(
+                "  {:<16} {:<7} {:>7.3f} s  {}{}\n", n.node, n.action, n.seconds, n.why, n.report.empty() ? "" : ": " + n.report);
         }
         for (const auto& [node, file] : report.written) std::cout << fmt::format("  wrote {} ({})\n", file, node);
         std::cout << fmt::format("graph {} in {:.2f} s\n", mPipeline, secondsSince(start));

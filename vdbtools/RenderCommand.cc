@@ -35,16 +35,18 @@ public:
         mApp->add_option("--height", mHeight, "Override the scene's height")->check(CLI::Range(1, 32768));
         mApp->add_option("--samples", mSamples, "Override the samples per pixel")->check(CLI::Range(1, 65536));
         mApp->add_option("--max-samples", mMaxSamples,
-               "Adaptive sampling: pixels whose first samples disagree (silhouettes, object edges, noise above "
-               "--noise-level) get more, up to this many in all (overrides the scene's max_samples)")
+                "Adaptive sampling: pixels whose first samples disagree (silhouettes, object edges, noise above "
+                "--noise-level) get more, up to this many in all (overrides the scene's max_samples)")
             ->check(CLI::Range(1, 65536));
         mApp->add_option("--noise-level", mNoiseLevel,
-               "Adaptive sampling's threshold: relative standard error of a pixel's mean luminance (default 0.02)")
+                "Adaptive sampling's threshold: relative standard error of a pixel's mean luminance (default 0.02)")
             ->check(CLI::Range(1e-6, 1.0));
         mApp->add_option("--mode", mMode, "view or gather (overrides the scene)")->check(CLI::IsMember({"view", "gather"}));
         mApp->add_flag("--level-set", mLevelSet, "Hit the volume's `surface` level set instead of the scene's meshes");
-        mApp->add_flag("--no-surface", [this](std::int64_t) { mNoSurface = true; }, "Leave out the surface term");
-        mApp->add_flag("--direct-from-lights", [this](std::int64_t) { mDirectFromLights = true; },
+        mApp->add_flag(
+            "--no-surface", [this](std::int64_t) { mNoSurface = true; }, "Leave out the surface term");
+        mApp->add_flag(
+            "--direct-from-lights", [this](std::int64_t) { mDirectFromLights = true; },
             "March single scattering to the lights at every step instead of reading the `direct` grid (exact in dense "
             "media at any voxel size, and the only way an anisotropic phase shows in single scattering: the scene's "
             "default when its medium's phase g is not 0; edits of `direct` do not show)");
@@ -83,9 +85,9 @@ public:
         writeExr(mOutput, image, mHalf);
         if (!mPng.empty()) writePng(mPng, image, mExposure);
         const std::string adaptive = image.refinedPixels == 0 ? std::string() : ", " + refinedSummary(image, options);
-        std::cout << fmt::format("rendered {} ({}x{}, {} samples per pixel{}, {} mode) -> {}{} in {:.3f} s\n", mVolume,
-            options.width, options.height, options.samples, adaptive, options.gather ? "gather" : "view", mOutput,
-            mPng.empty() ? "" : " + " + mPng, secondsSince(start));
+        std::cout << fmt::format("rendered {} ({}x{}, {} samples per pixel{}, {} mode) -> {}{} in {:.3f} s\n", mVolume, options.width,
+            options.height, options.samples, adaptive, options.gather ? "gather" : "view", mOutput, mPng.empty() ? "" : " + " + mPng,
+            secondsSince(start));
     }
 
 private:

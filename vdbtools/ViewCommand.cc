@@ -33,8 +33,9 @@ public:
         mApp->add_option("--port", mPort, "Port to listen on (0: any free port)")->check(CLI::Range(0, 65535));
         mApp->add_option("--bind", mHost, "Address to listen on (the default serves this machine only)");
         mApp->add_option("--grid", mGrid, "The grid shown first (default: scatter, illumination, direct, density, or the first)");
-        mApp->add_option("--scene", mScene, "A scene (camera, lights, material) to render the edited set with from the page: the "
-                                            "scatter stage re-runs where an edit changed what it reads, then the render stage")
+        mApp->add_option("--scene", mScene,
+                "A scene (camera, lights, material) to render the edited set with from the page: the "
+                "scatter stage re-runs where an edit changed what it reads, then the render stage")
             ->check(CLI::ExistingFile);
         mApp->add_flag("--no-browser", mNoBrowser, "Do not open a browser; only print the address");
     }

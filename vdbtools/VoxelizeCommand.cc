@@ -27,8 +27,7 @@ void voxelizeToFile(const VoxelizeRequest& request)
         report.triangles = mesh.triangles.size();
         report.outwardOriented = true;
     } else if (request.mesh.rfind("builtin:", 0) == 0) {
-        throw UsageError(fmt::format("unknown built-in mesh '{}' (known: {})", request.mesh,
-            fmt::join(builtinMeshNames(), ", ")));
+        throw UsageError(fmt::format("unknown built-in mesh '{}' (known: {})", request.mesh, fmt::join(builtinMeshNames(), ", ")));
     } else {
         MeshReadOptions readOptions = request.meshRead;
         readOptions.checkSelfIntersections = false; // overlapped with voxelization below
@@ -80,14 +79,14 @@ void voxelizeToFile(const VoxelizeRequest& request)
     for (const auto& grid : set.grids()) {
         const GridStats s = gridStats(*grid);
         totalMemory += s.memoryBytes;
-        std::cout << fmt::format("  {:<13} {:<10} {:>12} active voxels, {:>8} leaves, {:>6} active tiles, {:>10}\n",
-            grid->getName(), openvdb::GridBase::gridClassToString(grid->getGridClass()), s.activeVoxels, s.leafNodes,
-            s.activeTiles, formatBytes(s.memoryBytes));
+        std::cout << fmt::format("  {:<13} {:<10} {:>12} active voxels, {:>8} leaves, {:>6} active tiles, {:>10}\n", grid->getName(),
+            openvdb::GridBase::gridClassToString(grid->getGridClass()), s.activeVoxels, s.leafNodes, s.activeTiles,
+            formatBytes(s.memoryBytes));
     }
     const auto bbox = set.find("surface")->evalActiveVoxelBoundingBox();
     const auto dim = bbox.dim();
-    std::cout << fmt::format("  bounds        {} x {} x {} voxels; dense Vec3f grid of it: {}, this set in memory: {}\n",
-        dim.x(), dim.y(), dim.z(), formatBytes(std::uint64_t(dim.x()) * dim.y() * dim.z() * 12), formatBytes(totalMemory));
+    std::cout << fmt::format("  bounds        {} x {} x {} voxels; dense Vec3f grid of it: {}, this set in memory: {}\n", dim.x(), dim.y(),
+        dim.z(), formatBytes(std::uint64_t(dim.x()) * dim.y() * dim.z() * 12), formatBytes(totalMemory));
     std::cout << fmt::format("  file          {}\n", formatBytes(std::filesystem::file_size(request.output)));
     std::cout << fmt::format("  seconds       {:.3f} total: mesh {:.3f}, voxelize {:.3f}, write (+ self-intersection check) {:.3f}\n",
         secondsSince(start), meshSeconds, voxelizeSeconds, writeSeconds);
@@ -107,21 +106,22 @@ public:
     {
         mApp = parent.add_subcommand("voxelize", "Voxelize a mesh into `surface` (level set) and `density` (fog volume).");
         mApp->add_option("mesh", mRequest.mesh,
-               fmt::format("Mesh file (.obj .ply .off .stl) or a built-in mesh: {}", fmt::join(builtinMeshNames(), ", ")))
+                fmt::format("Mesh file (.obj .ply .off .stl) or a built-in mesh: {}", fmt::join(builtinMeshNames(), ", ")))
             ->required();
         mApp->add_option("-o,--output", mRequest.output, "Output .vdb file")->required()->check(OutputFile);
-        auto* size = mApp->add_option("--voxel-size", mRequest.voxelize.voxelSize, "Voxel size in world units")
-                         ->check(AboveZero);
-        auto* dim = mApp->add_option("--dim", mRequest.voxelize.dim, "Voxels along the longest side of the mesh")
-                        ->check(CLI::Range(1, 1 << 20));
+        auto* size = mApp->add_option("--voxel-size", mRequest.voxelize.voxelSize, "Voxel size in world units")->check(AboveZero);
+        auto* dim =
+            mApp->add_option("--dim", mRequest.voxelize.dim, "Voxels along the longest side of the mesh")->check(CLI::Range(1, 1 << 20));
         size->excludes(dim);
         dim->excludes(size);
         mApp->add_option("--band", mRequest.voxelize.bandWidth, "Narrow band half width in voxels, each side (default 3)")
             ->check(CLI::Range(1.0f, 1000.0f));
         mApp->add_flag("--half", mRequest.write.half, "Store floats as 16-bit halves");
-        mApp->add_flag("--no-fill-holes", [this](std::int64_t) { mRequest.meshRead.fillHoles = false; },
+        mApp->add_flag(
+            "--no-fill-holes", [this](std::int64_t) { mRequest.meshRead.fillHoles = false; },
             "Leave holes of an open mesh open (the interior may leak)");
-        mApp->add_flag("--no-self-intersection-check", [this](std::int64_t) { mRequest.meshRead.checkSelfIntersections = false; },
+        mApp->add_flag(
+            "--no-self-intersection-check", [this](std::int64_t) { mRequest.meshRead.checkSelfIntersections = false; },
             "Skip the self-intersection check");
         mApp->add_flag("-q,--quiet", mRequest.quiet, "No summary");
     }

@@ -30,28 +30,34 @@ int main(int argc, char** argv)
     {
         // A colour grid over the same voxels, and a second one to blend with.
         const auto& gradient = vxf::findOperator("gradient");
-        const auto args = vxf::ops::checkArgs(gradient, {{"kind", "radial"}, {"radius", 1.0}, {"colors", {{1, 0.5, 0.2}, {0.1, 0.2, 1}}}, {"out", "color"}});
+        const auto args = vxf::ops::checkArgs(
+            gradient, {{"kind", "radial"}, {"radius", 1.0}, {"colors", {{1, 0.5, 0.2}, {0.1, 0.2, 1}}}, {"out", "color"}});
         vxf::ops::OpContext context{base, args, nullptr};
         gradient.run(context);
         auto second = base.find("color")->deepCopyGrid();
         second->setName("color2");
         base.put(second);
         const auto& select = vxf::findOperator("select");
-        const auto sargs = vxf::ops::checkArgs(select, {{"grid", "density"}, {"shape", "range"}, {"low", 0.5}, {"high", 0.9}, {"out", "mask"}});
+        const auto sargs =
+            vxf::ops::checkArgs(select, {{"grid", "density"}, {"shape", "range"}, {"low", 0.5}, {"high", 0.9}, {"out", "mask"}});
         vxf::ops::OpContext scontext{base, sargs, nullptr};
         select.run(scontext);
     }
     // Parameters per operator (the rest take their defaults).
     const std::map<std::string, json> params = {
-        {"add", {{"grid", "color"}, {"value", 0.5}}}, {"sub", {{"grid", "color"}, {"value", 0.5}}},
-        {"mul", {{"grid", "color"}, {"value", json::array({1.0, 0.5, 2.0})}}}, {"div", {{"grid", "color"}, {"value", 3.0}}},
+        {"add", {{"grid", "color"}, {"value", 0.5}}},
+        {"sub", {{"grid", "color"}, {"value", 0.5}}},
+        {"mul", {{"grid", "color"}, {"value", json::array({1.0, 0.5, 2.0})}}},
+        {"div", {{"grid", "color"}, {"value", 3.0}}},
         {"pow", {{"grid", "color"}, {"value", 2.2}}},
         {"blend", {{"grid", "color"}, {"with", "color2"}, {"mode", "mix"}, {"weight", 0.3}}},
         {"blur", {{"grid", "color"}, {"radius", 2}}},
         {"blur_special", {{"grid", "color"}, {"region", "density"}, {"selection", "mask"}, {"smoothing", 2}}},
-        {"normalize", {{"grid", "color"}}}, {"denormalize", {{"grid", "color"}}},
+        {"normalize", {{"grid", "color"}}},
+        {"denormalize", {{"grid", "color"}}},
         {"gradient", {{"kind", "directional"}, {"from", {-0.1, 0, 0}}, {"to", {0.1, 0, 0}}, {"colors", {0, 1}}}},
-        {"remove", {{"grid", "color"}, {"with", "mask"}}}, {"include", {{"grid", "color"}, {"with", "mask"}}},
+        {"remove", {{"grid", "color"}, {"with", "mask"}}},
+        {"include", {{"grid", "color"}, {"with", "mask"}}},
         {"select", {{"grid", "density"}, {"shape", "range"}, {"low", 0.2}, {"high", 0.6}, {"out", "sel"}}},
         {"edit", {{"grid", "color"}, {"selection", "mask"}, {"hue_shift", 30.0}}},
         {"diff", {{"grid", "color"}, {"with", "color2"}}},

@@ -60,8 +60,8 @@ using Edit = std::function<void(vxf::VoxelSet&)>;
 /// Only the cases whose name holds this (bench_stability's second argument; empty: every case).
 std::string gOnly;
 
-Row runChain(const std::string& name, const vxf::TriangleMesh& mesh, const vxf::Material& m, int dim,
-    const vxf::ScatterOptions& scatter, const Edit& edit = {})
+Row runChain(const std::string& name, const vxf::TriangleMesh& mesh, const vxf::Material& m, int dim, const vxf::ScatterOptions& scatter,
+    const Edit& edit = {})
 {
     const auto start = std::chrono::steady_clock::now();
     Row row;
@@ -154,8 +154,8 @@ vxf::TriangleMesh cubesSharingAnEdge()
 
 std::string row(const Row& r)
 {
-    return fmt::format("| {} | {} | {:.4g} | {:.4g} | {:.4f} | {} | {} | {:.2f} |", r.name, r.finite ? "yes" : "**NO**",
-        r.maxValue, r.minValue, r.lastRatio, r.passes, r.stop, r.seconds);
+    return fmt::format("| {} | {} | {:.4g} | {:.4g} | {:.4f} | {} | {} | {:.2f} |", r.name, r.finite ? "yes" : "**NO**", r.maxValue,
+        r.minValue, r.lastRatio, r.passes, r.stop, r.seconds);
 }
 
 } // namespace
@@ -188,10 +188,10 @@ int main(int argc, char** argv)
     // Extinction over twelve decades.
     for (double sigmaT : {1e-6, 1e-3, 1.0, 1e3, 1e6}) {
         print(runChain(fmt::format("sigma_t {:g} per unit, albedo 0.9", sigmaT), sphere, albedoMaterial(sigmaT, 0.9), 64, coarsePasses()));
-        print(runChain(fmt::format("sigma_t {:g} per unit, albedo 0.9, accelerated sweeps", sigmaT), sphere, albedoMaterial(sigmaT, 0.9), 64,
-            acceleratedSweeps()));
-        print(runChain(fmt::format("sigma_t {:g} per unit, albedo 0.9, accelerated gathers", sigmaT), sphere, albedoMaterial(sigmaT, 0.9), 64,
-            acceleratedGathers()));
+        print(runChain(fmt::format("sigma_t {:g} per unit, albedo 0.9, accelerated sweeps", sigmaT), sphere, albedoMaterial(sigmaT, 0.9),
+            64, acceleratedSweeps()));
+        print(runChain(fmt::format("sigma_t {:g} per unit, albedo 0.9, accelerated gathers", sigmaT), sphere, albedoMaterial(sigmaT, 0.9),
+            64, acceleratedGathers()));
     }
     // Geometry.
     // Voxel size 1/32: shells one and half a voxel thick (too thin for the level set to place
@@ -208,8 +208,9 @@ int main(int argc, char** argv)
         vxf::MeshReport report;
         const vxf::TriangleMesh mesh = vxf::readMesh(meshes + "/" + file, {}, &report);
         const double size = mesh.bounds().extents()[mesh.bounds().maxExtent()];
-        print(runChain(fmt::format("{} ({} holes filled{})", file, report.holesFilled, report.selfIntersecting ? ", self-intersecting" : ""),
-            mesh, albedoMaterial(20.0 / size, 0.9), 64, coarsePasses()));
+        print(
+            runChain(fmt::format("{} ({} holes filled{})", file, report.holesFilled, report.selfIntersecting ? ", self-intersecting" : ""),
+                mesh, albedoMaterial(20.0 / size, 0.9), 64, coarsePasses()));
     }
     // Artist grids.
     print(runChain("scatter_source negated in half the volume (artist edit)", sphere, albedoMaterial(20.0, 0.9), 64, coarsePasses(),
@@ -219,8 +220,8 @@ int main(int argc, char** argv)
                 if (it.getCoord().x() < 0) it.setValue(-*it);
             }
         }));
-    print(runChain("density -0.5 in half the volume (artist edit)", sphere, albedoMaterial(20.0, 0.9), 64, coarsePasses(),
-        [](vxf::VoxelSet& set) {
+    print(runChain(
+        "density -0.5 in half the volume (artist edit)", sphere, albedoMaterial(20.0, 0.9), 64, coarsePasses(), [](vxf::VoxelSet& set) {
             auto density = set.get<openvdb::FloatGrid>("density");
             density->tree().voxelizeActiveTiles();
             for (auto it = density->beginValueOn(); it; ++it) {

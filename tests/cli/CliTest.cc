@@ -63,7 +63,7 @@ TEST_CASE("every bad input in tests/regress gives its error and no output", "[cl
         const std::string ext = input.extension().string();
         const std::string command = ext == ".vxf" ? fmt::format("{} {} {}", binary("vxf2vdb"), quoted(input.string()), quoted(output))
             : ext == ".vdb"                       ? fmt::format("{} info {}", binary("vxf"), quoted(input.string()))
-                                                  : fmt::format("{} voxelize {} -o {} --dim 16", binary("vxf"), quoted(input.string()), quoted(output));
+                            : fmt::format("{} voxelize {} -o {} --dim 16", binary("vxf"), quoted(input.string()), quoted(output));
         const auto result = run(command);
         INFO(input.filename().string() << "\nstderr: " << result.err);
         CHECK(result.status == 1);
@@ -106,8 +106,8 @@ TEST_CASE("vxf voxelize writes a voxel set that OpenVDB's tools read", "[cli][vo
     CHECK(print.out.find("vxf:stage: voxelize") != std::string::npos);
 
     const auto python = run("/usr/bin/python3 -c \"import pyopenvdb as vdb; grids, meta = vdb.readAll('" + output +
-                            "'); print(sorted((g.name, g.gridClass, g.activeVoxelCount() > 0) for g in grids)); "
-                            "print(meta['vxf:stage'])\"");
+        "'); print(sorted((g.name, g.gridClass, g.activeVoxelCount() > 0) for g in grids)); "
+        "print(meta['vxf:stage'])\"");
     INFO(python.err);
     REQUIRE(python.status == 0);
     CHECK(python.out == "[('density', 'fog volume', True), ('surface', 'level set', True)]\nvoxelize\n");
@@ -139,7 +139,8 @@ TEST_CASE("files made by other tools (pyopenvdb) are read, listed and converted"
                             "v = vdb.Vec3SGrid(); v.name = 'vel'; v.transform = vdb.createLinearTransform(voxelSize=0.25)\n"
                             "v.getAccessor().setValueOn((0, 0, 0), (1.0, 2.0, 3.0))\n"
                             "d['blender/solver'] = 'mantaflow'; d.saveFloatAsHalf = True\n"
-                            "vdb.write('" + made + "', grids=[d, v], metadata={'creator': 'pyopenvdb'})\"");
+                            "vdb.write('" +
+        made + "', grids=[d, v], metadata={'creator': 'pyopenvdb'})\"");
     INFO(python.err);
     REQUIRE(python.status == 0);
     const auto info = run(fmt::format("{} info --json {}", binary("vxf"), made));
@@ -160,7 +161,7 @@ TEST_CASE("files made by other tools (pyopenvdb) are read, listed and converted"
     const auto table = run(fmt::format("{} info {}", binary("vxf"), made));
     CHECK(table.out.find("(no vxf provenance)") != std::string::npos);
     CHECK(table.out.find("(passed through)") != std::string::npos); // 'vel' has no vxf role
-    CHECK(table.out.find("(own transform)") != std::string::npos);  // nor the shared transform
+    CHECK(table.out.find("(own transform)") != std::string::npos); // nor the shared transform
     CHECK(table.out.find("0.25 / 0.5833 / 1") != std::string::npos); // min / mean / max
 
     const auto text = run(fmt::format("{} {} {}", binary("vdb2vxf"), made, dir.path("h.vxf")));
@@ -173,8 +174,9 @@ TEST_CASE("files made by other tools (pyopenvdb) are read, listed and converted"
 TEST_CASE("vxf run says what repairing a scene's mesh did, as vxf voxelize does", "[cli][run]")
 {
     TempDir dir;
-    vxf::test::spit(dir.path("open.off"), "OFF\n8 5 0\n-1 -1 -1\n1 -1 -1\n-1 1 -1\n1 1 -1\n-1 -1 1\n1 -1 1\n-1 1 1\n1 1 1\n"
-                                          "4 0 4 6 2\n4 1 3 7 5\n4 0 1 5 4\n4 2 6 7 3\n4 0 2 3 1\n");
+    vxf::test::spit(dir.path("open.off"),
+        "OFF\n8 5 0\n-1 -1 -1\n1 -1 -1\n-1 1 -1\n1 1 -1\n-1 -1 1\n1 -1 1\n-1 1 1\n1 1 1\n"
+        "4 0 4 6 2\n4 1 3 7 5\n4 0 1 5 4\n4 2 6 7 3\n4 0 2 3 1\n");
     vxf::test::spit(dir.path("open.json"), R"({
   "objects": [{"name": "box", "mesh": "open.off", "material": {"albedo": 0.5, "mean_free_path": 0.5}},
               {"name": "floor", "mesh": "open.off", "role": "occluder", "transform": {"translate": [0, 0, -3]}}],
@@ -196,8 +198,9 @@ TEST_CASE("vxf run says what repairing a scene's mesh did, as vxf voxelize does"
 TEST_CASE("vxf voxelize on a real open mesh warns and still voxelizes", "[cli][voxelize]")
 {
     TempDir dir;
-    vxf::test::spit(dir.path("open.off"), "OFF\n8 5 0\n-1 -1 -1\n1 -1 -1\n-1 1 -1\n1 1 -1\n-1 -1 1\n1 -1 1\n-1 1 1\n1 1 1\n"
-                                          "4 0 4 6 2\n4 1 3 7 5\n4 0 1 5 4\n4 2 6 7 3\n4 0 2 3 1\n");
+    vxf::test::spit(dir.path("open.off"),
+        "OFF\n8 5 0\n-1 -1 -1\n1 -1 -1\n-1 1 -1\n1 1 -1\n-1 -1 1\n1 -1 1\n-1 1 1\n1 1 1\n"
+        "4 0 4 6 2\n4 1 3 7 5\n4 0 1 5 4\n4 2 6 7 3\n4 0 2 3 1\n");
     const auto result = run(fmt::format("{} voxelize {} -o {} --voxel-size 0.1", binary("vxf"), dir.path("open.off"), dir.path("o.vdb")));
     CHECK(result.status == 0);
     CHECK(result.err.find("vxf: voxelize: warning: ") == 0);
@@ -223,7 +226,8 @@ TEST_CASE("real meshes from Debian's libcgal-demo: the bunny and broken ones", "
     CHECK(bunny.err.empty()); // a clean closed mesh: no warnings
     CHECK(bunny.out.find("(75408 triangles)") != std::string::npos);
 
-    const auto elephant = run(fmt::format("{} voxelize {} -o {} --dim 64", binary("vxf"), mesh("elephant-with-holes.off"), dir.path("e.vdb")));
+    const auto elephant =
+        run(fmt::format("{} voxelize {} -o {} --dim 64", binary("vxf"), mesh("elephant-with-holes.off"), dir.path("e.vdb")));
     INFO(elephant.err);
     REQUIRE(elephant.status == 0);
     CHECK(elephant.err.find("the mesh is open") != std::string::npos);
@@ -332,7 +336,8 @@ TEST_CASE("vxf2vdb and vdb2vxf round-trip real files", "[cli][convert]")
     CHECK_FALSE(fs::exists(dir.path("n.vxf")));
 }
 
-TEST_CASE("SIGINT, SIGTERM and SIGHUP stop a long scatter: exit 128+N, the previous output intact, no temporary file left", "[cli][interrupt]")
+TEST_CASE(
+    "SIGINT, SIGTERM and SIGHUP stop a long scatter: exit 128+N, the previous output intact, no temporary file left", "[cli][interrupt]")
 {
     TempDir dir;
     REQUIRE(run(fmt::format("{} voxelize builtin:sphere -o {} --dim 32 -q", binary("vxf"), dir.path("s.vdb"))).status == 0);
@@ -341,7 +346,8 @@ TEST_CASE("SIGINT, SIGTERM and SIGHUP stop a long scatter: exit 128+N, the previ
   "lights": [{"type": "point", "position": [0, 0, 2], "intensity": 4}],
   "camera": {"position": [0, -4, 0], "look_at": [0, 0, 0]}
 })");
-    REQUIRE(run(fmt::format("{} light {} --scene {} -o {} -q", binary("vxf"), dir.path("s.vdb"), dir.path("scene.json"), dir.path("l.vdb"))).status == 0);
+    REQUIRE(run(fmt::format("{} light {} --scene {} -o {} -q", binary("vxf"), dir.path("s.vdb"), dir.path("scene.json"), dir.path("l.vdb")))
+                .status == 0);
     fs::copy_file(dir.path("l.vdb"), dir.path("out.vdb")); // a previous result the interrupted run must not touch
     const std::string before = slurp(dir.path("out.vdb"));
     // Ctrl-C, what `timeout`, schedulers and farms send, and a closed terminal: the same.
@@ -365,7 +371,8 @@ TEST_CASE("a write past the file size limit is an error that keeps the previous 
 {
     TempDir dir;
     vxf::test::spit(dir.path("out.vdb"), "the previous output");
-    const auto result = run(fmt::format("(ulimit -f 64; {} voxelize builtin:sphere -o {} --dim 64 -q)", binary("vxf"), dir.path("out.vdb")));
+    const auto result =
+        run(fmt::format("(ulimit -f 64; {} voxelize builtin:sphere -o {} --dim 64 -q)", binary("vxf"), dir.path("out.vdb")));
     CHECK(result.status == 1);
     CHECK(result.err == fmt::format("vxf: voxelize: {}: cannot write: File too large\n", dir.path("out.vdb")));
     CHECK(slurp(dir.path("out.vdb")) == "the previous output");
@@ -374,7 +381,8 @@ TEST_CASE("a write past the file size limit is an error that keeps the previous 
     REQUIRE(run(fmt::format("{} voxelize builtin:sphere -o {} --dim 64 -q", binary("vxf"), dir.path("big.vdb"))).status == 0);
     for (const auto& [tool, out] : {std::pair<std::string, std::string>{"vdb2vxf", "out.vxf"}, {"vdb2vol", "out.vol"}}) {
         vxf::test::spit(dir.path(out), "the previous output");
-        const auto converted = run(fmt::format("(ulimit -f 16; {} {} {} --grid density)", binary(tool), dir.path("big.vdb"), dir.path(out)));
+        const auto converted =
+            run(fmt::format("(ulimit -f 16; {} {} {} --grid density)", binary(tool), dir.path("big.vdb"), dir.path(out)));
         INFO(converted.err);
         CHECK(converted.status == 1);
         CHECK(converted.err.find(dir.path(out) + ": ") != std::string::npos);
@@ -390,7 +398,8 @@ TEST_CASE("an unwritable folder is an error that keeps the previous output", "[c
     TempDir dir;
     vxf::test::spit(dir.path("out.vdb"), "the previous output");
     const bool root = ::geteuid() == 0;
-    const auto readable = fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec | fs::perms::others_read | fs::perms::others_exec;
+    const auto readable =
+        fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec | fs::perms::others_read | fs::perms::others_exec;
     fs::permissions(dir.root(), root ? readable : readable & ~fs::perms::owner_write);
     fs::permissions(dir.path("out.vdb"), fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read | fs::perms::others_read);
     const std::string as = root ? "setpriv --reuid=65534 --regid=65534 --clear-groups " : "";
@@ -417,7 +426,8 @@ TEST_CASE("vdb2vol writes one grid as Mitsuba's dense volume", "[cli][convert][m
     const auto set = vxf::readVoxelSet(dir.path("box.vdb"));
     const openvdb::CoordBBox box = set.find("density")->evalActiveVoxelBoundingBox();
     const openvdb::Coord size = box.dim();
-    CHECK(result.out.find(fmt::format("-> {}: {}x{}x{}, 1 channel(s)", dir.path("box.vol"), size.x(), size.y(), size.z())) != std::string::npos);
+    CHECK(result.out.find(fmt::format("-> {}: {}x{}x{}, 1 channel(s)", dir.path("box.vol"), size.x(), size.y(), size.z())) !=
+        std::string::npos);
     const std::string bytes = slurp(dir.path("box.vol"));
     CHECK(bytes.substr(0, 3) == "VOL");
     CHECK(bytes.size() == 48 + std::size_t(size.x()) * std::size_t(size.y()) * std::size_t(size.z()) * 4);
@@ -436,7 +446,8 @@ TEST_CASE("vxf demo runs the main job on the embedded scene", "[cli][demo]")
     INFO(result.err);
     REQUIRE(result.status == 0);
     CHECK(result.out.find("demo: a wax candle lit by its flame") != std::string::npos);
-    for (const char* stage : {"voxelize", "light", "scatter", "render"}) CHECK(result.out.find(std::string("  ") + stage) != std::string::npos);
+    for (const char* stage : {"voxelize", "light", "scatter", "render"})
+        CHECK(result.out.find(std::string("  ") + stage) != std::string::npos);
     const auto set = vxf::readVoxelSet(dir.path("out/demo.vdb"));
     for (const char* name : {"surface", "density", "direct", "scatter_source", "scatter", "illumination"}) {
         INFO(name);
@@ -447,16 +458,17 @@ TEST_CASE("vxf demo runs the main job on the embedded scene", "[cli][demo]")
     // The flame shows: the brightest pixel is its emission (3, 1.7, 0.55), above the candle
     // (its top at row 8 of 36), on the centre line.
     const vxf::RgbImage image = vxf::readExr(dir.path("out/demo.exr"));
-    const auto brightest = std::max_element(image.pixels.begin(), image.pixels.end(),
-        [](const openvdb::Vec3f& a, const openvdb::Vec3f& b) { return a.x() < b.x(); });
+    const auto brightest = std::max_element(
+        image.pixels.begin(), image.pixels.end(), [](const openvdb::Vec3f& a, const openvdb::Vec3f& b) { return a.x() < b.x(); });
     const std::ptrdiff_t at = brightest - image.pixels.begin();
     CHECK(brightest->x() == Approx(3.0f));
     CHECK(brightest->z() == Approx(0.55f));
     CHECK(at / image.width < 8);
     CHECK(std::abs(int(at % image.width) - image.width / 2) <= 1);
     // The embedded scene is examples/candle.json, and it is valid.
-    CHECK(run(fmt::format("{} light {} --scene {} -o {} -q", binary("vxf"), dir.path("out/demo.vdb"),
-              source("examples/candle.json"), dir.path("relit.vdb"))).status == 0);
+    CHECK(run(fmt::format("{} light {} --scene {} -o {} -q", binary("vxf"), dir.path("out/demo.vdb"), source("examples/candle.json"),
+                  dir.path("relit.vdb")))
+              .status == 0);
 }
 
 TEST_CASE("vxf light lights a voxel set from a scene file", "[cli][light]")
@@ -469,7 +481,8 @@ TEST_CASE("vxf light lights a voxel set from a scene file", "[cli][light]")
              {"name": "off", "type": "directional", "direction": [0, 0, -1], "intensity": 0}],
   "camera": {"position": [0, -4, 0], "look_at": [0, 0, 0]}
 })");
-    const auto lit = run(fmt::format("{} light {} --scene {} -o {}", binary("vxf"), dir.path("s.vdb"), dir.path("scene.json"), dir.path("l.vdb")));
+    const auto lit =
+        run(fmt::format("{} light {} --scene {} -o {}", binary("vxf"), dir.path("s.vdb"), dir.path("scene.json"), dir.path("l.vdb")));
     INFO(lit.err);
     REQUIRE(lit.status == 0);
     CHECK(lit.out.find("off              skipped: zero colour or intensity") != std::string::npos);
@@ -486,12 +499,13 @@ TEST_CASE("vxf light lights a voxel set from a scene file", "[cli][light]")
     // The march step: the scene's (scatter.step, 1 unless set), as vxf run lights it; --step wins.
     CHECK(nlohmann::json::parse(set.paramsJson()).at("step").get<double>() == 1.0);
     REQUIRE(run(fmt::format("{} light {} --scene {} -o {} -q --step 0.25", binary("vxf"), dir.path("s.vdb"), dir.path("scene.json"),
-                    dir.path("l4.vdb"))).status == 0);
+                    dir.path("l4.vdb")))
+                .status == 0);
     CHECK(nlohmann::json::parse(vxf::readVoxelSet(dir.path("l4.vdb")).paramsJson()).at("step").get<double>() == 0.25);
 
     // Scatter from the file alone (the material travels in its metadata).
-    const auto scattered = run(fmt::format("{} scatter {} -o {} --passes 3 --directions 16 --keep-passes --tolerance 0",
-        binary("vxf"), dir.path("l.vdb"), dir.path("s2.vdb")));
+    const auto scattered = run(fmt::format("{} scatter {} -o {} --passes 3 --directions 16 --keep-passes --tolerance 0", binary("vxf"),
+        dir.path("l.vdb"), dir.path("s2.vdb")));
     INFO(scattered.err);
     REQUIRE(scattered.status == 0);
     CHECK(scattered.out.find("3 passes (reached 3 passes") != std::string::npos);
@@ -503,7 +517,8 @@ TEST_CASE("vxf light lights a voxel set from a scene file", "[cli][light]")
         CHECK(lit2.find(name));
     }
     // The sweep kernel: accelerated sweeps report themselves as such; plain sweeps keep the orders.
-    const auto swept = run(fmt::format("{} scatter {} -o {} --kernel sweep --directions 16", binary("vxf"), dir.path("l.vdb"), dir.path("sw.vdb")));
+    const auto swept =
+        run(fmt::format("{} scatter {} -o {} --kernel sweep --directions 16", binary("vxf"), dir.path("l.vdb"), dir.path("sw.vdb")));
     INFO(swept.err);
     REQUIRE(swept.status == 0);
     CHECK(swept.out.find("accelerated sweeps") != std::string::npos);
@@ -543,7 +558,8 @@ TEST_CASE("vxf light lights a voxel set from a scene file", "[cli][light]")
 
     // A bad scene names the file and the field; nothing is written.
     vxf::test::spit(dir.path("bad.json"), R"({"objects": [{"mesh": "builtin:sphere"}], "lights": [], "camera": {"position": [0, -4, 0]}})");
-    const auto bad = run(fmt::format("{} light {} --scene {} -o {}", binary("vxf"), dir.path("s.vdb"), dir.path("bad.json"), dir.path("x.vdb")));
+    const auto bad =
+        run(fmt::format("{} light {} --scene {} -o {}", binary("vxf"), dir.path("s.vdb"), dir.path("bad.json"), dir.path("x.vdb")));
     CHECK(bad.status == 1);
     CHECK(bad.err.find("bad.json: /camera: Missing required property 'look_at'") != std::string::npos);
     CHECK_FALSE(fs::exists(dir.path("x.vdb")));
@@ -553,14 +569,19 @@ TEST_CASE("vxf run simulates only what the scene needs and reuses what did not c
 {
     TempDir dir;
     const auto scene = [&](const std::string& fov, const std::string& intensity, const std::string& material, const std::string& outputs) {
-        vxf::test::spit(dir.path("s.json"), R"({
-  "objects": [{"mesh": "builtin:sphere", "material": )" + material + R"(}],
-  "lights": [{"type": "point", "position": [0, 0, 2], "intensity": )" + intensity + R"(}],
-  "camera": {"position": [0, -4, 0], "look_at": [0, 0, 0], "fov": )" + fov + R"(},
+        vxf::test::spit(dir.path("s.json"),
+            R"({
+  "objects": [{"mesh": "builtin:sphere", "material": )" +
+                material + R"(}],
+  "lights": [{"type": "point", "position": [0, 0, 2], "intensity": )" +
+                intensity + R"(}],
+  "camera": {"position": [0, -4, 0], "look_at": [0, 0, 0], "fov": )" +
+                fov + R"(},
   "voxelize": {"dim": 16},
   "scatter": {"passes": 2, "directions": 8},
   "render": {"width": 32, "height": 24, "samples": 1},
-  "outputs": )" + outputs + "}");
+  "outputs": )" +
+                outputs + "}");
         const auto result = run(fmt::format("{} run {} --out {}", binary("vxf"), dir.path("s.json"), dir.path("out")));
         INFO(result.err);
         REQUIRE(result.status == 0);
@@ -608,7 +629,8 @@ TEST_CASE("scatter with a band, render through Embree or the level set, occluder
   "render": {"width": 40, "height": 30, "samples": 1}
 })");
     REQUIRE(run(fmt::format("{} voxelize builtin:sphere -o {} --dim 40 -q", binary("vxf"), dir.path("v.vdb"))).status == 0);
-    const auto lit = run(fmt::format("{} light {} --scene {} -o {} -q", binary("vxf"), dir.path("v.vdb"), dir.path("scene.json"), dir.path("l.vdb")));
+    const auto lit =
+        run(fmt::format("{} light {} --scene {} -o {} -q", binary("vxf"), dir.path("v.vdb"), dir.path("scene.json"), dir.path("l.vdb")));
     INFO(lit.err);
     REQUIRE(lit.status == 0);
     // The card shadows the top of the sphere: the light arrives only around it.
@@ -618,7 +640,8 @@ TEST_CASE("scatter with a band, render through Embree or the level set, occluder
     CHECK(direct->tree().getValue(index(0, 0, 0.95)).x() == 0.0f);
     CHECK(direct->tree().getValue(index(0.7, 0, 0.65)).x() > 0.0f);
 
-    const auto banded = run(fmt::format("{} scatter {} -o {} --passes 2 --directions 8 --band 0.2", binary("vxf"), dir.path("l.vdb"), dir.path("s.vdb")));
+    const auto banded =
+        run(fmt::format("{} scatter {} -o {} --passes 2 --directions 8 --band 0.2", binary("vxf"), dir.path("l.vdb"), dir.path("s.vdb")));
     INFO(banded.err);
     REQUIRE(banded.status == 0);
     CHECK(banded.out.find("band 0.2: ") != std::string::npos);
@@ -676,7 +699,7 @@ TEST_CASE("vxf op runs operators on real files, records them, and vxf graph repl
     // density × the mean of (0.5, 1, 2) on a float grid; the input grid stays as it was.
     const openvdb::Coord centre(0);
     CHECK(set.get<openvdb::FloatGrid>("tinted")->tree().getValue(centre) ==
-          Approx(set.get<openvdb::FloatGrid>("density")->tree().getValue(centre) * 3.5f / 3.0f));
+        Approx(set.get<openvdb::FloatGrid>("density")->tree().getValue(centre) * 3.5f / 3.0f));
     for (const char* name : {"surface", "density", "tinted", "gradient"}) {
         INFO(name);
         CHECK(set.find(name));
@@ -695,7 +718,8 @@ TEST_CASE("vxf op runs operators on real files, records them, and vxf graph repl
     CHECK(again.out.find(" ran ") == std::string::npos);
 
     // Bad parameters: usage errors naming the operator and the parameter; nothing written.
-    const auto range = run(fmt::format("{} op blur {} -o {} --grid density --radius 0", binary("vxf"), dir.path("v.vdb"), dir.path("x.vdb")));
+    const auto range =
+        run(fmt::format("{} op blur {} -o {} --grid density --radius 0", binary("vxf"), dir.path("v.vdb"), dir.path("x.vdb")));
     CHECK(range.status == 2);
     CHECK(range.err.find("blur: parameter 'radius' is 0, out of range") != std::string::npos);
     const auto text = run(fmt::format("{} op mul {} -o {} --grid density --value x", binary("vxf"), dir.path("v.vdb"), dir.path("x.vdb")));
@@ -704,7 +728,8 @@ TEST_CASE("vxf op runs operators on real files, records them, and vxf graph repl
     const auto grid = run(fmt::format("{} op mul {} -o {} --grid nope --value 2", binary("vxf"), dir.path("v.vdb"), dir.path("x.vdb")));
     CHECK(grid.status == 2);
     CHECK(grid.err.find("mul: no grid named 'nope'") != std::string::npos);
-    const auto unknown = run(fmt::format("{} op mul {} -o {} --grid density --value 2 --radius 3", binary("vxf"), dir.path("v.vdb"), dir.path("x.vdb")));
+    const auto unknown =
+        run(fmt::format("{} op mul {} -o {} --grid density --value 2 --radius 3", binary("vxf"), dir.path("v.vdb"), dir.path("x.vdb")));
     CHECK(unknown.status == 2);
     CHECK(unknown.err.find("mul: unknown parameter or extra argument '--radius'") != std::string::npos);
     CHECK_FALSE(fs::exists(dir.path("x.vdb")));
@@ -774,7 +799,8 @@ TEST_CASE("vxf run lights and renders a fog volume made by vdb_tool (a volume ob
     CHECK(alpha[0] == 0.0f);
 }
 
-TEST_CASE("vxf run lights a noise density made with OpenVDB (scripts/make-smoke), scattering forward by its phase", "[cli][run][volume][phase]")
+TEST_CASE(
+    "vxf run lights a noise density made with OpenVDB (scripts/make-smoke), scattering forward by its phase", "[cli][run][volume][phase]")
 {
     TempDir dir;
     const auto made = run(fmt::format("{} {} --resolution 32", vxf::test::source("scripts/make-smoke"), quoted(dir.path("smoke.vdb"))));
@@ -782,14 +808,16 @@ TEST_CASE("vxf run lights a noise density made with OpenVDB (scripts/make-smoke)
     REQUIRE(made.status == 0);
     // Lit from behind: light scattered forward comes toward the camera, backward away from it.
     const auto render = [&](double g) {
-        vxf::test::spit(dir.path("smoke.json"), fmt::format(R"({{
+        vxf::test::spit(dir.path("smoke.json"),
+            fmt::format(R"({{
   "objects": [{{"name": "smoke", "volume": "smoke.vdb", "grid": "density",
                "material": {{"albedo": 0.95, "mean_free_path": 0.05, "phase": {{"g": {}}}}}}}],
   "lights": [{{"type": "directional", "direction": [0, -1, 0], "intensity": 2}}, {{"type": "environment", "intensity": 0.1, "samples": 8}}],
   "camera": {{"position": [0, -2, 0], "look_at": [0, 0, 0], "fov": 40}},
   "scatter": {{"directions": 8}},
   "render": {{"width": 32, "height": 24, "samples": 1}}
-}})", g));
+}})",
+                g));
         fs::remove_all(dir.path("out/cache")); // one stage file of each kind below
         const auto result = run(fmt::format("{} run {} --out {}", binary("vxf"), dir.path("smoke.json"), dir.path("out")));
         INFO(result.out << result.err);
@@ -883,8 +911,8 @@ TEST_CASE("an output that cannot be written is refused before any work, and a co
     // Both of render's outputs are checked first: the .exr is not written when the PNG cannot be.
     vxf::test::spit(dir.path("scene.json"), R"({"objects": [{"mesh": "builtin:sphere", "material": {"albedo": 0.5, "mean_free_path": 1}}],
       "lights": [{"type": "point", "position": [0, 0, 3]}], "camera": {"position": [0, -4, 0], "look_at": [0, 0, 0]}})");
-    const auto render = run(fmt::format("{} render {} --scene {} -o {} --png {}", vxf, quoted(dir.path("s.vdb")), quoted(dir.path("scene.json")),
-        quoted(dir.path("ok.exr")), quoted(dir.path("nodir/x.png"))));
+    const auto render = run(fmt::format("{} render {} --scene {} -o {} --png {}", vxf, quoted(dir.path("s.vdb")),
+        quoted(dir.path("scene.json")), quoted(dir.path("ok.exr")), quoted(dir.path("nodir/x.png"))));
     CHECK(render.status == 2);
     CHECK_FALSE(fs::exists(dir.path("ok.exr")));
     for (const auto& [tool, output] : {std::pair<std::string, std::string>{"vdb2vxf", "s.vdb"}, {"vdb2vol", "s.vdb"}}) {
@@ -915,8 +943,8 @@ TEST_CASE("vxf run recomputes a cache entry it cannot read (truncated or damaged
     const auto rerun = run(command);
     INFO(rerun.out << rerun.err);
     CHECK(rerun.status == 0);
-    CHECK_THAT(rerun.err, Catch::Contains("warning: cache entry " + light + " could not be read") &&
-                              Catch::Contains("removed, and its stage recomputed"));
+    CHECK_THAT(rerun.err,
+        Catch::Contains("warning: cache entry " + light + " could not be read") && Catch::Contains("removed, and its stage recomputed"));
     CHECK(rerun.out.find("light     ran") != std::string::npos);
     CHECK(slurp(dir.path("out/s.exr")) == image); // the same image as before the damage
     const auto third = run(command);
@@ -931,7 +959,8 @@ TEST_CASE("two runs on one cache compute each stage once: the second waits for t
       "lights": [{"type": "point", "position": [0, 0, 3]}], "camera": {"position": [0, -4, 0], "look_at": [0, 0, 0]},
       "voxelize": {"dim": 40}, "scatter": {"kernel": "gather", "directions": 32}, "render": {"width": 16, "height": 12, "samples": 1}})");
     const std::string command = fmt::format("{} run {} --out {}", binary("vxf"), quoted(dir.path("s.json")), quoted(dir.path("out")));
-    const auto both = run(fmt::format("({} > {} 2>&1 & {} > {} 2>&1 & wait)", command, quoted(dir.path("a.txt")), command, quoted(dir.path("b.txt"))));
+    const auto both =
+        run(fmt::format("({} > {} 2>&1 & {} > {} 2>&1 & wait)", command, quoted(dir.path("a.txt")), command, quoted(dir.path("b.txt"))));
     REQUIRE(both.status == 0);
     const std::string a = slurp(dir.path("a.txt")), b = slurp(dir.path("b.txt"));
     INFO(a << "\n" << b);
@@ -960,7 +989,8 @@ TEST_CASE("a FIFO, a device, a folder or a symbolic link loop is refused by name
     refused(fmt::format("{} run {}", vxf, quoted(dir.root().string())), "is a folder, not a file");
     refused(fmt::format("{} run {}", vxf, quoted(dir.path("loop1"))), "a loop of symbolic links");
     refused(fmt::format("{} run /dev/zero", vxf), "is not a regular file");
-    refused(fmt::format("{} voxelize {} -o {} --dim 8", vxf, quoted(dir.path("fifo.off")), quoted(dir.path("x.vdb"))), "is not a regular file");
+    refused(
+        fmt::format("{} voxelize {} -o {} --dim 8", vxf, quoted(dir.path("fifo.off")), quoted(dir.path("x.vdb"))), "is not a regular file");
     refused(fmt::format("{} graph /dev/zero", vxf), "is not a regular file");
     refused(fmt::format("{} {} {}", binary("vxf2vdb"), "/dev/zero", quoted(dir.path("x.vdb"))), "is not a regular file");
     refused(fmt::format("{} info {}", vxf, quoted(dir.path("fifo.off"))), "is not a regular file");
@@ -1001,12 +1031,14 @@ TEST_CASE("every crafted .vdb that overflowed OpenVDB 10.0.1's reader is a clear
     for (const char* name : {"blosc_raw_chunk_longer_than_node", "blosc_raw_chunk_longer_than_node_2"}) {
         const std::string crafted = dir.path(std::string(name) + ".vdb");
         fs::copy_file(source("tests/regress/fuzz/vdb_info/") + name, crafted);
-        vxf::test::spit(dir.path("scene.json"), fmt::format(R"({{
+        vxf::test::spit(dir.path("scene.json"),
+            fmt::format(R"({{
   "objects": [{{"name": "smoke", "volume": {}, "grid": "density", "material": {{"albedo": 0.9, "mean_free_path": 0.5}}}}],
   "lights": [{{"type": "directional", "direction": [0, 0, -1], "intensity": 3}}],
   "camera": {{"position": [0, -4, 0], "look_at": [0, 0, 0], "fov": 40}},
   "render": {{"width": 8, "height": 6, "samples": 1}}
-}})", nlohmann::json(crafted).dump()));
+}})",
+                nlohmann::json(crafted).dump()));
         const std::vector<std::string> commands{
             fmt::format("{} info {}", vxf, quoted(crafted)),
             fmt::format("{} info --json {}", vxf, quoted(crafted)),
@@ -1030,21 +1062,24 @@ TEST_CASE("every crafted .vdb that overflowed OpenVDB 10.0.1's reader is a clear
     }
 }
 
-TEST_CASE("every command that allocates estimates its peak first: above --max-memory, a ulimit or the machine it stops at once with the estimate",
+TEST_CASE(
+    "every command that allocates estimates its peak first: above --max-memory, a ulimit or the machine it stops at once with the estimate",
     "[cli][memory]")
 {
     TempDir dir;
     const std::string vxf = binary("vxf");
     const auto tiny = run(fmt::format("{} voxelize builtin:sphere --dim 64 -o {} --max-memory 1M", vxf, quoted(dir.path("s.vdb"))));
     CHECK(tiny.status == 1);
-    CHECK_THAT(tiny.err, Catch::Contains("voxelize needs about") && Catch::Contains("narrow-band voxels × 56 bytes") &&
-                             Catch::Contains("more than the memory budget of 1.0 MiB (--max-memory)"));
+    CHECK_THAT(tiny.err,
+        Catch::Contains("voxelize needs about") && Catch::Contains("narrow-band voxels × 56 bytes") &&
+            Catch::Contains("more than the memory budget of 1.0 MiB (--max-memory)"));
     CHECK_FALSE(fs::exists(dir.path("s.vdb")));
     CHECK(run(fmt::format("{} voxelize builtin:sphere --dim 64 -o {} --max-memory 8X", vxf, quoted(dir.path("s.vdb")))).status == 2);
 
     // An image of 32768² pixels: refused before a pixel is allocated (about 60 MB resident, against 160 GiB).
     REQUIRE(run(fmt::format("{} voxelize builtin:sphere --dim 24 -q -o {}", vxf, quoted(dir.path("s.vdb")))).status == 0);
-    vxf::test::spit(dir.path("s.json"), R"({"objects": [{"name": "ball", "mesh": "builtin:sphere", "material": {"albedo": 0.9, "mean_free_path": 0.5}}],
+    vxf::test::spit(
+        dir.path("s.json"), R"({"objects": [{"name": "ball", "mesh": "builtin:sphere", "material": {"albedo": 0.9, "mean_free_path": 0.5}}],
  "lights": [{"type": "point", "position": [0, -3, 2], "intensity": 10}],
  "camera": {"position": [0, -4, 0], "look_at": [0, 0, 0], "fov": 40},
  "render": {"width": 32, "height": 24, "samples": 1}})");
@@ -1059,14 +1094,14 @@ TEST_CASE("every command that allocates estimates its peak first: above --max-me
 
     // Under an address-space limit the default budget is what the limit leaves: a clear error,
     // not an allocation failing inside OpenVDB (which ended in std::terminate, SIGABRT).
-    const auto limited = run(fmt::format("bash -c 'ulimit -v 2000000 && exec {} voxelize builtin:sphere --dim 4096 -o {}'", vxf,
-        dir.path("big.vdb")));
+    const auto limited =
+        run(fmt::format("bash -c 'ulimit -v 2000000 && exec {} voxelize builtin:sphere --dim 4096 -o {}'", vxf, dir.path("big.vdb")));
     CHECK(limited.status == 1);
     CHECK_THAT(limited.err, Catch::Contains("voxelize needs about") && Catch::Contains("the memory this machine has available"));
     // Past the estimate (a budget raised above the limit): the allocation that fails inside
     // OpenVDB's meshToVolume is a clear error, not std::terminate from its unwinding (SIGABRT).
-    const auto beyond = run(fmt::format("bash -c 'ulimit -v 1500000 && exec {} voxelize builtin:sphere --dim 4096 -o {} --max-memory 100G'",
-        vxf, dir.path("big.vdb")));
+    const auto beyond = run(fmt::format(
+        "bash -c 'ulimit -v 1500000 && exec {} voxelize builtin:sphere --dim 4096 -o {} --max-memory 100G'", vxf, dir.path("big.vdb")));
     CHECK(beyond.status == 1);
     CHECK_THAT(beyond.err, Catch::Contains("out of memory"));
     CHECK_FALSE(fs::exists(dir.path("big.vdb")));
@@ -1093,7 +1128,8 @@ TEST_CASE("no stage output goes negative on its own: the candle through both ker
         for (const char* mode : {"view", "gather"}) {
             CAPTURE(kernel, mode);
             std::string variant = scene;
-            variant.replace(variant.find(R"("kernel": "sweep")"), std::strlen(R"("kernel": "sweep")"), fmt::format(R"("kernel": "{}")", kernel));
+            variant.replace(
+                variant.find(R"("kernel": "sweep")"), std::strlen(R"("kernel": "sweep")"), fmt::format(R"("kernel": "{}")", kernel));
             variant.replace(variant.find(R"("mode": "view")"), std::strlen(R"("mode": "view")"), fmt::format(R"("mode": "{}")", mode));
             vxf::test::spit(dir.path("candle.json"), variant);
             const auto r = run(fmt::format("{} run {} --out {}", binary("vxf"), quoted(dir.path("candle.json")), quoted(dir.path("out"))));
@@ -1131,14 +1167,20 @@ TEST_CASE("a density with no positive value is lit with a warning, never silentl
     TempDir dir;
     const std::string vxf = binary("vxf");
     REQUIRE(run(fmt::format("{} voxelize builtin:sphere --dim 16 -q -o {}", vxf, quoted(dir.path("s.vdb")))).status == 0);
-    REQUIRE(run(fmt::format("{} op mul {} -o {} --grid density --value 0", vxf, quoted(dir.path("s.vdb")), quoted(dir.path("z.vdb")))).status == 0);
-    vxf::test::spit(dir.path("s.json"), R"({"objects": [{"name": "ball", "mesh": "builtin:sphere", "material": {"albedo": 0.9, "mean_free_path": 0.5}}],
+    REQUIRE(
+        run(fmt::format("{} op mul {} -o {} --grid density --value 0", vxf, quoted(dir.path("s.vdb")), quoted(dir.path("z.vdb")))).status ==
+        0);
+    vxf::test::spit(
+        dir.path("s.json"), R"({"objects": [{"name": "ball", "mesh": "builtin:sphere", "material": {"albedo": 0.9, "mean_free_path": 0.5}}],
  "lights": [{"type": "point", "position": [0, -3, 2], "intensity": 10}],
  "camera": {"position": [0, -4, 0], "look_at": [0, 0, 0], "fov": 40}})");
-    const auto empty = run(fmt::format("{} light {} --scene {} -o {}", vxf, quoted(dir.path("z.vdb")), quoted(dir.path("s.json")), quoted(dir.path("l.vdb"))));
+    const auto empty = run(
+        fmt::format("{} light {} --scene {} -o {}", vxf, quoted(dir.path("z.vdb")), quoted(dir.path("s.json")), quoted(dir.path("l.vdb"))));
     CHECK(empty.status == 0);
-    CHECK_THAT(empty.err, Catch::Contains("warning: the medium's density ('density', ") && Catch::Contains("has no positive value (largest 0)"));
-    const auto lit = run(fmt::format("{} light {} --scene {} -o {}", vxf, quoted(dir.path("s.vdb")), quoted(dir.path("s.json")), quoted(dir.path("l.vdb"))));
+    CHECK_THAT(
+        empty.err, Catch::Contains("warning: the medium's density ('density', ") && Catch::Contains("has no positive value (largest 0)"));
+    const auto lit = run(
+        fmt::format("{} light {} --scene {} -o {}", vxf, quoted(dir.path("s.vdb")), quoted(dir.path("s.json")), quoted(dir.path("l.vdb"))));
     CHECK(lit.status == 0);
     CHECK(lit.err.find("no positive value") == std::string::npos);
 }

@@ -96,6 +96,8 @@ TEST_CASE("a write removes the temporaries of killed writers of the same file, a
     CHECK(vxf::test::slurp(target) == "whole");
     const auto left = names();
     CHECK(left.size() == 4); // out.vdb, the live writer's, the other machine's, the other file's
-    CHECK(std::count_if(left.begin(), left.end(), [&](const std::string& n) { return n.find("-" + std::to_string(killed) + "-") != std::string::npos; }) == 0);
-    CHECK(std::count_if(left.begin(), left.end(), [&](const std::string& n) { return n.find("-" + std::to_string(alive) + "-") != std::string::npos; }) == 1);
+    CHECK(std::count_if(left.begin(), left.end(),
+              [&](const std::string& n) { return n.find("-" + std::to_string(killed) + "-") != std::string::npos; }) == 0);
+    CHECK(std::count_if(left.begin(), left.end(),
+              [&](const std::string& n) { return n.find("-" + std::to_string(alive) + "-") != std::string::npos; }) == 1);
 }

@@ -57,7 +57,8 @@ TEST_CASE("prolongation interpolates a linear field exactly", "[coarse]")
     for (int i = -4; i <= 4; ++i)
         for (int j = -4; j <= 4; ++j)
             for (int k = -4; k <= 4; ++k) {
-                coarse->tree().setValueOn(openvdb::Coord(i, j, k), openvdb::Vec3f(field(coarseXform->indexToWorld(openvdb::Coord(i, j, k)))));
+                coarse->tree().setValueOn(
+                    openvdb::Coord(i, j, k), openvdb::Vec3f(field(coarseXform->indexToWorld(openvdb::Coord(i, j, k)))));
             }
     auto fine = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
     fine->setTransform(fineXform);

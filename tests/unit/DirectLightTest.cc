@@ -165,7 +165,7 @@ TEST_CASE("environment maps: lat-long convention, energy kept for any direction 
         INFO(samples << " directions");
         // φ = ∫ L dω = 2π·2 with no extinction, however the texels are binned.
         CHECK(vxf::lightFluence(vxf::LightSampler(light), sampler, medium, openvdb::Coord(1, 2, 3), {}).x() ==
-              Approx(4.0 * M_PI).epsilon(1e-3));
+            Approx(4.0 * M_PI).epsilon(1e-3));
     }
     // A thick medium below... lit from above only: the top face sees more than the bottom face.
     const vxf::Medium thick(set, vxf::test::greyMaterial(5.0, 0.0));
@@ -173,7 +173,7 @@ TEST_CASE("environment maps: lat-long convention, energy kept for any direction 
     light.samples = 64;
     const vxf::LightSampler sampled(light);
     CHECK(vxf::lightFluence(sampled, thickSampler, thick, openvdb::Coord(0, 0, 5), {}).x() >
-          5.0 * vxf::lightFluence(sampled, thickSampler, thick, openvdb::Coord(0, 0, -5), {}).x());
+        5.0 * vxf::lightFluence(sampled, thickSampler, thick, openvdb::Coord(0, 0, -5), {}).x());
 
     const std::string bad = dir.path("bad.exr");
     writeMap(bad, 8, 4, [](double u, double v) { return u > 0.5 && v > 0.5 ? std::nanf("") : 1.0f; });
@@ -194,7 +194,7 @@ TEST_CASE("spot and area lights agree with their point-light limits", "[light][d
     spot.coneSoftnessDegrees = 10.0;
     const openvdb::Coord below(0, 0, 10), edge(16, 0, 0), outside(20, 0, 18);
     CHECK(vxf::lightFluence(vxf::LightSampler(spot), sampler, medium, below, {}).x() ==
-          Approx(vxf::lightFluence(vxf::LightSampler(point), sampler, medium, below, {}).x()));
+        Approx(vxf::lightFluence(vxf::LightSampler(point), sampler, medium, below, {}).x()));
     const double soft = vxf::lightFluence(vxf::LightSampler(spot), sampler, medium, edge, {}).x(); // ~28 degrees off axis: in the soft edge
     CHECK(soft > 0.0);
     CHECK(soft < vxf::lightFluence(vxf::LightSampler(point), sampler, medium, edge, {}).x());
@@ -210,7 +210,7 @@ TEST_CASE("spot and area lights agree with their point-light limits", "[light][d
     area.intensity = 2.0 / (0.02 * 0.02);
     area.samples = 16;
     CHECK(vxf::lightFluence(vxf::LightSampler(area), sampler, medium, below, {}).x() ==
-          Approx(vxf::lightFluence(vxf::LightSampler(point), sampler, medium, below, {}).x()).epsilon(1e-3));
+        Approx(vxf::lightFluence(vxf::LightSampler(point), sampler, medium, below, {}).x()).epsilon(1e-3));
     // One-sided: nothing behind it.
     area.direction = openvdb::Vec3d(0, 0, 1);
     CHECK(vxf::lightFluence(vxf::LightSampler(area), sampler, medium, below, {}).x() == 0.0);
@@ -353,7 +353,8 @@ TEST_CASE("a directional light by sweeps: shadows cast across vacuum wider than 
     // chest). The depth entering from outside the lattice is marched instead.
     const double dx = 0.05, sigmaT = 2.0;
     vxf::VoxelSet set = boxMedium(openvdb::CoordBBox(openvdb::Coord(0, -20, -20), openvdb::Coord(7, 20, 20)), dx);
-    set.get<openvdb::FloatGrid>("density")->tree().fill(openvdb::CoordBBox(openvdb::Coord(32, -20, -20), openvdb::Coord(47, 20, 20)), 1.0f, true);
+    set.get<openvdb::FloatGrid>("density")->tree().fill(
+        openvdb::CoordBBox(openvdb::Coord(32, -20, -20), openvdb::Coord(47, 20, 20)), 1.0f, true);
     set.get<openvdb::FloatGrid>("density")->tree().voxelizeActiveTiles();
     vxf::Light sun;
     sun.type = vxf::Light::Type::Directional;
@@ -426,7 +427,8 @@ TEST_CASE("directional and environment lights by sweeps match the march through 
     INFO(why);
 }
 
-TEST_CASE("with the medium's meshes, light crossing vacuum brings the depth the sweep holds where it left the medium", "[light][direct][sweep]")
+TEST_CASE(
+    "with the medium's meshes, light crossing vacuum brings the depth the sweep holds where it left the medium", "[light][direct][sweep]")
 {
     // Two spheres (radius 10 voxels) 30 voxels apart along the sun: the far one lies in the
     // near one's shadow, beyond a gap no leaf spans. With the meshes at hand the depth entering

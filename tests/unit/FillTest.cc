@@ -32,5 +32,5 @@ TEST_CASE("blur_special fills unset voxels from their neighbours; the artist's v
     o.smoothing = 0;
     CHECK(vxf::ops::fill(*g, o) == 1);
     CHECK(g->tree().getValue(openvdb::Coord(5, 0, 0)) ==
-          Approx(0.5 * (g->tree().getValue(openvdb::Coord(4, 0, 0)) + g->tree().getValue(openvdb::Coord(6, 0, 0)))));
+        Approx(0.5 * (g->tree().getValue(openvdb::Coord(4, 0, 0)) + g->tree().getValue(openvdb::Coord(6, 0, 0)))));
 }

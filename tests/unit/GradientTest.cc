@@ -24,7 +24,7 @@ TEST_CASE("gradients: directional, radial, surface distance and multi-stop ramps
     o.falloff = 2.0;
     g = vxf::ops::gradient(*topology, nullptr, o);
     CHECK(g->tree().getValue(openvdb::Coord(2, 0, 0))[0] == Approx(0.16f)); // (0.2/0.5)²
-    CHECK(g->tree().getValue(openvdb::Coord(9, 0, 0))[0] == 1.0f);          // clamped beyond the radius
+    CHECK(g->tree().getValue(openvdb::Coord(9, 0, 0))[0] == 1.0f); // clamped beyond the radius
 
     CHECK(vxf::ops::rampColor({{0.0, openvdb::Vec3d(0)}, {0.5, openvdb::Vec3d(1)}, {1.0, openvdb::Vec3d(0)}}, 0.75)[0] == Approx(0.5));
 

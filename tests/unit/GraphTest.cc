@@ -27,8 +27,10 @@ std::string graph(double value, int radius)
     return R"({
   "nodes": {
     "source": {"file": "in.vdb"},
-    "scaled": {"op": "mul", "input": "source", "params": {"grid": "density", "value": )" + std::to_string(value) + R"(}},
-    "soft": {"op": "blur", "input": "scaled", "params": {"grid": "density", "radius": )" + std::to_string(radius) + R"(}},
+    "scaled": {"op": "mul", "input": "source", "params": {"grid": "density", "value": )" +
+        std::to_string(value) + R"(}},
+    "soft": {"op": "blur", "input": "scaled", "params": {"grid": "density", "radius": )" +
+        std::to_string(radius) + R"(}},
     "unused": {"op": "normalize", "input": "source", "params": {"grid": "density"}}
   },
   "outputs": {"soft": "out.vdb", "scaled": "scaled.vdb"}
@@ -79,9 +81,14 @@ TEST_CASE("bad graphs name the file and the node", "[graph]")
         CHECK_THROWS_WITH(vxf::runGraph(dir.path("bad.json"), dir.path("cache")), Catch::Contains("bad.json") && Catch::Contains(message));
     };
     fails(R"({"nodes": {"a": {"file": "in.vdb"}}, "outputs": {"b": "x.vdb"}})", "no node named 'b'");
-    fails(R"({"nodes": {"a": {"op": "blur", "input": "z", "params": {"grid": "density"}}}, "outputs": {"a": "x.vdb"}})", "/nodes/a: input 'z'");
-    fails(R"({"nodes": {"a": {"op": "blur", "input": "b", "params": {"grid": "density"}}, "b": {"op": "blur", "input": "a", "params": {"grid": "density"}}}, "outputs": {"a": "x.vdb"}})", "cycle");
-    fails(R"({"nodes": {"s": {"file": "in.vdb"}, "a": {"op": "blur", "input": "s", "params": {"grid": "density", "radius": 99}}}, "outputs": {"a": "x.vdb"}})", "radius");
+    fails(R"({"nodes": {"a": {"op": "blur", "input": "z", "params": {"grid": "density"}}}, "outputs": {"a": "x.vdb"}})",
+        "/nodes/a: input 'z'");
+    fails(
+        R"({"nodes": {"a": {"op": "blur", "input": "b", "params": {"grid": "density"}}, "b": {"op": "blur", "input": "a", "params": {"grid": "density"}}}, "outputs": {"a": "x.vdb"}})",
+        "cycle");
+    fails(
+        R"({"nodes": {"s": {"file": "in.vdb"}, "a": {"op": "blur", "input": "s", "params": {"grid": "density", "radius": 99}}}, "outputs": {"a": "x.vdb"}})",
+        "radius");
     fails(R"({"nodes": {"a": {"op": "sharpen", "input": "a"}}, "outputs": {}})", "/nodes/a/op");
     fails(R"({"nodes": {"a": {"file": "in.vdb"}}, "outputs": {"a": "x.vdb"}, })", "invalid JSON");
 }
@@ -135,7 +142,8 @@ TEST_CASE("a graph runs the pipeline stages and combines nodes (with)", "[graph]
         worst = std::max(worst, double((mixed->tree().getValue(it.getCoord()) - *it * 1.5f).length()));
     }
     CHECK(worst < 1e-5);
-    vxf::test::spit(dir.path("q.json"), R"({"nodes": {"s": {"file": "sc.vdb"}, "v": {"op": "voxelize", "input": "s", "params": {"mesh": "builtin:box"}}}, "outputs": {"v": "v.vdb"}})");
+    vxf::test::spit(dir.path("q.json"),
+        R"({"nodes": {"s": {"file": "sc.vdb"}, "v": {"op": "voxelize", "input": "s", "params": {"mesh": "builtin:box"}}}, "outputs": {"v": "v.vdb"}})");
     CHECK_THROWS_WITH(vxf::runGraph(dir.path("q.json"), dir.path("cache")), Catch::Contains("takes no input"));
 }
 

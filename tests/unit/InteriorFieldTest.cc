@@ -60,8 +60,8 @@ TEST_CASE("single scattering read from the grid follows a steep fall-off up to t
     const auto phi = [ell](const openvdb::Vec3d& x) { return std::exp(-(1.0 - x.length()) / ell); };
     const LitSphere sphere(phi);
     const vxf::InteriorField field(*sphere.medium, *sphere.fluence);
-    for (const openvdb::Vec3d& dir : {openvdb::Vec3d(0.3, -0.8, 0.52).unit(), openvdb::Vec3d(0.71, 0.1, 0.7).unit(),
-             openvdb::Vec3d(0.0, 0.0, 1.0)}) {
+    for (const openvdb::Vec3d& dir :
+        {openvdb::Vec3d(0.3, -0.8, 0.52).unit(), openvdb::Vec3d(0.71, 0.1, 0.7).unit(), openvdb::Vec3d(0.0, 0.0, 1.0)}) {
         for (double depth : {0.0, 0.02, 0.05, 0.1, 0.15, 0.2, 0.3}) {
             const openvdb::Vec3d x = dir * (1.0 - depth);
             INFO("direction " << dir << ", depth " << depth);

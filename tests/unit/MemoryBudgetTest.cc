@@ -40,6 +40,6 @@ TEST_CASE("a stage's estimate above the budget stops it with the estimate, the b
     CHECK_THROWS_AS(vxf::requireMemory("voxelize", vxf::MemoryEstimate{std::numeric_limits<double>::infinity(), "x"}), vxf::Error);
     CHECK_THROWS_AS(vxf::requireMemory("voxelize", vxf::MemoryEstimate{std::nan(""), "x"}), vxf::Error);
     vxf::setMemoryBudget(0); // the default again, for the tests after this one
-    CHECK_THROWS_WITH(vxf::requireMemory("render", vxf::MemoryEstimate{1e30, "x"}),
-        Catch::Contains("the memory this machine has available"));
+    CHECK_THROWS_WITH(
+        vxf::requireMemory("render", vxf::MemoryEstimate{1e30, "x"}), Catch::Contains("the memory this machine has available"));
 }

@@ -31,12 +31,14 @@ TEST_CASE("meshes read in every supported format", "[io][mesh]")
 {
     TempDir dir;
     spit(dir.path("cube.off"), kCubeOff);
-    spit(dir.path("cube.obj"), "# cube\nv -1 -1 -1\nv 1 -1 -1\nv -1 1 -1\nv 1 1 -1\nv -1 -1 1\nv 1 -1 1\nv -1 1 1\nv 1 1 1\n"
-                               "f 1 5 7 3\nf 2 4 8 6\nf 1 2 6 5\nf 3 7 8 4\nf 1 3 4 2\nf 5 6 8 7\n");
-    spit(dir.path("cube.ply"), "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\nproperty float z\n"
-                               "element face 6\nproperty list uchar int vertex_indices\nend_header\n"
-                               "-1 -1 -1\n1 -1 -1\n-1 1 -1\n1 1 -1\n-1 -1 1\n1 -1 1\n-1 1 1\n1 1 1\n"
-                               "4 0 4 6 2\n4 1 3 7 5\n4 0 1 5 4\n4 2 6 7 3\n4 0 2 3 1\n4 4 5 7 6\n");
+    spit(dir.path("cube.obj"),
+        "# cube\nv -1 -1 -1\nv 1 -1 -1\nv -1 1 -1\nv 1 1 -1\nv -1 -1 1\nv 1 -1 1\nv -1 1 1\nv 1 1 1\n"
+        "f 1 5 7 3\nf 2 4 8 6\nf 1 2 6 5\nf 3 7 8 4\nf 1 3 4 2\nf 5 6 8 7\n");
+    spit(dir.path("cube.ply"),
+        "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\nproperty float z\n"
+        "element face 6\nproperty list uchar int vertex_indices\nend_header\n"
+        "-1 -1 -1\n1 -1 -1\n-1 1 -1\n1 1 -1\n-1 -1 1\n1 -1 1\n-1 1 1\n1 1 1\n"
+        "4 0 4 6 2\n4 1 3 7 5\n4 0 1 5 4\n4 2 6 7 3\n4 0 2 3 1\n4 4 5 7 6\n");
     {
         // ASCII STL: one facet per triangle, vertices repeated (merged on reading).
         const auto box = vxf::makeBox(openvdb::Vec3d(-1), openvdb::Vec3d(1));
@@ -66,8 +68,9 @@ TEST_CASE("meshes read in every supported format", "[io][mesh]")
 TEST_CASE("an inside-out mesh is turned outward", "[io][mesh]")
 {
     TempDir dir;
-    spit(dir.path("inverted.off"), "OFF\n8 6 0\n-1 -1 -1\n1 -1 -1\n-1 1 -1\n1 1 -1\n-1 -1 1\n1 -1 1\n-1 1 1\n1 1 1\n"
-                                   "4 2 6 4 0\n4 5 7 3 1\n4 4 5 1 0\n4 3 7 6 2\n4 1 3 2 0\n4 6 7 5 4\n");
+    spit(dir.path("inverted.off"),
+        "OFF\n8 6 0\n-1 -1 -1\n1 -1 -1\n-1 1 -1\n1 1 -1\n-1 -1 1\n1 -1 1\n-1 1 1\n1 1 1\n"
+        "4 2 6 4 0\n4 5 7 3 1\n4 4 5 1 0\n4 3 7 6 2\n4 1 3 2 0\n4 6 7 5 4\n");
     CHECK(vxf::readMesh(dir.path("inverted.off")).volume() == Approx(8.0));
 }
 
@@ -77,8 +80,9 @@ TEST_CASE("mesh defects are repaired or reported, never silent", "[io][mesh]")
     SECTION("open mesh: holes filled")
     {
         // The cube without its top face.
-        spit(dir.path("open.off"), "OFF\n8 5 0\n-1 -1 -1\n1 -1 -1\n-1 1 -1\n1 1 -1\n-1 -1 1\n1 -1 1\n-1 1 1\n1 1 1\n"
-                                   "4 0 4 6 2\n4 1 3 7 5\n4 0 1 5 4\n4 2 6 7 3\n4 0 2 3 1\n");
+        spit(dir.path("open.off"),
+            "OFF\n8 5 0\n-1 -1 -1\n1 -1 -1\n-1 1 -1\n1 1 -1\n-1 -1 1\n1 -1 1\n-1 1 1\n1 1 1\n"
+            "4 0 4 6 2\n4 1 3 7 5\n4 0 1 5 4\n4 2 6 7 3\n4 0 2 3 1\n");
         vxf::MeshReport report;
         const auto mesh = vxf::readMesh(dir.path("open.off"), {}, &report);
         CHECK(report.holes == 1);
@@ -95,10 +99,11 @@ TEST_CASE("mesh defects are repaired or reported, never silent", "[io][mesh]")
     }
     SECTION("duplicate points, degenerate and duplicate faces")
     {
-        spit(dir.path("dirty.off"), "OFF\n10 9 0\n-1 -1 -1\n1 -1 -1\n-1 1 -1\n1 1 -1\n-1 -1 1\n1 -1 1\n-1 1 1\n1 1 1\n"
-                                    "1 1 1\n5 5 5\n"
-                                    "4 0 4 6 2\n4 1 3 7 5\n4 0 1 5 4\n4 2 6 7 3\n4 0 2 3 1\n4 4 5 8 6\n"
-                                    "3 0 0 1\n3 0 1 1\n4 0 4 6 2\n");
+        spit(dir.path("dirty.off"),
+            "OFF\n10 9 0\n-1 -1 -1\n1 -1 -1\n-1 1 -1\n1 1 -1\n-1 -1 1\n1 -1 1\n-1 1 1\n1 1 1\n"
+            "1 1 1\n5 5 5\n"
+            "4 0 4 6 2\n4 1 3 7 5\n4 0 1 5 4\n4 2 6 7 3\n4 0 2 3 1\n4 4 5 8 6\n"
+            "3 0 0 1\n3 0 1 1\n4 0 4 6 2\n");
         vxf::MeshReport report;
         const auto mesh = vxf::readMesh(dir.path("dirty.off"), {}, &report);
         CHECK(report.mergedPoints == 2); // the duplicate of point 7 and the unused point 9

@@ -39,7 +39,7 @@ TEST_CASE("Mitsuba .vol: header, bounds over voxel cells, values x fastest", "[i
     CHECK(i32(16) == 1);
     CHECK(i32(20) == 3);
     CHECK(f32(24) == -0.25f); // cell of voxel 0: centre 0, half a voxel (0.25) each side
-    CHECK(f32(36) == 1.25f);  // x max: voxel 2's cell ends at 2.5 voxels = 1.25
+    CHECK(f32(36) == 1.25f); // x max: voxel 2's cell ends at 2.5 voxels = 1.25
     // Voxel (2, 1, 0): index ((0·2 + 1)·3 + 2)·3 channels.
     CHECK(f32(48 + 4 * ((1 * 3 + 2) * 3 + 1)) == 5.0f);
     CHECK(f32(48 + 4 * 2) == 3.0f);

@@ -17,8 +17,7 @@ namespace {
 /// through σt(y) = σt·density(y) with the majorant σt, starting at x in a uniformly random
 /// direction. Each real collision y scores albedo^k·φ0(y)·... with the estimator
 /// φ(x) = φ0(x) + a·E[φ(y)], so the scatter part is E[Σ_{k≥1} a^k φ0(y_k)] (a = σs/σt).
-double randomWalkScatter(const vxf::VoxelSet& set, const vxf::Material& m, const openvdb::Vec3d& xWorld, int walks,
-    std::mt19937_64& rng)
+double randomWalkScatter(const vxf::VoxelSet& set, const vxf::Material& m, const openvdb::Vec3d& xWorld, int walks, std::mt19937_64& rng)
 {
     auto density = set.get<openvdb::FloatGrid>("density");
     auto direct = set.get<openvdb::Vec3SGrid>("direct");
@@ -27,8 +26,8 @@ double randomWalkScatter(const vxf::VoxelSet& set, const vxf::Material& m, const
     const auto& xform = set.transform();
     const double sigmaT = m.sigmaT()[0], albedo = m.sigmaS[0] / sigmaT;
     const openvdb::CoordBBox box = density->evalActiveVoxelBoundingBox();
-    const openvdb::BBoxd bounds(xform.indexToWorld(box.min().asVec3d() - openvdb::Vec3d(1.0)),
-        xform.indexToWorld(box.max().asVec3d() + openvdb::Vec3d(1.0)));
+    const openvdb::BBoxd bounds(
+        xform.indexToWorld(box.min().asVec3d() - openvdb::Vec3d(1.0)), xform.indexToWorld(box.max().asVec3d() + openvdb::Vec3d(1.0)));
     std::uniform_real_distribution<double> uniform(0.0, 1.0);
     double total = 0.0;
     for (int w = 0; w < walks; ++w) {

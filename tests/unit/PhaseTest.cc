@@ -120,8 +120,8 @@ TEST_CASE("the rest of the phase: delta-M's moments, and its angular factor's Le
             const openvdb::Vec3f side = axis.cross(openvdb::Vec3f(0.0f, 0.0f, 1.0f)).unit();
             const openvdb::Vec3f omega = axis * float(mu) + side * float(std::sqrt(1.0 - mu * mu));
             const double r = rest(axis * float(k), omega);
-            const double p[5] = {1.0, mu, 0.5 * (3 * mu * mu - 1), 0.5 * (5 * mu * mu * mu - 3 * mu),
-                (35 * std::pow(mu, 4) - 30 * mu * mu + 3) / 8};
+            const double p[5] = {
+                1.0, mu, 0.5 * (3 * mu * mu - 1), 0.5 * (5 * mu * mu * mu - 3 * mu), (35 * std::pow(mu, 4) - 30 * mu * mu + 3) / 8};
             for (int l = 0; l < 5; ++l) moment[l] += 0.5 * r * p[l] * 2.0 / steps;
         }
         INFO("k " << k);
@@ -169,6 +169,7 @@ TEST_CASE("the material's phase is recorded in the voxel set, and isotropic sets
     vxf::recordMaterial(set, m);
     CHECK(vxf::recordedMaterial(set).phaseG == -0.4);
     // A file claiming a phase no medium can have is refused, not solved with σs' < 0.
-    set.metadata().insertMeta(vxf::kMaterialMetaKey, openvdb::StringMetadata(R"({"sigma_a": [1, 1, 1], "sigma_s": [4, 4, 4], "phase_g": 5})"));
+    set.metadata().insertMeta(
+        vxf::kMaterialMetaKey, openvdb::StringMetadata(R"({"sigma_a": [1, 1, 1], "sigma_s": [4, 4, 4], "phase_g": 5})"));
     CHECK_THROWS_WITH(vxf::recordedMaterial(set), "malformed 'vxf:material' metadata: phase_g 5 is outside [-0.95, 0.95]");
 }

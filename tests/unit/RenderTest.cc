@@ -329,7 +329,8 @@ TEST_CASE("surface term: Lambert + normalized Blinn-Phong in closed form, occlud
     CHECK(plain.alpha[lit] == 1.0f);
 }
 
-TEST_CASE("surface term shadowed by a medium: Beer-Lambert along the chord, the vacuum before it skipped with the media's meshes", "[render][rayscene]")
+TEST_CASE("surface term shadowed by a medium: Beer-Lambert along the chord, the vacuum before it skipped with the media's meshes",
+    "[render][rayscene]")
 {
     // A wall (front face y = 1.5, kd = 0.5) behind a unit sphere of medium (σt = 1), lit by a
     // directional light of irradiance E = 2 travelling along (0, 1, −1)/√2, seen by camera rays
@@ -683,8 +684,8 @@ TEST_CASE("a Henyey-Greenstein phase: a thin slab's single scattering in closed 
     const double sigmaT = 4.0, albedo = 0.8, irradiance = 2.0, depth = 0.2; // τ = 0.8 across
     vxf::VoxelizeOptions voxelize;
     voxelize.dim = 64; // 6.4 voxels across the slab
-    const vxf::VoxelSet set = vxf::voxelize(vxf::makeBox(openvdb::Vec3d(-1.0, -0.5 * depth, -1.0),
-                                                openvdb::Vec3d(1.0, 0.5 * depth, 1.0)), voxelize);
+    const vxf::VoxelSet set =
+        vxf::voxelize(vxf::makeBox(openvdb::Vec3d(-1.0, -0.5 * depth, -1.0), openvdb::Vec3d(1.0, 0.5 * depth, 1.0)), voxelize);
     vxf::Material m = vxf::test::albedoMaterial(sigmaT, albedo);
     m.phaseG = g;
     const vxf::Medium medium(set, m);
@@ -729,7 +730,8 @@ TEST_CASE("a Henyey-Greenstein phase: the scattered light reaches the camera thr
     CHECK(image.scatter[15 * 31 + 15].x() == Approx(reducedS * phi / (4.0 * M_PI) / reducedT).epsilon(0.01));
 }
 
-TEST_CASE("a Henyey-Greenstein phase: the grids' light scatters toward the camera by the rest of the phase from its mean direction", "[render][phase]")
+TEST_CASE("a Henyey-Greenstein phase: the grids' light scatters toward the camera by the rest of the phase from its mean direction",
+    "[render][phase]")
 {
     // The accelerated sweeps' scattered fluence φ with its mean direction a (`scatter_anisotropy`),
     // in the delta-M medium (f = g⁴ kept in the beam, Phase.h): toward the camera
@@ -767,8 +769,8 @@ TEST_CASE("a Henyey-Greenstein phase: the grids' light scatters toward the camer
         CHECK(image.direct[15 * 31 + 15].x() == Approx(sigmaS * direct * r / (4.0 * M_PI) / sigmaT).epsilon(0.01));
         // Read in the medium's index space: a grid on other voxels is refused, not misread.
         anisotropy->setTransform(openvdb::math::Transform::createLinearTransform(0.5));
-        CHECK_THROWS_WITH(vxf::render(set, medium, frontView(), options),
-            "grid 'scatter_anisotropy' does not share the transform of 'density'");
+        CHECK_THROWS_WITH(
+            vxf::render(set, medium, frontView(), options), "grid 'scatter_anisotropy' does not share the transform of 'density'");
     }
 }
 
@@ -815,6 +817,5 @@ TEST_CASE("a volume light: its emission x colour x intensity in J0, and seen alo
 
     fire.grid = "nope";
     scene.lights = {fire};
-    CHECK_THROWS_WITH(vxf::render(set, medium, scene, options),
-        Catch::Contains("light 'fire': no grid 'nope' in " + dir.path("fire.vdb")));
+    CHECK_THROWS_WITH(vxf::render(set, medium, scene, options), Catch::Contains("light 'fire': no grid 'nope' in " + dir.path("fire.vdb")));
 }

@@ -94,18 +94,21 @@ void writePuff(const std::string& path)
 std::vector<std::pair<std::string, json>> everyLight()
 {
     return {{"point", {{"type", "point"}, {"position", {0.8, -0.9, 1.1}}, {"intensity", 3}}},
-        {"spot", {{"type", "spot"}, {"position", {0.8, -0.9, 1.1}}, {"direction", {-0.8, 0.9, -1.1}}, {"cone_angle", 60},
-                     {"cone_softness", 25}, {"intensity", 3}}},
+        {"spot",
+            {{"type", "spot"}, {"position", {0.8, -0.9, 1.1}}, {"direction", {-0.8, 0.9, -1.1}}, {"cone_angle", 60}, {"cone_softness", 25},
+                {"intensity", 3}}},
         {"directional", {{"type", "directional"}, {"direction", {-0.3, 0.5, -0.8}}, {"intensity", 2}}},
-        {"area", {{"type", "area"}, {"shape", "disk"}, {"radius", 0.3}, {"position", {0.6, -0.7, 1.0}},
-                     {"direction", {-0.6, 0.7, -1.0}}, {"intensity", 3}, {"samples", 8}}},
+        {"area",
+            {{"type", "area"}, {"shape", "disk"}, {"radius", 0.3}, {"position", {0.6, -0.7, 1.0}}, {"direction", {-0.6, 0.7, -1.0}},
+                {"intensity", 3}, {"samples", 8}}},
         {"environment", {{"type", "environment"}, {"intensity", 0.5}, {"samples", 64}}}};
 }
 
 } // namespace
 
 TEST_CASE("moving the objects, lights and camera together leaves the image as it was: every light type, both kernels, "
-          "mesh media and volume objects", "[pipeline][transform]")
+          "mesh media and volume objects",
+    "[pipeline][transform]")
 {
     vxf::test::TempDir dir;
     writePuff(dir.path("puff.vdb"));
@@ -127,11 +130,11 @@ TEST_CASE("moving the objects, lights and camera together leaves the image as it
                 const auto& [lightName, light] = lights[index];
                 json object = medium == "mesh"
                     ? json{{"name", "ball"}, {"mesh", "builtin:sphere"}, {"material", {{"albedo", 0.9}, {"mean_free_path", 0.2}}}}
-                    : json{{"name", "puff"}, {"volume", "puff.vdb"}, {"material", {{"albedo", 0.9}, {"mean_free_path", 0.1}, {"phase", {{"g", 0.3}}}}}};
+                    : json{{"name", "puff"}, {"volume", "puff.vdb"},
+                          {"material", {{"albedo", 0.9}, {"mean_free_path", 0.1}, {"phase", {{"g", 0.3}}}}}};
                 if (light.empty()) object["emission"] = {{"grid", "flame"}, {"intensity", 2}};
                 const json scene = {{"objects", {object}}, {"lights", light.empty() ? json::array() : json::array({light})},
-                    {"camera", {{"position", {0.4, -3.0, 0.6}}, {"look_at", {0, 0, 0}}, {"fov", 40}}},
-                    {"voxelize", {{"dim", 32}}},
+                    {"camera", {{"position", {0.4, -3.0, 0.6}}, {"look_at", {0, 0, 0}}, {"fov", 40}}}, {"voxelize", {{"dim", 32}}},
                     {"scatter", {{"kernel", kernel}, {"directions", 16}, {"passes", 8}}},
                     {"render", {{"width", 40}, {"height", 30}, {"samples", 1}}}};
                 const auto render = [&](const json& s, const std::string& name) {

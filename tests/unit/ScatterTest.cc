@@ -215,7 +215,9 @@ double secondPassOnHalfSpace(double albedo, double tau)
 
 } // namespace
 
-TEST_CASE("two passes from a uniform source near a flat face: the closed form and a 1-D quadrature at every depth, the face anywhere in its voxel", "[scatter]")
+TEST_CASE("two passes from a uniform source near a flat face: the closed form and a 1-D quadrature at every depth, the face anywhere in "
+          "its voxel",
+    "[scatter]")
 {
     // A half-space of uniform source J0 = σs·φ0/4π: at depth z the directions leaving through
     // the face see the medium for z/μ, so one pass gives φ1(z) = A·φ0·(1 − E2(σt z)/2), half
@@ -255,7 +257,11 @@ TEST_CASE("two passes from a uniform source near a flat face: the closed form an
             INFO("face offset " << offset << " voxel, centre " << i << ": depth " << depth / dx << " voxels");
             const double first = albedo * (1.0 - 0.5 * boost::math::expint(2, std::max(sigmaT * depth, 1e-300)));
             CHECK(phi1.getValue(openvdb::Coord(i, 0, 0)).x() == Approx(first).epsilon(0.003));
-            CHECK(phi2.getValue(openvdb::Coord(i, 0, 0)).x() == Approx(secondPassOnHalfSpace(albedo, sigmaT * depth)).epsilon(depth == 0.0 ? 0.03 : depth < dx ? 0.01 : 0.005));
+            CHECK(phi2.getValue(openvdb::Coord(i, 0, 0)).x() ==
+                Approx(secondPassOnHalfSpace(albedo, sigmaT * depth))
+                    .epsilon(depth == 0.0 ? 0.03
+                            : depth < dx  ? 0.01
+                                          : 0.005));
         }
         CHECK(skins == 1);
     }

@@ -113,7 +113,8 @@ TEST_CASE("a scene file resolves materials, lights, camera and settings", "[pipe
 TEST_CASE("bad scenes are refused with the field at fault", "[pipeline][scene]")
 {
     CHECK(errorOf("{\n  \"objects\": [\n    {\"mesh\": \"a.obj\",}\n  ]\n}") ==
-          std::string("/scenes/test.json:3:22: invalid JSON: syntax error while parsing object key - unexpected '}'; expected string literal"));
+        std::string(
+            "/scenes/test.json:3:22: invalid JSON: syntax error while parsing object key - unexpected '}'; expected string literal"));
     // A number beyond a double is an error at the number, not nlohmann's out_of_range (found by fuzzing).
     CHECK(errorOf("{\n  \"objects\": [1e999]\n}") == std::string("/scenes/test.json:2:15: invalid JSON: number overflow parsing '1e999'"));
     CHECK_THAT(errorOf(edited(R"("intensity": 4)", R"("intensity": -4)")), Catch::StartsWith("/scenes/test.json: /lights/0/intensity: "));
@@ -121,40 +122,44 @@ TEST_CASE("bad scenes are refused with the field at fault", "[pipeline][scene]")
     CHECK_THAT(errorOf(edited(R"("fov": 30)", R"("fov": 30, "zoom": 2)")), Catch::Contains("/camera"));
     CHECK_THAT(errorOf(edited(R"("cutoff": 0.01)", R"("cutoff": 0)")), Catch::StartsWith("/scenes/test.json: /scatter/cutoff: "));
     CHECK_THAT(errorOf(edited(R"("cutoff": 0.01)", R"("cutoff": 0.9)")), Catch::StartsWith("/scenes/test.json: /scatter/cutoff: "));
-    CHECK_THAT(errorOf(edited(R"("mean_free_path": 0.5)", R"("mean_free_path": 0.5, "sigma_a": 1)")), Catch::Contains("/objects/0/material"));
+    CHECK_THAT(
+        errorOf(edited(R"("mean_free_path": 0.5)", R"("mean_free_path": 0.5, "sigma_a": 1)")), Catch::Contains("/objects/0/material"));
     CHECK_THAT(errorOf(edited(R"("voxel_size": 0.01)", R"("voxel_size": 0.01, "dim": 64)")), Catch::Contains("/voxelize"));
     CHECK_THAT(errorOf(edited(R"("type": "directional")", R"("type": "laser")")), Catch::Contains("/lights/2"));
     CHECK_THAT(errorOf(edited(R"("outputs": ["image", "direct"])", R"("outputs": ["picture"])")), Catch::Contains("/outputs/0"));
     CHECK(errorOf(edited(R"("direction": [1, 1, 0])", R"("direction": [0, 0, 0])")) ==
-          "/scenes/test.json: /lights/2/direction: a direction must be a non-zero vector");
+        "/scenes/test.json: /lights/2/direction: a direction must be a non-zero vector");
     CHECK(errorOf(edited(R"("look_at": [0, 0, 1])", R"("look_at": [0, -5, 1])")) ==
-          "/scenes/test.json: /camera/look_at: must differ from /camera/position");
+        "/scenes/test.json: /camera/look_at: must differ from /camera/position");
     CHECK(errorOf(edited(R"("look_at": [0, 0, 1], "fov": 30)", R"("look_at": [0, 0, 1], "up": [0, 3, 0], "fov": 30)")) ==
-          "/scenes/test.json: /camera/up: must not point along the view direction");
+        "/scenes/test.json: /camera/up: must not point along the view direction");
     CHECK(errorOf(edited(R"({"mesh": "builtin:box", "role": "occluder"})", R"({"mesh": "builtin:box"})")) ==
-          "/scenes/test.json: /objects/1: a medium object needs a material (or set \"role\": \"occluder\")");
+        "/scenes/test.json: /objects/1: a medium object needs a material (or set \"role\": \"occluder\")");
     CHECK(errorOf(edited(R"({"mesh": "builtin:box", "role": "occluder"})", R"({"mesh": "builtin:flame", "role": "emitter"})")) ==
-          "/scenes/test.json: /objects/1/surface/emission: an emitter needs a non-zero emission");
+        "/scenes/test.json: /objects/1/surface/emission: an emitter needs a non-zero emission");
     CHECK(errorOf(edited(R"({"mesh": "builtin:box", "role": "occluder"})",
               R"({"mesh": "builtin:box", "material": {"albedo": 0.5, "mean_free_path": 1}, "surface": {"emission": 2}})")) ==
-          "/scenes/test.json: /objects/1/surface/emission: only an occluder or an emitter emits (a medium's glow is a volume light)");
+        "/scenes/test.json: /objects/1/surface/emission: only an occluder or an emitter emits (a medium's glow is a volume light)");
     CHECK(errorOf(edited(R"("cone_softness": 5)", R"("cone_softness": 25)")) ==
-          "/scenes/test.json: /lights/1/cone_softness: the soft edge (25 degrees) must fit inside half the cone (20 degrees)");
+        "/scenes/test.json: /lights/1/cone_softness: the soft edge (25 degrees) must fit inside half the cone (20 degrees)");
     // A light beyond what float grids carry once multiplied by 1/r² and σs (it scattered to all
     // zeros before), and one just inside.
     CHECK(errorOf(edited(R"("color": [1, 0.5, 0.25], "intensity": 4)", R"("color": [1, 0.5, 0.25], "intensity": 1e37)")) ==
-          "/scenes/test.json: /lights/0/intensity: intensity × colour is 1e+37, beyond the 1e+20 vxf carries (its grids hold 32-bit "
-          "floats, up to 3.4e38, and the stages multiply a light by distances and densities); scale the scene's units instead");
+        "/scenes/test.json: /lights/0/intensity: intensity × colour is 1e+37, beyond the 1e+20 vxf carries (its grids hold 32-bit "
+        "floats, up to 3.4e38, and the stages multiply a light by distances and densities); scale the scene's units instead");
     CHECK(errorOf(edited(R"("color": [1, 0.5, 0.25], "intensity": 4)", R"("color": [1, 0.5, 0.25], "intensity": 1e20)")) == "(no error)");
     // Volume objects (a .vdb's density grid): media only, without a surface; a mesh or a volume, not both.
     CHECK(errorOf(edited(R"({"mesh": "builtin:box", "role": "occluder"})", R"({"volume": "smoke.vdb", "role": "occluder"})")) ==
-          "/scenes/test.json: /objects/1/role: a volume object is a medium (its grid is the medium's density); an opaque object needs a mesh");
+        "/scenes/test.json: /objects/1/role: a volume object is a medium (its grid is the medium's density); an opaque object needs a "
+        "mesh");
     CHECK(errorOf(edited(R"({"mesh": "builtin:box", "role": "occluder"})",
               R"({"volume": "smoke.vdb", "material": {"albedo": 0.5, "mean_free_path": 1}, "surface": {"diffuse": 0.5}})")) ==
-          "/scenes/test.json: /objects/1/surface: a volume object has no surface to shade (its look is the volume term)");
-    CHECK(errorOf(edited(R"({"mesh": "builtin:box", "role": "occluder"})", R"({"mesh": "builtin:box", "role": "occluder", "grid": "density"})")) ==
-          "/scenes/test.json: /objects/1/grid: names the grid of a volume object; this object has a mesh");
-    CHECK_THAT(errorOf(edited(R"({"mesh": "builtin:box", "role": "occluder"})", R"({"mesh": "builtin:box", "volume": "smoke.vdb", "role": "occluder"})")),
+        "/scenes/test.json: /objects/1/surface: a volume object has no surface to shade (its look is the volume term)");
+    CHECK(errorOf(edited(
+              R"({"mesh": "builtin:box", "role": "occluder"})", R"({"mesh": "builtin:box", "role": "occluder", "grid": "density"})")) ==
+        "/scenes/test.json: /objects/1/grid: names the grid of a volume object; this object has a mesh");
+    CHECK_THAT(errorOf(edited(R"({"mesh": "builtin:box", "role": "occluder"})",
+                   R"({"mesh": "builtin:box", "volume": "smoke.vdb", "role": "occluder"})")),
         Catch::StartsWith("/scenes/test.json: /objects/1"));
     CHECK_THAT(errorOf(edited(R"({"mesh": "builtin:box", "role": "occluder"})", R"({"role": "occluder"})")),
         Catch::StartsWith("/scenes/test.json: /objects/1"));
@@ -162,11 +167,12 @@ TEST_CASE("bad scenes are refused with the field at fault", "[pipeline][scene]")
     CHECK_THAT(errorOf(edited(R"("mean_free_path": 0.5})", R"("mean_free_path": 0.5, "phase": {"g": 0.99}})")),
         Catch::StartsWith("/scenes/test.json: /objects/0/material/phase/g: "));
     CHECK(errorOf(edited(R"("mean_free_path": 0.5})", R"("mean_free_path": 0.5, "phase": {"g": 0.6}})")) ==
-          "/scenes/test.json: /objects/2/material/phase/g: 0 differs from medium 'grape''s 0.6: every medium of a scene has the same phase");
+        "/scenes/test.json: /objects/2/material/phase/g: 0 differs from medium 'grape''s 0.6: every medium of a scene has the same phase");
     CHECK_THROWS_WITH(vxf::loadScene("/nonexistent/scene.json"), "/nonexistent/scene.json: no such file");
 }
 
-TEST_CASE("a material's phase: Henyey-Greenstein g, and single scattering marched to the lights unless the scene says", "[pipeline][scene][phase]")
+TEST_CASE("a material's phase: Henyey-Greenstein g, and single scattering marched to the lights unless the scene says",
+    "[pipeline][scene][phase]")
 {
     const std::string anisotropic = edited(R"("mean_free_path": 0.5})", R"("mean_free_path": 0.5, "phase": {"g": -0.3}})");
     std::string both = anisotropic;
@@ -175,7 +181,7 @@ TEST_CASE("a material's phase: Henyey-Greenstein g, and single scattering marche
     const vxf::Scene scene = parse(both);
     CHECK(scene.objects[0].material->phaseG == -0.3);
     CHECK(scene.objects[2].material->phaseG == -0.3);
-    CHECK(scene.settings.directFromLights);   // the phase shows in single scattering marched to the lights
+    CHECK(scene.settings.directFromLights); // the phase shows in single scattering marched to the lights
     CHECK_FALSE(parse(kScene).settings.directFromLights); // isotropic: the direct grid, as before
     std::string asked = both;
     const std::string render = R"("mode": "gather",)";
@@ -188,7 +194,8 @@ TEST_CASE("a volume object names a .vdb and its density grid, resolved against t
     const vxf::Scene scene = vxf::parseScene(R"({
       "objects": [{"name": "smoke", "volume": "sim/smoke.vdb", "material": {"albedo": 0.9, "mean_free_path": 0.1}},
                   {"name": "ground", "mesh": "builtin:box", "role": "occluder"}],
-      "lights": [], "camera": {"position": [0, -5, 0], "look_at": [0, 0, 0]}})", "/scenes/cloud.json");
+      "lights": [], "camera": {"position": [0, -5, 0], "look_at": [0, 0, 0]}})",
+        "/scenes/cloud.json");
     REQUIRE(scene.objects.size() == 2);
     CHECK(scene.objects[0].isVolume());
     CHECK(scene.objects[0].volume == "/scenes/sim/smoke.vdb");
@@ -197,7 +204,8 @@ TEST_CASE("a volume object names a .vdb and its density grid, resolved against t
     CHECK_FALSE(scene.objects[1].isVolume());
     const vxf::Scene flame = vxf::parseScene(R"({
       "objects": [{"volume": "fire.vdb", "grid": "soot", "material": {"sigma_a": 1, "sigma_s": 1}}],
-      "lights": [], "camera": {"position": [0, -5, 0], "look_at": [0, 0, 0]}})", "/scenes/fire.json");
+      "lights": [], "camera": {"position": [0, -5, 0], "look_at": [0, 0, 0]}})",
+        "/scenes/fire.json");
     CHECK(flame.objects[0].grid == "soot");
 }
 
@@ -239,5 +247,5 @@ TEST_CASE("a volume object's emission is a volume light on its file that moves w
     CHECK(e.gridToWorld.getTranslation() == openvdb::Vec3d(1, 2, 3));
 
     CHECK(errorOf(edited(R"("mesh": "meshes/grape.obj", )", R"("mesh": "meshes/grape.obj", "emission": {"grid": "flame"}, )")) ==
-          "/scenes/test.json: /objects/0/emission: names a grid of a volume object's file; a mesh medium's glow is a volume light");
+        "/scenes/test.json: /objects/0/emission: names a grid of a volume object's file; a mesh medium's glow is a volume light");
 }

@@ -30,12 +30,15 @@ TEST_CASE("an object's mesh is read once, and again when the file changes", "[pi
     spit(path, cubeOff(1));
     const vxf::Scene scene = vxf::parseScene(R"({
       "objects": [
-        {"name": "a", "mesh": ")" + path + R"(", "material": {"sigma_a": [1, 1, 1], "sigma_s": [1, 1, 1]}},
-        {"name": "b", "mesh": ")" + path + R"(", "transform": {"translate": [5, 0, 0]},
+        {"name": "a", "mesh": ")" +
+            path + R"(", "material": {"sigma_a": [1, 1, 1], "sigma_s": [1, 1, 1]}},
+        {"name": "b", "mesh": ")" +
+            path + R"(", "transform": {"translate": [5, 0, 0]},
          "material": {"sigma_a": [1, 1, 1], "sigma_s": [1, 1, 1]}}
       ],
       "lights": [], "camera": {"position": [0, -5, 0], "look_at": [0, 0, 0]}
-    })", dir.path("scene.json"));
+    })",
+        dir.path("scene.json"));
     CHECK(vxf::objectMesh(scene.objects[0]).volume() == Approx(8.0));
     // The same file for another object: each gets its own transform.
     const vxf::TriangleMesh moved = vxf::objectMesh(scene.objects[1]);

@@ -18,13 +18,15 @@ vxf::Scene twoSpheres(const std::string& second)
       "objects": [
         {"name": "red", "mesh": "builtin:sphere", "transform": {"translate": [-1.5, 0, 0]},
          "material": {"sigma_a": [1, 0, 0], "sigma_s": [2, 2, 2]}},
-        {"name": "blue", "mesh": "builtin:sphere", "transform": {"translate": [)" + second + R"(, 0, 0]},
+        {"name": "blue", "mesh": "builtin:sphere", "transform": {"translate": [)" +
+            second + R"(, 0, 0]},
          "material": {"sigma_a": [0, 0, 3], "sigma_s": [4, 4, 4]}},
         {"name": "wall", "mesh": "builtin:box", "role": "occluder", "transform": {"translate": [0, 5, 0]}}
       ],
       "lights": [],
       "camera": {"position": [0, -5, 0], "look_at": [0, 0, 0]}
-    })", "two.json");
+    })",
+        "two.json");
 }
 
 openvdb::Vec3f at(const vxf::VoxelSet& set, const char* grid, const openvdb::Vec3d& world)
@@ -90,8 +92,10 @@ TEST_CASE("a material's per-voxel coefficient grids are read and resampled onto 
 
     const auto scene = [&](const std::string& grid) {
         return vxf::parseScene(R"({"objects": [{"mesh": "builtin:sphere", "material": {"sigma_a": 1, "sigma_s": 1,
-            "grids": {"file": ")" + file + R"(", "sigma_a": ")" + grid + R"("}}}], "lights": [],
-            "camera": {"position": [0, -5, 0], "look_at": [0, 0, 0]}})", dir.path("s.json"));
+            "grids": {"file": ")" +
+                file + R"(", "sigma_a": ")" + grid + R"("}}}], "lights": [],
+            "camera": {"position": [0, -5, 0], "look_at": [0, 0, 0]}})",
+            dir.path("s.json"));
     };
     vxf::VoxelizeOptions options;
     options.dim = 40;
@@ -103,8 +107,8 @@ TEST_CASE("a material's per-voxel coefficient grids are read and resampled onto 
     CHECK(inside[2] == Approx(2.5f));
     CHECK_FALSE(set.find("sigma_s")); // not given: density × the material's sigma_s
 
-    CHECK_THROWS_WITH(vxf::voxelizeMedia(scene("missing"), options),
-        Catch::Contains("coefficients.vdb") && Catch::Contains("no grid named 'missing'"));
+    CHECK_THROWS_WITH(
+        vxf::voxelizeMedia(scene("missing"), options), Catch::Contains("coefficients.vdb") && Catch::Contains("no grid named 'missing'"));
     CHECK_THROWS_WITH(vxf::voxelizeMedia(scene("not_a_vector"), options), Catch::Contains("needs vec3s"));
 }
 
@@ -125,7 +129,8 @@ TEST_CASE("a volume object's grid is the medium, on its own voxels; level sets a
 
     const auto scene = [&](const std::string& object) {
         return vxf::parseScene(R"({"objects": [)" + object + R"(], "lights": [],
-          "camera": {"position": [0, -5, 0], "look_at": [0, 0, 0]}})", dir.path("scene.json"));
+          "camera": {"position": [0, -5, 0], "look_at": [0, 0, 0]}})",
+            dir.path("scene.json"));
     };
     const std::string material = R"("material": {"sigma_a": [1, 1, 1], "sigma_s": [2, 2, 2]})";
     vxf::VoxelizeOptions options;
@@ -144,11 +149,13 @@ TEST_CASE("a volume object's grid is the medium, on its own voxels; level sets a
     CHECK(world(*density, {0.0, 0.0, 1.2}) == 0.0f);
 
     // Moved by the object's transform: translated as it is, turned by resampling.
-    const vxf::VoxelSet moved = vxf::voxelizeMedia(scene(R"({"volume": "smoke.vdb", "transform": {"translate": [3, 0, 0]}, )" + material + "}"), options);
+    const vxf::VoxelSet moved =
+        vxf::voxelizeMedia(scene(R"({"volume": "smoke.vdb", "transform": {"translate": [3, 0, 0]}, )" + material + "}"), options);
     CHECK(world(*moved.get<openvdb::FloatGrid>("density"), {3.0, 0.0, 0.0}) == Approx(1.0f));
     CHECK(world(*moved.get<openvdb::FloatGrid>("density"), {0.0, 0.0, 0.0}) == 0.0f);
     const vxf::VoxelSet turned = vxf::voxelizeMedia(
-        scene(R"({"volume": "smoke.vdb", "grid": "temperature", "transform": {"rotate": [0, 0, 30], "scale": 2}, )" + material + "}"), options);
+        scene(R"({"volume": "smoke.vdb", "grid": "temperature", "transform": {"rotate": [0, 0, 30], "scale": 2}, )" + material + "}"),
+        options);
     const auto t = turned.get<openvdb::FloatGrid>("density");
     CHECK(t->voxelSize()[0] == Approx(0.2));
     CHECK(world(*t, {0.0, 0.0, 0.0}) == Approx(1.0f));

@@ -13,7 +13,7 @@ TEST_CASE("spherical Fibonacci directions are unit and evenly spread", "[core][d
         sum += d;
         zz += d.z() * d.z();
     }
-    CHECK(sum.length() / 256.0 < 0.01);   // no net direction
+    CHECK(sum.length() / 256.0 < 0.01); // no net direction
     CHECK(zz / 256.0 == Approx(1.0 / 3.0).epsilon(0.01)); // <z^2> of the uniform sphere
     CHECK(vxf::sphericalFibonacci(0).empty());
 }

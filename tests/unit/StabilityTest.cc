@@ -35,8 +35,8 @@ vxf::ScatterOptions fewPassesWithTail()
 
 /// The whole chain on @a mesh with a point light 1.5 longest sides above its centre;
 /// @a edit changes the lit set before scattering, as an artist might.
-Bounds runChain(const vxf::TriangleMesh& mesh, const vxf::Material& m, int dim,
-    const vxf::ScatterOptions& options = fewPassesWithTail(), const std::function<void(vxf::VoxelSet&)>& edit = {})
+Bounds runChain(const vxf::TriangleMesh& mesh, const vxf::Material& m, int dim, const vxf::ScatterOptions& options = fewPassesWithTail(),
+    const std::function<void(vxf::VoxelSet&)>& edit = {})
 {
     vxf::VoxelizeOptions voxelize;
     voxelize.dim = dim;
@@ -97,7 +97,7 @@ TEST_CASE("hard cases stay finite and bounded through the whole chain", "[stabil
             INFO("sigma_t " << sigmaT);
             const Bounds b = runChain(sphere, vxf::test::albedoMaterial(sigmaT, 0.5), 24);
             CHECK(b.finite);
-        CHECK(b.nonNegative);
+            CHECK(b.nonNegative);
             CHECK(b.maxDirect <= 4.0 + 1e-6);
             CHECK(b.maxScatter <= 4.0 + 1e-6);
         }
@@ -119,7 +119,8 @@ TEST_CASE("hard cases stay finite and bounded through the whole chain", "[stabil
     SECTION("a one-voxel-thin shell")
     {
         // Box 0.04 thick at a voxel size of 1/24 of its width: thinner than a voxel.
-        const Bounds b = runChain(vxf::makeBox(openvdb::Vec3d(-1, -1, -0.02), openvdb::Vec3d(1, 1, 0.02)), vxf::test::albedoMaterial(20.0, 0.9), 48);
+        const Bounds b =
+            runChain(vxf::makeBox(openvdb::Vec3d(-1, -1, -0.02), openvdb::Vec3d(1, 1, 0.02)), vxf::test::albedoMaterial(20.0, 0.9), 48);
         CHECK(b.finite);
         CHECK(b.nonNegative);
         CHECK(b.maxDirect <= 4.0 + 1e-6);
@@ -172,8 +173,9 @@ TEST_CASE("open, non-manifold and self-intersecting meshes light and render fini
     {
         vxf::test::TempDir dir;
         // A unit cube's eight corners and five of its six faces (the top, z = 1, is open).
-        vxf::test::spit(dir.path("open.off"), "OFF\n8 5 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n"
-                                               "4 0 3 2 1\n4 0 1 5 4\n4 1 2 6 5\n4 2 3 7 6\n4 3 0 4 7\n");
+        vxf::test::spit(dir.path("open.off"),
+            "OFF\n8 5 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n"
+            "4 0 3 2 1\n4 0 1 5 4\n4 1 2 6 5\n4 2 3 7 6\n4 3 0 4 7\n");
         vxf::MeshReport report;
         const vxf::TriangleMesh mesh = vxf::readMesh(dir.path("open.off"), {}, &report);
         CHECK(report.holesFilled == 1);
@@ -186,7 +188,8 @@ TEST_CASE("open, non-manifold and self-intersecting meshes light and render fini
     {
         vxf::TriangleMesh mesh = vxf::makeBox(openvdb::Vec3d(0, 0, 0), openvdb::Vec3d(1, 1, 1));
         const auto n = openvdb::Index32(mesh.points.size());
-        mesh.points.insert(mesh.points.end(), {openvdb::Vec3d(0.5, -0.5, 0.5), openvdb::Vec3d(0.5, 1.5, 0.3), openvdb::Vec3d(0.5, 0.5, 1.5)});
+        mesh.points.insert(
+            mesh.points.end(), {openvdb::Vec3d(0.5, -0.5, 0.5), openvdb::Vec3d(0.5, 1.5, 0.3), openvdb::Vec3d(0.5, 0.5, 1.5)});
         mesh.triangles.push_back(openvdb::Vec3I(n, n + 1, n + 2));
         const Bounds b = runChain(mesh, m, 32);
         CHECK(b.finite);

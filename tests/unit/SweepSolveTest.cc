@@ -22,8 +22,8 @@ struct Solved
 
 /// A sphere of radius 8 voxels, sigma_t R = @a sigmaT (8: a mean free path per voxel), lit
 /// uniformly; its scattered light solved by @a kernel's passes.
-Solved solveSphere(double albedo, bool accelerate, double tolerance, int maxSweeps,
-    vxf::ScatterKernel kernel = vxf::ScatterKernel::Sweep, double sigmaT = 8.0)
+Solved solveSphere(double albedo, bool accelerate, double tolerance, int maxSweeps, vxf::ScatterKernel kernel = vxf::ScatterKernel::Sweep,
+    double sigmaT = 8.0)
 {
     const vxf::Material m = vxf::test::albedoMaterial(sigmaT, albedo);
     vxf::VoxelSet set = vxf::test::uniformSphere(m, 1.0, 8);
@@ -103,8 +103,8 @@ TEST_CASE("the gather solve takes no anisotropic phase", "[scatter][dsa]")
     vxf::SweepSolveOptions options;
     options.kernel = vxf::ScatterKernel::Gather;
     vxf::SweepSolveReport report;
-    CHECK_THROWS_WITH(vxf::sweepSolve(medium, *set.get<openvdb::Vec3SGrid>("scatter_source"), options, report),
-        Catch::Contains("isotropic"));
+    CHECK_THROWS_WITH(
+        vxf::sweepSolve(medium, *set.get<openvdb::Vec3SGrid>("scatter_source"), options, report), Catch::Contains("isotropic"));
     CHECK_NOTHROW(vxf::sweepSolve(medium.isotropic(), *set.get<openvdb::Vec3SGrid>("scatter_source"), options, report));
 }
 
@@ -191,7 +191,8 @@ TEST_CASE("a diffusion correction that stalls in voxels thicker than a mean free
     for (auto it = sum->cbeginValueOn(); it; ++it) REQUIRE(std::isfinite((*it).x()));
 }
 
-TEST_CASE("diffusion-accelerated sweeps with a Henyey-Greenstein phase: the transport-corrected diffusion, in at most 20 sweeps", "[sweep][dsa][phase]")
+TEST_CASE("diffusion-accelerated sweeps with a Henyey-Greenstein phase: the transport-corrected diffusion, in at most 20 sweeps",
+    "[sweep][dsa][phase]")
 {
     // The reduced medium's diffusion coefficient 1/(3σt') = 1/(3σt(1 − g·albedo)) is the
     // transport-corrected one; the accelerated solve reaches plain source iteration's sum.
@@ -213,7 +214,8 @@ TEST_CASE("diffusion-accelerated sweeps with a Henyey-Greenstein phase: the tran
         const auto reference = solve(false, 2000, plain);
         std::string changes;
         for (const auto& it : fast.iterations) changes += " " + std::to_string(it.change);
-        INFO("g " << g << ": " << fast.iterations.size() << " accelerated sweeps (" << fast.stopReason << "; changes" << changes << "), " << plain.iterations.size() << " plain");
+        INFO("g " << g << ": " << fast.iterations.size() << " accelerated sweeps (" << fast.stopReason << "; changes" << changes << "), "
+                  << plain.iterations.size() << " plain");
         CHECK(fast.converged);
         REQUIRE(plain.converged);
         CHECK(relativeL1(*accelerated, *reference) < 2e-3);

@@ -26,7 +26,8 @@ std::vector<std::pair<std::string, json>> everyOperator(const std::string& scene
         {"scatter", {{"directions", 8}, {"kernel", "sweep"}, {"tolerance", 1e-3}}},
         {"scatter", {{"directions", 8}, {"kernel", "gather"}, {"fine_passes", 0}, {"tolerance", 1e-3}}}, // corrected by sweeps
         {"render", {{"scene", scene}, {"image", image}, {"width", 24}, {"height", 16}, {"samples", 2}, {"max_samples", 8}}},
-        {"gradient", {{"kind", "surface_distance"}, {"distance", 0.3}, {"colors", json::array({json::array({1, 0, 0}), json::array({0, 0, 1})})}}},
+        {"gradient",
+            {{"kind", "surface_distance"}, {"distance", 0.3}, {"colors", json::array({json::array({1, 0, 0}), json::array({0, 0, 1})})}}},
         {"add", {{"grid", "density"}, {"value", 0.25}, {"out", "d1"}}},
         {"sub", {{"grid", "d1"}, {"value", 0.5}}},
         {"mul", {{"grid", "scatter"}, {"value", json::array({2, 1, 0.5})}, {"out", "s1"}}},

@@ -67,8 +67,8 @@ TEST_CASE("a march hands the rest of its way to whoever holds its depth", "[ligh
     CHECK(whole == Approx(std::exp(-sigmaT * dx * 17.5)).epsilon(1e-3)); // the density ramps over the last half voxel
     std::vector<double> asked;
     const double marker = 0.25;
-    const double handed = vxf::transmittanceToBoundary(sampler, medium, from, along, march,
-        [&](const openvdb::Vec3d& at, double, openvdb::Vec3f& depth) {
+    const double handed =
+        vxf::transmittanceToBoundary(sampler, medium, from, along, march, [&](const openvdb::Vec3d& at, double, openvdb::Vec3f& depth) {
             asked.push_back(at.x());
             if (at.x() < 10.0 - 1e-9) return false;
             depth = openvdb::Vec3f(float(sigmaT * dx * (19.5 - at.x()) + marker));
@@ -83,8 +83,10 @@ TEST_CASE("a march hands the rest of its way to whoever holds its depth", "[ligh
     CHECK(asked.back() < 19.5);
     CHECK(handed == Approx(whole * std::exp(-marker)).epsilon(1e-4));
     // Never taken: the march itself, to the bit.
-    const double declined = vxf::transmittanceToBoundary(sampler, medium, from, along, march,
-        [](const openvdb::Vec3d&, double, openvdb::Vec3f&) { return false; }).x();
+    const double declined =
+        vxf::transmittanceToBoundary(sampler, medium, from, along, march, [](const openvdb::Vec3d&, double, openvdb::Vec3f&) {
+            return false;
+        }).x();
     CHECK(declined == whole);
 }
 
@@ -116,7 +118,8 @@ TEST_CASE("negative artist coefficients never amplify light", "[light][transmitt
     auto sigmaA = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
     sigmaA->setName("sigma_a");
     sigmaA->setTransform(set.transformPtr());
-    sigmaA->tree().fill(openvdb::CoordBBox(openvdb::Coord(0, -20, -20), openvdb::Coord(19, 20, 20)), openvdb::Vec3f(-5.0f, 1.0f, 0.0f), true);
+    sigmaA->tree().fill(
+        openvdb::CoordBBox(openvdb::Coord(0, -20, -20), openvdb::Coord(19, 20, 20)), openvdb::Vec3f(-5.0f, 1.0f, 0.0f), true);
     set.put(sigmaA);
     const vxf::Medium medium(set, vxf::test::greyMaterial(0.0, 0.0));
     vxf::Medium::Sampler sampler(medium);
@@ -325,10 +328,11 @@ TEST_CASE("marches cross uniform regions in one go with the same optical depth",
     REQUIRE(stepped.uniformBricks() == nullptr);
     vxf::Medium::Sampler a(medium), b(stepped);
     for (double step : {0.5, 1.0, 3.0}) {
-        for (const openvdb::Vec3d& direction : {openvdb::Vec3d(1, 0, 0), openvdb::Vec3d(1, 0.7, 0.4).unit(), openvdb::Vec3d(-0.2, 1, -0.9).unit()}) {
-            for (const auto& [from, to] : {std::pair{openvdb::Vec3d(0.013), direction * 2.0},           // centre to outside
-                                          std::pair{-direction * 2.0 + openvdb::Vec3d(0.1), direction * 2.0}, // a chord
-                                          std::pair{direction * 0.97, -direction * 0.5}}) {             // from under the surface inwards
+        for (const openvdb::Vec3d& direction :
+            {openvdb::Vec3d(1, 0, 0), openvdb::Vec3d(1, 0.7, 0.4).unit(), openvdb::Vec3d(-0.2, 1, -0.9).unit()}) {
+            for (const auto& [from, to] : {std::pair{openvdb::Vec3d(0.013), direction * 2.0}, // centre to outside
+                     std::pair{-direction * 2.0 + openvdb::Vec3d(0.1), direction * 2.0}, // a chord
+                     std::pair{direction * 0.97, -direction * 0.5}}) { // from under the surface inwards
                 const vxf::MarchOptions march{step, 0.0};
                 const double one = -std::log(vxf::transmittance(a, medium, from / dx, to / dx, march).x());
                 const double other = -std::log(vxf::transmittance(b, stepped, from / dx, to / dx, march).x());
@@ -378,7 +382,8 @@ TEST_CASE("a grid too large for a dense copy: marches cross its tree's empty nod
         grid->setTransform(density->transformPtr()->copy());
         grid->tree().topologyUnion(density->tree());
         grid->tree().voxelizeActiveTiles();
-        for (auto it = grid->tree().beginValueOn(); it; ++it) it.setValue(openvdb::Vec3f(float(sigma * density->tree().getValue(it.getCoord()))));
+        for (auto it = grid->tree().beginValueOn(); it; ++it)
+            it.setValue(openvdb::Vec3f(float(sigma * density->tree().getValue(it.getCoord()))));
         grids.put(grid);
     }
     const vxf::Medium stepped(grids, vxf::test::greyMaterial(0.0, 0.0));
@@ -408,7 +413,8 @@ TEST_CASE("a surface on another lattice is refused by name", "[light][transmitta
     surface->setName("surface");
     openvdb::io::File(dir.path("mixed.vdb")).write({density, surface});
     const vxf::VoxelSet set = vxf::readVoxelSet(dir.path("mixed.vdb"));
-    CHECK_THROWS_WITH(vxf::Medium(set, vxf::test::greyMaterial(1.0, 0.0)), Catch::Contains("grid 'surface' does not share the transform of 'density'"));
+    CHECK_THROWS_WITH(
+        vxf::Medium(set, vxf::test::greyMaterial(1.0, 0.0)), Catch::Contains("grid 'surface' does not share the transform of 'density'"));
 }
 
 TEST_CASE("a step's emission integral is exact for quadratic emission", "[light][transmittance]")

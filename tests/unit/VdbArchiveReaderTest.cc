@@ -53,8 +53,9 @@ TEST_CASE("every crafted .vdb that made OpenVDB 10.0.1's reader write past a buf
         const std::string path = vxf::test::source("tests/regress/fuzz/vdb_info/") + name;
         const std::string error = readError(path);
         CAPTURE(name);
-        CHECK_THAT(error, Catch::Contains(path) && Catch::Contains("not a readable OpenVDB file") &&
-                              Catch::Contains("uncompressed bytes where the node holds"));
+        CHECK_THAT(error,
+            Catch::Contains(path) && Catch::Contains("not a readable OpenVDB file") &&
+                Catch::Contains("uncompressed bytes where the node holds"));
     }
 }
 
@@ -111,14 +112,14 @@ TEST_CASE("a size in a .vdb's metadata that the file cannot hold, or a fixed-siz
         std::memcpy(&longString[lengthAt], &huge, 4);
     }
     vxf::test::spit(dir.path("long.vdb"), longString);
-    CHECK_THAT(readError(dir.path("long.vdb")), Catch::Contains(dir.path("long.vdb")) &&
-                                                   Catch::Contains("the metadata of grid 'density'") &&
-                                                   Catch::Contains("declares 4294967280 bytes where the file has"));
+    CHECK_THAT(readError(dir.path("long.vdb")),
+        Catch::Contains(dir.path("long.vdb")) && Catch::Contains("the metadata of grid 'density'") &&
+            Catch::Contains("declares 4294967280 bytes where the file has"));
 
     // A float declaring 8 bytes: OpenVDB reads 4 and takes the other 4 for the next item.
     vxf::test::spit(dir.path("float8.vdb"), patchedAfter(good, opacityName + std::string("\x05\0\0\0", 4) + "float", 8));
-    CHECK_THAT(readError(dir.path("float8.vdb")),
-        Catch::Contains("item 'opacity_scale' of type float declares 8 bytes where the type has 4"));
+    CHECK_THAT(
+        readError(dir.path("float8.vdb")), Catch::Contains("item 'opacity_scale' of type float declares 8 bytes where the type has 4"));
 
     // Delayed-load metadata (a count, then a mask per leaf) declaring 2^32 − 1 leaves: OpenVDB
     // would size a 4 GiB mask from it. vxf never loads piecewise, reads it as opaque bytes and drops it.

@@ -139,7 +139,8 @@ TEST_CASE("view server: another page, another host name or no token changes noth
         CHECK(s.client.Post("/api/export", exportWhole, type)->status == 415);
     }
     // Another origin (another port of 127.0.0.1, another site), even with the token.
-    for (const std::string& origin : {fmt::format("http://127.0.0.1:{}", s.port + 1), std::string("http://evil.example"), std::string("null")}) {
+    for (const std::string& origin :
+        {fmt::format("http://127.0.0.1:{}", s.port + 1), std::string("http://evil.example"), std::string("null")}) {
         CAPTURE(origin);
         auto r = s.client.Post("/api/apply", {{"Origin", origin}}, edit, "application/json");
         CHECK(r->status == 403);
@@ -155,7 +156,8 @@ TEST_CASE("view server: another page, another host name or no token changes noth
     for (const std::string& host : {fmt::format("127.0.0.1:{}", s.port), fmt::format("localhost:{}", s.port)}) {
         CHECK(s.client.Get("/api/info", {{"Host", host}})->status == 200);
     }
-    auto own = s.client.Post("/api/apply", {{"Origin", fmt::format("http://localhost:{}", s.port)}}, edit, "application/json; charset=utf-8");
+    auto own =
+        s.client.Post("/api/apply", {{"Origin", fmt::format("http://localhost:{}", s.port)}}, edit, "application/json; charset=utf-8");
     CHECK(own->status == 200);
     CHECK(session.describe()["steps"].size() == 1);
 }
@@ -181,16 +183,10 @@ TEST_CASE("view server: export paths stay inside the folder, create nothing, and
     };
     const auto before = listing(dir.root());
     for (const auto& [path, why] : std::vector<std::pair<std::string, std::string>>{
-             {std::string("notes.json\0.vdb", 15), "control character 0x00"},
-             {"a\nb.vdb", "control character 0x0a"},
-             {"link/x.vdb", "symbolic link"},
-             {"new/deep/dir/x.vdb", "no folder 'new/deep/dir'"},
-             {"~/x.vdb", "'~'"},
-             {std::string(300, 'a') + ".vdb", "at most 255"},
-             {std::string(250, 'a') + ".vdb", "no room for its .pipeline.json"},
-             {"../x.vdb", "'..'"},
-             {"s.vdb", "the served file itself"},
-             {"sub", "must end in .vdb"}}) {
+             {std::string("notes.json\0.vdb", 15), "control character 0x00"}, {"a\nb.vdb", "control character 0x0a"},
+             {"link/x.vdb", "symbolic link"}, {"new/deep/dir/x.vdb", "no folder 'new/deep/dir'"}, {"~/x.vdb", "'~'"},
+             {std::string(300, 'a') + ".vdb", "at most 255"}, {std::string(250, 'a') + ".vdb", "no room for its .pipeline.json"},
+             {"../x.vdb", "'..'"}, {"s.vdb", "the served file itself"}, {"sub", "must end in .vdb"}}) {
         CAPTURE(path);
         auto r = exportTo(path);
         REQUIRE(r);

@@ -153,8 +153,8 @@ TEST_CASE("view: edits are the registry's operators, undoable, and the pipeline 
     CHECK(session.undo());
     CHECK_FALSE(session.undo());
     session.exportTo("out/undone.vdb", view::ExportMode::Whole, "", 0);
-    CHECK(test::identicalGrids(*readVoxelSet(dir.path("out/undone.vdb")).find("direct"),
-        *readVoxelSet(dir.path("s.vdb")).find("direct"), &why));
+    CHECK(test::identicalGrids(
+        *readVoxelSet(dir.path("out/undone.vdb")).find("direct"), *readVoxelSet(dir.path("s.vdb")).find("direct"), &why));
 }
 
 TEST_CASE("view: bad edits and exports are refused with a message and change nothing", "[view]")
@@ -164,7 +164,8 @@ TEST_CASE("view: bad edits and exports are refused with a message and change not
     view::ViewSession session(dir.path("s.vdb"));
     CHECK_THROWS_WITH(session.apply("scatter", nlohmann::json::object()), Catch::Contains("not 'scatter'"));
     CHECK_THROWS_WITH(session.apply("edit", {{"grid", "direct"}, {"hue_shift", 999}}), Catch::Contains("hue_shift"));
-    CHECK_THROWS_WITH(session.apply("copy", {{"grid", "direct"}, {"from_file", "/etc/passwd"}, {"out", "x"}}), Catch::Contains("from_file"));
+    CHECK_THROWS_WITH(
+        session.apply("copy", {{"grid", "direct"}, {"from_file", "/etc/passwd"}, {"out", "x"}}), Catch::Contains("from_file"));
     CHECK_THROWS_WITH(session.apply("edit", {{"grid", "density"}}), Catch::Contains("density"));
     CHECK(session.describe()["steps"].empty());
     CHECK_THROWS_WITH(session.exportTo("../x.vdb", view::ExportMode::Whole, "", 0), Catch::Contains("'..'"));

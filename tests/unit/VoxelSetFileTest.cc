@@ -81,8 +81,10 @@ TEST_CASE("voxel sets round-trip through .vdb files exactly", "[io][vdb]")
 TEST_CASE("the metadata schema rejects what it should", "[io][vdb][schema]")
 {
     const std::string schema = "schemas/vxf-metadata.schema.json";
-    CHECK(vxf::test::schemaErrors({{"vxf:version", "0.1.0"}, {"vxf:stage", "voxelize"}, {"vxf:params", {{"command", "voxelize"}}}}, schema) == "");
-    CHECK_THAT(vxf::test::schemaErrors({{"vxf:version", "one"}, {"vxf:stage", "voxelize"}, {"vxf:params", nlohmann::json::object()}}, schema),
+    CHECK(vxf::test::schemaErrors(
+              {{"vxf:version", "0.1.0"}, {"vxf:stage", "voxelize"}, {"vxf:params", {{"command", "voxelize"}}}}, schema) == "");
+    CHECK_THAT(
+        vxf::test::schemaErrors({{"vxf:version", "one"}, {"vxf:stage", "voxelize"}, {"vxf:params", nlohmann::json::object()}}, schema),
         Catch::StartsWith("document: /vxf:version: "));
     CHECK_THAT(vxf::test::schemaErrors({{"vxf:version", "0.1.0"}, {"vxf:stage", "bake"}, {"vxf:params", nlohmann::json::object()}}, schema),
         Catch::StartsWith("document: /vxf:stage: "));
@@ -132,8 +134,7 @@ TEST_CASE("unreadable .vdb files are reported with their path", "[io][vdb]")
     TempDir dir;
     CHECK_THROWS_WITH(vxf::readVoxelSet(dir.path("missing.vdb")), Catch::EndsWith("missing.vdb: no such file"));
     vxf::test::spit(dir.path("text.vdb"), "this is not a vdb\n");
-    CHECK_THROWS_WITH(vxf::readVoxelSet(dir.path("text.vdb")),
-        Catch::Contains("text.vdb: not a readable OpenVDB file"));
+    CHECK_THROWS_WITH(vxf::readVoxelSet(dir.path("text.vdb")), Catch::Contains("text.vdb: not a readable OpenVDB file"));
     // A truncated file (the first half of a real one).
     vxf::writeVoxelSet(dir.path("full.vdb"), sampleSet());
     const std::string bytes = vxf::test::slurp(dir.path("full.vdb"));

@@ -39,8 +39,7 @@ TEST_CASE("a voxel set holds named grids sharing one transform", "[core][voxelse
     {
         CHECK(set.find("nothing") == nullptr);
         CHECK_THROWS_WITH(set.get<openvdb::FloatGrid>("nothing"), "no grid named 'nothing' in the voxel set");
-        CHECK_THROWS_WITH(set.get<openvdb::Vec3SGrid>("density"),
-            "grid 'density' holds float values, expected vec3s");
+        CHECK_THROWS_WITH(set.get<openvdb::Vec3SGrid>("density"), "grid 'density' holds float values, expected vec3s");
     }
     SECTION("removal")
     {

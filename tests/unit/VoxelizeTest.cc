@@ -80,8 +80,8 @@ TEST_CASE("voxelizing a box: volume, faces and interior tiles", "[voxelize]")
     // Smooth ramp across the inner band: in [0, 1], increasing inward.
     float previous = -1.0f;
     for (int i = 0; i <= 4; ++i) {
-        const float d = float(openvdb::tools::BoxSampler::sample(
-            density->tree(), set.transform().worldToIndex(openvdb::Vec3d(1.1 - i * dx, 0.1, 0.0))));
+        const float d = float(
+            openvdb::tools::BoxSampler::sample(density->tree(), set.transform().worldToIndex(openvdb::Vec3d(1.1 - i * dx, 0.1, 0.0))));
         CHECK(d >= 0.0f);
         CHECK(d <= 1.0f);
         CHECK(d >= previous);

@@ -131,10 +131,7 @@ TEST_CASE("text round trips are lossless", "[io][vxf]")
         CHECK(set.get<openvdb::FloatGrid>("surface")->tree().getValue(openvdb::Coord(20, 20, 20)) == -0.15f);
         CHECK(set.get<openvdb::FloatGrid>("surface")->tree().getValue(openvdb::Coord(0, 0, 0)) == 0.15f);
     }
-    SECTION("an empty volume")
-    {
-        checkRoundTrip("size 2 2 2 1\nmin 0 0 0\nmax 2 2 2\n", dir);
-    }
+    SECTION("an empty volume") { checkRoundTrip("size 2 2 2 1\nmin 0 0 0\nmax 2 2 2\n", dir); }
 }
 
 TEST_CASE("vdb grids write as text and read back identically", "[io][vxf]")
@@ -198,7 +195,8 @@ TEST_CASE("a voxelized mesh's grids come back from text at their own index coord
         CHECK(returned->activeVoxelCount() == original->activeVoxelCount());
         bool same = true;
         auto acc = returned->getConstAccessor();
-        for (auto it = original->cbeginValueOn(); it; ++it) same = same && acc.isValueOn(it.getCoord()) && acc.getValue(it.getCoord()) == *it;
+        for (auto it = original->cbeginValueOn(); it; ++it)
+            same = same && acc.isValueOn(it.getCoord()) && acc.getValue(it.getCoord()) == *it;
         CHECK(same); // every active voxel at its index, bit-exact
         // Edited in text and back, the grid blends with its original as it is (no resample).
         auto sum = original->deepCopy();

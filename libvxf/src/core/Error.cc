@@ -13,8 +13,7 @@ std::string locate(const std::string& path, std::size_t line, std::size_t column
 }
 } // namespace
 
-InputError::InputError(const std::string& path, std::size_t line, std::size_t column,
-    const std::string& what)
+InputError::InputError(const std::string& path, std::size_t line, std::size_t column, const std::string& what)
     : Error(locate(path, line, column) + ": " + what)
     , mPath(path)
     , mLine(line)

@@ -89,14 +89,21 @@ std::uint64_t parseMemorySize(const std::string& text)
     }
     std::string unit = text.substr(end);
     for (auto& c : unit) c = char(std::toupper(static_cast<unsigned char>(c)));
-    if (unit.size() >= 2 && unit.compare(unit.size() - 2, 2, "IB") == 0) unit.resize(unit.size() - 2);
-    else if (!unit.empty() && unit.back() == 'B') unit.pop_back();
+    if (unit.size() >= 2 && unit.compare(unit.size() - 2, 2, "IB") == 0)
+        unit.resize(unit.size() - 2);
+    else if (!unit.empty() && unit.back() == 'B')
+        unit.pop_back();
     double scale = 0.0;
-    if (unit.empty()) scale = 1.0;
-    else if (unit == "K") scale = 1024.0;
-    else if (unit == "M") scale = 1024.0 * 1024.0;
-    else if (unit == "G") scale = 1024.0 * 1024.0 * 1024.0;
-    else if (unit == "T") scale = 1024.0 * 1024.0 * 1024.0 * 1024.0;
+    if (unit.empty())
+        scale = 1.0;
+    else if (unit == "K")
+        scale = 1024.0;
+    else if (unit == "M")
+        scale = 1024.0 * 1024.0;
+    else if (unit == "G")
+        scale = 1024.0 * 1024.0 * 1024.0;
+    else if (unit == "T")
+        scale = 1024.0 * 1024.0 * 1024.0 * 1024.0;
     const double bytes = value * scale;
     if (end == 0 || scale == 0.0 || !std::isfinite(bytes) || bytes < 1.0 || bytes >= 1.8e19) {
         throw UsageError(fmt::format("--max-memory: '{}' is not a memory size (a positive number of bytes, or with K, M, G or "

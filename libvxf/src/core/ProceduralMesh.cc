@@ -20,8 +20,7 @@ double TriangleMesh::volume() const
     const openvdb::Vec3d origin = points.front();
     double sixV = 0.0;
     for (const auto& t : triangles) {
-        const openvdb::Vec3d a = points[t[0]] - origin, b = points[t[1]] - origin,
-                             c = points[t[2]] - origin;
+        const openvdb::Vec3d a = points[t[0]] - origin, b = points[t[1]] - origin, c = points[t[2]] - origin;
         sixV += a.dot(b.cross(c));
     }
     return sixV / 6.0;
@@ -40,16 +39,13 @@ TriangleMesh makeRevolution(const std::vector<openvdb::Vec2d>& profile, int segm
     for (std::size_t r = 1; r + 1 < profile.size(); ++r) {
         for (int s = 0; s < segments; ++s) {
             const double phi = 2.0 * M_PI * double(s) / double(segments);
-            mesh.points.emplace_back(profile[r][0] * std::cos(phi), profile[r][0] * std::sin(phi),
-                profile[r][1]);
+            mesh.points.emplace_back(profile[r][0] * std::cos(phi), profile[r][0] * std::sin(phi), profile[r][1]);
         }
     }
     const auto top = openvdb::Index(mesh.points.size());
     mesh.points.emplace_back(0.0, 0.0, profile.back()[1]);
 
-    const auto ring = [&](std::size_t r, int s) {
-        return openvdb::Index(1 + r * segments + std::size_t((s + segments) % segments));
-    };
+    const auto ring = [&](std::size_t r, int s) { return openvdb::Index(1 + r * segments + std::size_t((s + segments) % segments)); };
     // Outward orientation: the profile runs bottom → top with the solid on the axis side.
     for (int s = 0; s < segments; ++s) {
         mesh.triangles.emplace_back(bottom, ring(0, s + 1), ring(0, s));
@@ -67,8 +63,7 @@ TriangleMesh makeSphere(const openvdb::Vec3d& center, double radius, int rings, 
     std::vector<openvdb::Vec2d> profile;
     for (int i = 0; i <= rings; ++i) {
         const double theta = M_PI * double(i) / double(rings); // 0 at the south pole
-        profile.emplace_back(i == 0 || i == rings ? 0.0 : radius * std::sin(theta),
-            -radius * std::cos(theta));
+        profile.emplace_back(i == 0 || i == rings ? 0.0 : radius * std::sin(theta), -radius * std::cos(theta));
     }
     TriangleMesh mesh = makeRevolution(profile, segments);
     for (auto& p : mesh.points) p += center;

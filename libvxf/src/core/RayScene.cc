@@ -91,10 +91,10 @@ void RayScene::commit()
     rtcSetSceneBuildQuality(s.scene, RTC_BUILD_QUALITY_HIGH);
     for (const auto& [mesh, id] : s.pending) {
         RTCGeometry geometry = rtcNewGeometry(s.device, RTC_GEOMETRY_TYPE_TRIANGLE);
-        auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0,
-            RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.points.size()));
-        auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0,
-            RTC_FORMAT_UINT3, 3 * sizeof(unsigned), mesh.triangles.size()));
+        auto* vertices = static_cast<float*>(
+            rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.points.size()));
+        auto* indices = static_cast<unsigned*>(
+            rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), mesh.triangles.size()));
         s.check("allocating a mesh");
         for (std::size_t i = 0; i < mesh.points.size(); ++i) {
             const openvdb::Vec3d p = mesh.points[i] - s.centre;
@@ -114,8 +114,8 @@ void RayScene::commit()
     s.check("building the BVH");
 }
 
-std::optional<RayScene::Hit> RayScene::intersect(const openvdb::Vec3d& origin, const openvdb::Vec3d& direction,
-    double tNear, double tFar) const
+std::optional<RayScene::Hit> RayScene::intersect(
+    const openvdb::Vec3d& origin, const openvdb::Vec3d& direction, double tNear, double tFar) const
 {
     const Impl& s = *mImpl;
     if (!s.scene || !(tFar > tNear)) return std::nullopt;

@@ -6,9 +6,14 @@ namespace vxf {
 
 const char* versionString() { return VXF_VERSION_STRING; }
 
-VoxelSet::VoxelSet() : mTransform(openvdb::math::Transform::createLinearTransform(1.0)) {}
+VoxelSet::VoxelSet()
+    : mTransform(openvdb::math::Transform::createLinearTransform(1.0))
+{
+}
 
-VoxelSet::VoxelSet(openvdb::math::Transform::Ptr transform) : mTransform(std::move(transform)), mTransformGiven(true)
+VoxelSet::VoxelSet(openvdb::math::Transform::Ptr transform)
+    : mTransform(std::move(transform))
+    , mTransformGiven(true)
 {
     if (!mTransform) throw Error("voxel set: null transform");
 }
@@ -36,10 +41,8 @@ void VoxelSet::put(openvdb::GridBase::Ptr grid)
         if (mGrids.empty() && !mTransformGiven) { // the first grid defines the transform
             mTransform = grid->transformPtr();
         } else {
-            throw Error("grid '" + grid->getName() +
-                        "' does not share the voxel set's transform (voxel size " +
-                        std::to_string(grid->voxelSize()[0]) + " vs " +
-                        std::to_string(mTransform->voxelSize()[0]) + "); resample it first");
+            throw Error("grid '" + grid->getName() + "' does not share the voxel set's transform (voxel size " +
+                std::to_string(grid->voxelSize()[0]) + " vs " + std::to_string(mTransform->voxelSize()[0]) + "); resample it first");
         }
     }
     grid->setTransform(mTransform);
@@ -49,8 +52,8 @@ void VoxelSet::put(openvdb::GridBase::Ptr grid)
 void VoxelSet::putAsIs(openvdb::GridBase::Ptr grid)
 {
     if (!grid) throw Error("voxel set: null grid");
-    auto same = std::find_if(mGrids.begin(), mGrids.end(),
-        [&](const openvdb::GridBase::Ptr& g) { return g->getName() == grid->getName(); });
+    auto same =
+        std::find_if(mGrids.begin(), mGrids.end(), [&](const openvdb::GridBase::Ptr& g) { return g->getName() == grid->getName(); });
     if (same != mGrids.end()) {
         *same = grid;
     } else {
@@ -60,8 +63,7 @@ void VoxelSet::putAsIs(openvdb::GridBase::Ptr grid)
 
 bool VoxelSet::remove(const std::string& name)
 {
-    auto it = std::remove_if(mGrids.begin(), mGrids.end(),
-        [&](const openvdb::GridBase::Ptr& g) { return g->getName() == name; });
+    auto it = std::remove_if(mGrids.begin(), mGrids.end(), [&](const openvdb::GridBase::Ptr& g) { return g->getName() == name; });
     const bool removed = it != mGrids.end();
     mGrids.erase(it, mGrids.end());
     return removed;

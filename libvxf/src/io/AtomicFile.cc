@@ -66,8 +66,7 @@ void writeAtomically(const std::string& path, const std::function<void(const std
         throw Error(fmt::format("{}: cannot write: directory '{}' does not exist", path, dir.string()));
     }
     removeStaleTemporaries(dir, target.filename().string());
-    const fs::path tmp = dir / fmt::format(".{}.tmp-{}-{}-{}", target.filename().string(), hostTag(), ::getpid(),
-                                   counter.fetch_add(1));
+    const fs::path tmp = dir / fmt::format(".{}.tmp-{}-{}-{}", target.filename().string(), hostTag(), ::getpid(), counter.fetch_add(1));
     try {
         write(tmp.string());
         fs::rename(tmp, target);

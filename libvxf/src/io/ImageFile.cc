@@ -73,7 +73,7 @@ RgbImage readExr(const std::string& path)
         const std::size_t stride = sizeof(openvdb::Vec3f), row = stride * std::size_t(image.width);
         // Slices are addressed by absolute pixel coordinates: shift the base by the window origin.
         char* base = reinterpret_cast<char*>(image.pixels.data()->asPointer()) - std::ptrdiff_t(window.min.x) * std::ptrdiff_t(stride) -
-                     std::ptrdiff_t(window.min.y) * std::ptrdiff_t(row);
+            std::ptrdiff_t(window.min.y) * std::ptrdiff_t(row);
         for (int c = 0; c < 3; ++c) {
             const char* name = grey ? "Y" : (c == 0 ? "R" : c == 1 ? "G" : "B");
             frame.insert(name, Imf::Slice(Imf::FLOAT, base + c * sizeof(float), stride, row, 1, 1, 0.0));
@@ -96,8 +96,9 @@ RgbImage readExr(const std::string& path)
         for (int c = 0; c < 3; ++c) {
             const float v = image.pixels[i][c];
             if (!std::isfinite(v) || v < 0.0f) {
-                throw InputError(path, 0, 0, fmt::format("pixel ({}, {}) channel {} is {}: radiance must be finite and >= 0",
-                    i % std::size_t(image.width), i / std::size_t(image.width), "RGB"[c], v));
+                throw InputError(path, 0, 0,
+                    fmt::format("pixel ({}, {}) channel {} is {}: radiance must be finite and >= 0", i % std::size_t(image.width),
+                        i / std::size_t(image.width), "RGB"[c], v));
             }
         }
     }
@@ -133,8 +134,8 @@ void writePng(const std::string& path, const RenderedImage& image, double exposu
             throw Error(fmt::format("{}: libpng failed to write", path));
         }
         png_init_io(png, file.get());
-        png_set_IHDR(png, info, png_uint_32(w), png_uint_32(h), 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
-            PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+        png_set_IHDR(png, info, png_uint_32(w), png_uint_32(h), 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+            PNG_FILTER_TYPE_DEFAULT);
         png_set_sRGB_gAMA_and_cHRM(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
         png_write_info(png, info);
         for (int y = 0; y < h; ++y) png_write_row(png, &rgb[std::size_t(y) * std::size_t(w) * 3]);

@@ -49,7 +49,8 @@ json parseJsonText(const std::string& text, const std::string& path)
         const auto bracket = what.find("] ");
         if (bracket != std::string::npos) what = what.substr(bracket + 2);
         const auto quote = what.find('\''), end = what.rfind('\'');
-        const std::size_t at = quote != std::string::npos && end > quote ? text.find(what.substr(quote + 1, end - quote - 1)) : std::string::npos;
+        const std::size_t at =
+            quote != std::string::npos && end > quote ? text.find(what.substr(quote + 1, end - quote - 1)) : std::string::npos;
         const auto [line, column] = lineAndColumn(text, at == std::string::npos ? 0 : at);
         throw InputError(path, at == std::string::npos ? 0 : line, at == std::string::npos ? 0 : column, "invalid JSON: " + what);
     }

@@ -53,8 +53,9 @@ void checkPlyHeader(const std::string& path)
             words >> name >> count;
             const bool digits = !count.empty() && count.find_first_not_of("0123456789") == std::string::npos;
             if (!digits || count.size() > 19 || std::stoull(count) > bytes) {
-                throw InputError(path, number, 1, fmt::format("PLY header: element '{}' has {} items, more than a file of {} bytes holds",
-                    name, count.empty() ? "no count of" : count, bytes));
+                throw InputError(path, number, 1,
+                    fmt::format("PLY header: element '{}' has {} items, more than a file of {} bytes holds", name,
+                        count.empty() ? "no count of" : count, bytes));
             }
         }
         if (keyword == "property" && !element) throw InputError(path, number, 1, "PLY header: 'property' before any 'element'");
@@ -69,8 +70,7 @@ namespace PMP = CGAL::Polygon_mesh_processing;
 std::string lowerExtension(const std::string& path)
 {
     std::string ext = std::filesystem::path(path).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-        [](unsigned char c) { return char(std::tolower(c)); });
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
     return ext;
 }
 
@@ -78,7 +78,11 @@ std::string lowerExtension(const std::string& path)
 class StepTimer
 {
 public:
-    explicit StepTimer(MeshReport& report) : mReport(report), mStart(std::chrono::steady_clock::now()) {}
+    explicit StepTimer(MeshReport& report)
+        : mReport(report)
+        , mStart(std::chrono::steady_clock::now())
+    {
+    }
     void lap(const char* step)
     {
         const auto now = std::chrono::steady_clock::now();
@@ -95,8 +99,7 @@ private:
 /// directed edge appears once, and the polygons around each vertex form a single fan.
 /// O(n log n) (CGAL's is_polygon_soup_a_polygon_mesh is ~15x slower on the bunny).
 /// @a borderEdges counts the border edges of a manifold soup (one per open fan).
-bool isOrientedManifoldSoup(std::size_t pointCount, const std::vector<std::vector<std::size_t>>& polygons,
-    std::size_t& borderEdges)
+bool isOrientedManifoldSoup(std::size_t pointCount, const std::vector<std::vector<std::size_t>>& polygons, std::size_t& borderEdges)
 {
     borderEdges = 0;
     std::vector<std::uint64_t> directed;
@@ -158,9 +161,8 @@ void reportSelfIntersections(const Mesh& mesh, MeshReport& report)
     }
     report.selfIntersecting = PMP::does_self_intersect<CGAL::Sequential_tag>(mesh);
     if (report.selfIntersecting) {
-        report.warnings.push_back(
-            "the mesh intersects itself; voxelization takes the union of the enclosed regions "
-            "(the interior is what no path from outside reaches)");
+        report.warnings.push_back("the mesh intersects itself; voxelization takes the union of the enclosed regions "
+                                  "(the interior is what no path from outside reaches)");
     }
 }
 
@@ -185,7 +187,8 @@ void checkOffCounts(const std::string& path)
             std::uintmax_t count = 0;
             if (!(face >> count)) return;
             if (count > bytes / 2) {
-                throw InputError(path, number, 1, fmt::format("OFF face lists {} vertices, more than a file of {} bytes holds", count, bytes));
+                throw InputError(
+                    path, number, 1, fmt::format("OFF face lists {} vertices, more than a file of {} bytes holds", count, bytes));
             }
             if (seen >= vertices + faces) return;
             continue;
@@ -203,7 +206,8 @@ void checkOffCounts(const std::string& path)
         std::istringstream numbers(tokens[0] + " " + (tokens.size() > 1 ? tokens[1] : ""));
         if (!(numbers >> vertices >> faces)) return; // CGAL reports the malformed header
         if (vertices > bytes || faces > bytes) {
-            throw InputError(path, number, 1, fmt::format("OFF header: {} vertices and {} faces, more than a file of {} bytes holds", vertices, faces, bytes));
+            throw InputError(path, number, 1,
+                fmt::format("OFF header: {} vertices and {} faces, more than a file of {} bytes holds", vertices, faces, bytes));
         }
     }
 }
@@ -240,15 +244,13 @@ const std::vector<std::string>& meshFileExtensions()
     return extensions;
 }
 
-TriangleMesh readMesh(const std::string& path, const MeshReadOptions& options, MeshReport* reportOut,
-    Interrupter* interrupter)
+TriangleMesh readMesh(const std::string& path, const MeshReadOptions& options, MeshReport* reportOut, Interrupter* interrupter)
 {
     MeshReport report;
     const std::string ext = lowerExtension(path);
     const auto& known = meshFileExtensions();
     if (std::find(known.begin(), known.end(), ext) == known.end()) {
-        throw Error(fmt::format("{}: unsupported mesh format '{}' (expected one of .obj .ply .off .stl)",
-            path, ext));
+        throw Error(fmt::format("{}: unsupported mesh format '{}' (expected one of .obj .ply .off .stl)", path, ext));
     }
     requireRegularFile(path);
     if (!std::ifstream(path).good()) throw Error(fmt::format("{}: cannot open mesh file", path));
@@ -282,8 +284,7 @@ TriangleMesh readMesh(const std::string& path, const MeshReadOptions& options, M
     for (const auto& polygon : polygons) {
         for (std::size_t index : polygon) {
             if (index >= points.size()) {
-                throw Error(fmt::format("{}: a face refers to vertex {} but there are only {}", path,
-                    index, points.size()));
+                throw Error(fmt::format("{}: a face refers to vertex {} but there are only {}", path, index, points.size()));
             }
         }
     }
@@ -310,7 +311,7 @@ TriangleMesh readMesh(const std::string& path, const MeshReadOptions& options, M
             used[p[0]] = used[p[1]] = used[p[2]] = true;
         }
         clean = clean && std::all_of(used.begin(), used.end(), [](bool u) { return u; }) &&
-                std::none_of(polygons.begin(), polygons.end(), degenerate);
+            std::none_of(polygons.begin(), polygons.end(), degenerate);
         manifold = clean && isOrientedManifoldSoup(points.size(), polygons, soupBorderEdges);
         if (!manifold || soupBorderEdges > 0) {
             // Repair: merge duplicate points, drop degenerate and duplicate polygons and unused points.
@@ -319,12 +320,11 @@ TriangleMesh readMesh(const std::string& path, const MeshReadOptions& options, M
             report.mergedPoints = report.inputPoints - std::min(report.inputPoints, points.size());
             report.removedPolygons = report.inputPolygons - std::min(report.inputPolygons, polygons.size());
             if (polygons.empty()) {
-                throw Error(fmt::format("{}: the mesh has no usable faces ({} read, all degenerate)", path,
-                    report.inputPolygons));
+                throw Error(fmt::format("{}: the mesh has no usable faces ({} read, all degenerate)", path, report.inputPolygons));
             }
             if (report.removedPolygons > 0) {
-                report.warnings.push_back(fmt::format(
-                    "removed {} degenerate or duplicate faces; voxelization ignores them", report.removedPolygons));
+                report.warnings.push_back(
+                    fmt::format("removed {} degenerate or duplicate faces; voxelization ignores them", report.removedPolygons));
             }
             manifold = isOrientedManifoldSoup(points.size(), polygons, soupBorderEdges);
         }
@@ -361,9 +361,8 @@ TriangleMesh readMesh(const std::string& path, const MeshReadOptions& options, M
     const std::size_t before = points.size();
     if (!manifold && !PMP::orient_polygon_soup(points, polygons)) {
         report.splitPoints = points.size() - before;
-        report.warnings.push_back(fmt::format(
-            "the mesh is not manifold: {} vertices were duplicated to orient it; the surface is "
-            "voxelized as given, and the interior is what no path from outside reaches",
+        report.warnings.push_back(fmt::format("the mesh is not manifold: {} vertices were duplicated to orient it; the surface is "
+                                              "voxelized as given, and the interior is what no path from outside reaches",
             report.splitPoints));
     }
     checkInterrupt(interrupter);
@@ -389,17 +388,13 @@ TriangleMesh readMesh(const std::string& path, const MeshReadOptions& options, M
                 if (!patch.empty()) ++report.holesFilled;
                 checkInterrupt(interrupter);
             }
-            report.warnings.push_back(fmt::format(
-                "the mesh is open: {} holes ({} border edges); filled {} of them with flat "
-                "triangulations before voxelizing{}",
+            report.warnings.push_back(fmt::format("the mesh is open: {} holes ({} border edges); filled {} of them with flat "
+                                                  "triangulations before voxelizing{}",
                 report.holes, report.borderEdges, report.holesFilled,
-                report.holesFilled < report.holes
-                    ? "; the interior may leak through the rest and is then left empty"
-                    : ""));
+                report.holesFilled < report.holes ? "; the interior may leak through the rest and is then left empty" : ""));
         } else {
-            report.warnings.push_back(fmt::format(
-                "the mesh is open: {} holes ({} border edges), left open as asked; the interior "
-                "is what no path from outside reaches, so it leaks through holes wider than the band",
+            report.warnings.push_back(fmt::format("the mesh is open: {} holes ({} border edges), left open as asked; the interior "
+                                                  "is what no path from outside reaches, so it leaks through holes wider than the band",
                 report.holes, report.borderEdges));
         }
     }

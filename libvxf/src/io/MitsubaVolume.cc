@@ -13,13 +13,13 @@ namespace vxf {
 
 namespace {
 
-template<typename T>
+template <typename T>
 void put(std::ofstream& out, T value)
 {
     out.write(reinterpret_cast<const char*>(&value), sizeof(T));
 }
 
-template<typename GridT>
+template <typename GridT>
 MitsubaVolumeInfo write(const std::string& path, const GridT& grid, int pad)
 {
     openvdb::CoordBBox box = grid.evalActiveVoxelBoundingBox();
@@ -29,8 +29,8 @@ MitsubaVolumeInfo write(const std::string& path, const GridT& grid, int pad)
     info.resolution = box.dim();
     info.channels = std::is_same_v<typename GridT::ValueType, float> ? 1 : 3;
     const openvdb::math::Transform& xform = grid.transform();
-    info.bounds = openvdb::BBoxd(xform.indexToWorld(box.min().asVec3d() - openvdb::Vec3d(0.5)),
-        xform.indexToWorld(box.max().asVec3d() + openvdb::Vec3d(0.5)));
+    info.bounds = openvdb::BBoxd(
+        xform.indexToWorld(box.min().asVec3d() - openvdb::Vec3d(0.5)), xform.indexToWorld(box.max().asVec3d() + openvdb::Vec3d(0.5)));
     writeAtomically(path, [&](const std::string& tmp) {
         std::ofstream out(tmp, std::ios::binary);
         out.write("VOL", 3);

@@ -72,16 +72,17 @@ public:
     std::uint64_t end() const { return mEnd; }
     void rewind() { mIn.seekg(mStart); }
 
-private:
+    /// Throws unless @a bytes are left in the file from here.
     void need(std::uint64_t bytes, const char* what)
     {
         const std::uint64_t at = position();
         if (at > mEnd || bytes > mEnd - at) {
-            throw openvdb::IoError(fmt::format("{} at byte {} declares {} bytes where the file has {} left", what, at, bytes,
-                at > mEnd ? 0 : mEnd - at));
+            throw openvdb::IoError(
+                fmt::format("{} at byte {} declares {} bytes where the file has {} left", what, at, bytes, at > mEnd ? 0 : mEnd - at));
         }
     }
 
+private:
     std::istream& mIn;
     std::streampos mStart;
     std::uint64_t mEnd;
@@ -101,8 +102,8 @@ void checkMetaMap(Lookahead& ahead, const char* what)
         if (type != openvdb::StringMetadata::staticTypeName() && openvdb::Metadata::isRegisteredType(type)) {
             const openvdb::Index32 size = openvdb::Metadata::createMetadata(type)->size();
             if (bytes != size) {
-                throw openvdb::IoError(fmt::format("{}: item '{}' of type {} declares {} bytes where the type has {}", what,
-                    name, type, bytes, size));
+                throw openvdb::IoError(
+                    fmt::format("{}: item '{}' of type {} declares {} bytes where the type has {}", what, name, type, bytes, size));
             }
         }
         ahead.skip(bytes, what);
@@ -199,17 +200,19 @@ public:
         mAhead.skip(mLayout.valueBytes, "a tree's background");
         const auto tiles = mAhead.value<std::uint32_t>("a tree's root tile count");
         const auto children = mAhead.value<std::uint32_t>("a tree's root child count");
-        mAhead.skip(std::uint64_t(tiles) * (3 * sizeof(std::int32_t) + mLayout.valueBytes + 1), "a tree's root tiles");
+        // Every origin on the 4096-voxel lattice of the root's children (so that a node's
+        // bounds, origin + 4095, stay within int32: a tile at 2^31 − 1 overflowed in
+        // evalActiveBoundingBox), every active flag a bool (0 or 1).
+        mAhead.need(std::uint64_t(tiles) * (3 * sizeof(std::int32_t) + mLayout.valueBytes + 1), "a tree's root tiles");
+        for (std::uint32_t n = 0; n < tiles; ++n) {
+            rootOrigin("a root tile");
+            mAhead.skip(mLayout.valueBytes, "a root tile's value");
+            const auto active = mAhead.value<std::uint8_t>("a root tile's active flag");
+            if (active > 1) throw openvdb::IoError(fmt::format("a root tile's active flag is {}, not 0 or 1", unsigned(active)));
+        }
         std::set<std::array<std::int32_t, 3>> origins;
         for (std::uint32_t n = 0; n < children; ++n) {
-            std::array<std::int32_t, 3> origin{};
-            for (auto& c : origin) c = mAhead.value<std::int32_t>("a root child's origin");
-            for (const auto c : origin) {
-                if (c % 4096 != 0) {
-                    throw openvdb::IoError(fmt::format("a root child's origin ({}, {}, {}) is not a multiple of 4096 voxels",
-                        origin[0], origin[1], origin[2]));
-                }
-            }
+            const auto origin = rootOrigin("a root child");
             if (!origins.insert(origin).second) {
                 throw openvdb::IoError(fmt::format("the root child at ({}, {}, {}) appears twice", origin[0], origin[1], origin[2]));
             }
@@ -218,6 +221,19 @@ public:
     }
 
 private:
+    std::array<std::int32_t, 3> rootOrigin(const char* what)
+    {
+        std::array<std::int32_t, 3> origin{};
+        for (auto& c : origin) c = mAhead.value<std::int32_t>(what);
+        for (const auto c : origin) {
+            if (c % 4096 != 0) {
+                throw openvdb::IoError(
+                    fmt::format("{}'s origin ({}, {}, {}) is not a multiple of 4096 voxels", what, origin[0], origin[1], origin[2]));
+            }
+        }
+        return origin;
+    }
+
     /// InternalNode<ChildT, log2Dim>::readTopology: child mask, value mask, the node's values,
     /// then each child's topology; a leaf's (LeafNode<T, 3>) is its 64-byte mask.
     void internalNode(int log2Dim)

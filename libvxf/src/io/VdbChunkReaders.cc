@@ -53,8 +53,8 @@ void readRawChunk(std::istream& is, char* data, size_t numBytes, std::int64_t le
     // -length overflows for INT64_MIN; compared as unsigned, -(INT64_MIN) is 2^63, never a buffer's size.
     const std::uint64_t declared = std::uint64_t(0) - std::uint64_t(length);
     if (declared != numBytes) {
-        OPENVDB_THROW(RuntimeError, "a " << codec << " chunk declares " << declared << " uncompressed bytes where the node holds "
-                                         << numBytes);
+        OPENVDB_THROW(
+            RuntimeError, "a " << codec << " chunk declares " << declared << " uncompressed bytes where the node holds " << numBytes);
     }
     if (data == nullptr) {
         is.seekg(std::streamoff(numBytes), std::ios_base::cur);
@@ -64,12 +64,12 @@ void readRawChunk(std::istream& is, char* data, size_t numBytes, std::int64_t le
 }
 
 /// A compressed chunk's bytes, after its length was checked against @a maxLength.
-std::unique_ptr<char[]> readCompressed(std::istream& is, std::int64_t length, std::uint64_t maxLength, size_t numBytes,
-    const char* codec)
+std::unique_ptr<char[]> readCompressed(std::istream& is, std::int64_t length, std::uint64_t maxLength, size_t numBytes, const char* codec)
 {
     if (std::uint64_t(length) > maxLength) {
-        OPENVDB_THROW(RuntimeError, "a " << codec << " chunk declares " << length << " compressed bytes for a node of "
-                                         << numBytes << " (at most " << maxLength << ")");
+        OPENVDB_THROW(RuntimeError,
+            "a " << codec << " chunk declares " << length << " compressed bytes for a node of " << numBytes << " (at most " << maxLength
+                 << ")");
     }
     std::unique_ptr<char[]> bytes(new char[size_t(length)]);
     is.read(bytes.get(), std::streamsize(length));
@@ -97,9 +97,9 @@ void bloscFromStream(std::istream& is, char* data, size_t numBytes)
     size_t headerUncompressed = 0, headerCompressed = 0, blockSize = 0;
     blosc_cbuffer_sizes(compressed.get(), &headerUncompressed, &headerCompressed, &blockSize);
     if (uncompressed != numBytes || headerCompressed != size_t(length)) {
-        OPENVDB_THROW(RuntimeError, "a Blosc chunk holds " << headerCompressed << " bytes decompressing to " << uncompressed
-                                                           << " where its length is " << length << " and the node holds "
-                                                           << numBytes);
+        OPENVDB_THROW(RuntimeError,
+            "a Blosc chunk holds " << headerCompressed << " bytes decompressing to " << uncompressed << " where its length is " << length
+                                   << " and the node holds " << numBytes);
     }
     const int decompressed = blosc_decompress_ctx(compressed.get(), data, numBytes, /*numinternalthreads=*/1);
     if (decompressed < 0 || size_t(decompressed) != numBytes) {
@@ -118,13 +118,12 @@ void unzipFromStream(std::istream& is, char* data, size_t numBytes)
     // zlib's worst case for the node's bytes bounds what a writer could have produced.
     const auto compressed = readCompressed(is, length, compressBound(uLong(numBytes)), numBytes, "zip");
     uLongf unzipped = uLongf(numBytes);
-    const int status = uncompress(reinterpret_cast<Bytef*>(data), &unzipped, reinterpret_cast<const Bytef*>(compressed.get()),
-        uLong(length));
+    const int status =
+        uncompress(reinterpret_cast<Bytef*>(data), &unzipped, reinterpret_cast<const Bytef*>(compressed.get()), uLong(length));
     if (status != Z_OK || unzipped != numBytes) {
-        OPENVDB_THROW(RuntimeError, "a zip chunk decompressed to " << unzipped << " bytes where the node holds " << numBytes
-                                                                    << (status != Z_OK ? " (zlib: " : "")
-                                                                    << (status != Z_OK ? zError(status) : "")
-                                                                    << (status != Z_OK ? ")" : ""));
+        OPENVDB_THROW(RuntimeError,
+            "a zip chunk decompressed to " << unzipped << " bytes where the node holds " << numBytes << (status != Z_OK ? " (zlib: " : "")
+                                           << (status != Z_OK ? zError(status) : "") << (status != Z_OK ? ")" : ""));
     }
 }
 

@@ -56,7 +56,8 @@ public:
         if (!(statm >> pages) || pages == 0) return;
         const std::uintmax_t mapped = pages * std::uintmax_t(::sysconf(_SC_PAGESIZE));
         const std::uintmax_t budget = fileBytes > (UINTMAX_MAX - kReadBudgetBase) / kReadBudgetRatio
-            ? UINTMAX_MAX / 2 : kReadBudgetBase + kReadBudgetRatio * fileBytes;
+            ? UINTMAX_MAX / 2
+            : kReadBudgetBase + kReadBudgetRatio * fileBytes;
         const std::uintmax_t limit = mapped + std::min(budget, UINTMAX_MAX / 2 - mapped);
         if (mPrevious.rlim_cur != RLIM_INFINITY && mPrevious.rlim_cur <= limit) return; // already tighter
         rlimit tighter = mPrevious;
@@ -149,8 +150,8 @@ VoxelSet readVoxelSet(const std::string& path, const VoxelSetReadOptions& option
     if (!damaged.empty()) {
         std::string names;
         for (const auto& n : damaged) names += (names.empty() ? "'" : ", '") + n + "'";
-        const std::string message = fmt::format("{}: grid{} {} damaged: the data does not match the checksum vxf wrote with it",
-            path, damaged.size() == 1 ? "" : "s", names + (damaged.size() == 1 ? " is" : " are"));
+        const std::string message = fmt::format("{}: grid{} {} damaged: the data does not match the checksum vxf wrote with it", path,
+            damaged.size() == 1 ? "" : "s", names + (damaged.size() == 1 ? " is" : " are"));
         if (!options.acceptDamaged) throw Error(message);
         if (options.damaged) *options.damaged = damaged;
     }
@@ -165,8 +166,8 @@ namespace {
 class CheckedArchive : public openvdb::io::Archive
 {
 public:
-    void writeFile(const std::string& file, const openvdb::GridCPtrVec& grids, const openvdb::MetaMap& metadata,
-        const std::string& target) const
+    void writeFile(
+        const std::string& file, const openvdb::GridCPtrVec& grids, const openvdb::MetaMap& metadata, const std::string& target) const
     {
         std::ofstream out(file, std::ios::binary | std::ios::trunc);
         if (!out) throw Error(fmt::format("{}: cannot write: {}", target, std::strerror(errno)));
@@ -211,8 +212,7 @@ void writeVoxelSet(const std::string& path, const VoxelSet& set, const VoxelSetW
             CheckedArchive archive;
             uint32_t compression = openvdb::io::COMPRESS_ACTIVE_MASK;
             if (options.compress) {
-                compression |= openvdb::io::Archive::hasBloscCompression() ? openvdb::io::COMPRESS_BLOSC
-                                                                           : openvdb::io::COMPRESS_ZIP;
+                compression |= openvdb::io::Archive::hasBloscCompression() ? openvdb::io::COMPRESS_BLOSC : openvdb::io::COMPRESS_ZIP;
             }
             archive.setCompression(compression);
             archive.writeFile(tmpPath, grids, metadata, path);

@@ -72,23 +72,20 @@ void tokenize(std::string_view line, std::vector<Token>& tokens)
 }
 
 bool isNameStart(char c) { return std::isalpha(static_cast<unsigned char>(c)) || c == '_'; }
-bool isNameChar(char c)
-{
-    return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.' || c == '-' || c == ':';
-}
+bool isNameChar(char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.' || c == '-' || c == ':'; }
 
 /// Parses and checks one text file, remembering where it is for error messages.
 class TextReader
 {
 public:
-    TextReader(const std::string& path) : mPath(path) {}
-
-    [[noreturn]] void fail(std::size_t column, const std::string& what) const
+    TextReader(const std::string& path)
+        : mPath(path)
     {
-        throw InputError(mPath, mLine, column, what);
     }
 
-    template<typename IntT>
+    [[noreturn]] void fail(std::size_t column, const std::string& what) const { throw InputError(mPath, mLine, column, what); }
+
+    template <typename IntT>
     IntT parseInt(const Token& token, const char* what) const
     {
         std::string_view text = token.text;
@@ -104,7 +101,7 @@ public:
         return value;
     }
 
-    template<typename RealT>
+    template <typename RealT>
     RealT parseReal(const Token& token, const std::string& what) const
     {
         std::string_view text = token.text;
@@ -121,8 +118,9 @@ public:
                 if constexpr (std::is_same_v<RealT, float>) value = std::strtof(copy.c_str(), nullptr);
                 ec = std::errc();
             } else {
-                fail(token.column, fmt::format("{} '{}' is too large for a {}", what, token.text,
-                                       std::is_same_v<RealT, float> ? "32-bit float" : "double"));
+                fail(token.column,
+                    fmt::format(
+                        "{} '{}' is too large for a {}", what, token.text, std::is_same_v<RealT, float> ? "32-bit float" : "double"));
             }
         }
         if (ec != std::errc() || end != text.data() + text.size() || text.empty()) {
@@ -171,7 +169,7 @@ openvdb::math::Transform::Ptr textTransform(const openvdb::Vec3d& minCorner, dou
     return xform;
 }
 
-template<typename GridT>
+template <typename GridT>
 typename GridT::Ptr makeGrid(const GridColumn& column, const openvdb::math::Transform::Ptr& xform)
 {
     using ValueT = typename GridT::ValueType;
@@ -302,20 +300,29 @@ VoxelSet readVxfText(const std::string& path, Interrupter* interrupter)
                 if (other.name == column.name) reader.fail(tokens[1].column, fmt::format("grid '{}' declared twice", column.name));
             }
             const std::string_view type = tokens[2].text;
-            if (type == "bool") column.type = ColumnType::Bool;
-            else if (type == "float") column.type = ColumnType::Float;
-            else if (type == "vec3") column.type = ColumnType::Vec3;
-            else reader.fail(tokens[2].column, fmt::format("unknown grid type '{}' (expected bool, float or vec3)", type));
+            if (type == "bool")
+                column.type = ColumnType::Bool;
+            else if (type == "float")
+                column.type = ColumnType::Float;
+            else if (type == "vec3")
+                column.type = ColumnType::Vec3;
+            else
+                reader.fail(tokens[2].column, fmt::format("unknown grid type '{}' (expected bool, float or vec3)", type));
             for (std::size_t t = 3; t < tokens.size(); ++t) {
                 const std::string_view option = tokens[t].text;
                 const auto eq = option.find('=');
                 const std::string_view key = option.substr(0, eq);
                 const std::string_view value = eq == std::string_view::npos ? std::string_view() : option.substr(eq + 1);
                 if (key == "class" && eq != std::string_view::npos) {
-                    if (value == "level_set") column.gridClass = openvdb::GRID_LEVEL_SET;
-                    else if (value == "fog_volume") column.gridClass = openvdb::GRID_FOG_VOLUME;
-                    else if (value == "unknown") column.gridClass = openvdb::GRID_UNKNOWN;
-                    else reader.fail(tokens[t].column + 6, fmt::format("unknown grid class '{}' (expected level_set, fog_volume or unknown)", value));
+                    if (value == "level_set")
+                        column.gridClass = openvdb::GRID_LEVEL_SET;
+                    else if (value == "fog_volume")
+                        column.gridClass = openvdb::GRID_FOG_VOLUME;
+                    else if (value == "unknown")
+                        column.gridClass = openvdb::GRID_UNKNOWN;
+                    else
+                        reader.fail(tokens[t].column + 6,
+                            fmt::format("unknown grid class '{}' (expected level_set, fog_volume or unknown)", value));
                     if (column.gridClass == openvdb::GRID_LEVEL_SET && column.type != ColumnType::Float) {
                         reader.fail(tokens[t].column, "class=level_set needs a float grid");
                     }
@@ -330,8 +337,9 @@ VoxelSet readVxfText(const std::string& path, Interrupter* interrupter)
                         start = comma + 1;
                     }
                     if (parts.size() != std::size_t(columnWidth(column.type))) {
-                        reader.fail(tokens[t].column, fmt::format("background of a {} grid takes {} value(s), found {}",
-                                                          columnTypeName(column.type), columnWidth(column.type), parts.size()));
+                        reader.fail(tokens[t].column,
+                            fmt::format("background of a {} grid takes {} value(s), found {}", columnTypeName(column.type),
+                                columnWidth(column.type), parts.size()));
                     }
                     for (std::size_t p = 0; p < parts.size(); ++p) {
                         column.background[int(p)] = reader.parseReal<float>(parts[p], "background");
@@ -346,17 +354,17 @@ VoxelSet readVxfText(const std::string& path, Interrupter* interrupter)
             }
             columns.push_back(column);
         } else {
-            reader.fail(tokens[0].column, fmt::format(
-                "unknown header line '{}' (expected size, min, max, grid, count or vxf, or a voxel line 'i j k active …')",
-                keyword));
+            reader.fail(tokens[0].column,
+                fmt::format(
+                    "unknown header line '{}' (expected size, min, max, grid, count or vxf, or a voxel line 'i j k active …')", keyword));
         }
     }
 
     // The header must be complete before the first voxel (or the end of the file).
     const auto requireHeader = [&](bool present, const char* form) {
         if (!present) {
-            reader.fail(haveVoxelLine ? 1 : 0, fmt::format("missing header line '{}' {}", form,
-                                                haveVoxelLine ? "before the first voxel" : "(the file ends without it)"));
+            reader.fail(haveVoxelLine ? 1 : 0,
+                fmt::format("missing header line '{}' {}", form, haveVoxelLine ? "before the first voxel" : "(the file ends without it)"));
         }
     };
     requireHeader(size.has_value(), "size W D H voxelsize");
@@ -367,10 +375,10 @@ VoxelSet readVxfText(const std::string& path, Interrupter* interrupter)
         const double expected = (*minCorner)[a] + double((*size)[a]) * voxelSize;
         const double tolerance = std::max(1e-3 * voxelSize, 1e-6 * std::max(std::abs((*minCorner)[a]), std::abs((*maxCorner)[a])));
         if (!(std::abs(expected - (*maxCorner)[a]) <= tolerance)) {
-            throw InputError(path, maxLine, 0, fmt::format(
-                "header disagrees with itself along {}: min {} + size {} × voxelsize {} = {}, but max is {} "
-                "(size on line {}, min on line {})", "xyz"[a], (*minCorner)[a], (*size)[a], voxelSize, expected,
-                (*maxCorner)[a], sizeLine, minLine));
+            throw InputError(path, maxLine, 0,
+                fmt::format("header disagrees with itself along {}: min {} + size {} × voxelsize {} = {}, but max is {} "
+                            "(size on line {}, min on line {})",
+                    "xyz"[a], (*minCorner)[a], (*size)[a], voxelSize, expected, (*maxCorner)[a], sizeLine, minLine));
         }
     }
     if (columns.empty()) columns.push_back(GridColumn{"color", ColumnType::Vec3, openvdb::GRID_UNKNOWN, openvdb::Vec3f(0.0f)});
@@ -422,8 +430,9 @@ VoxelSet readVxfText(const std::string& path, Interrupter* interrupter)
         for (int a = 0; a < 3; ++a) {
             const auto v = reader.parseInt<std::int64_t>(tokens[std::size_t(a)], fmt::format("voxel index {}", axisNames[a]).c_str());
             if (v < 0 || v >= (*size)[a]) {
-                reader.fail(tokens[std::size_t(a)].column, fmt::format("voxel index {} = {} is outside [0, {}) given by {} on line {}",
-                                                   axisNames[a], v, (*size)[a], axisSizes[a], sizeLine));
+                reader.fail(tokens[std::size_t(a)].column,
+                    fmt::format("voxel index {} = {} is outside [0, {}) given by {} on line {}", axisNames[a], v, (*size)[a], axisSizes[a],
+                        sizeLine));
             }
             ijk[a] = openvdb::Int32(v);
         }
@@ -465,15 +474,20 @@ VoxelSet readVxfText(const std::string& path, Interrupter* interrupter)
             switch (w.column.type) {
             case ColumnType::Bool: {
                 const std::string_view b = tokens[t].text;
-                if (b != "0" && b != "1") reader.fail(tokens[t].column, fmt::format("expected 0 or 1 for bool grid '{}', found '{}'", w.column.name, b));
-                if (active) w.boolAcc->setValueOn(at, b == "1");
-                else w.boolAcc->setValueOff(at, b == "1");
+                if (b != "0" && b != "1")
+                    reader.fail(tokens[t].column, fmt::format("expected 0 or 1 for bool grid '{}', found '{}'", w.column.name, b));
+                if (active)
+                    w.boolAcc->setValueOn(at, b == "1");
+                else
+                    w.boolAcc->setValueOff(at, b == "1");
                 break;
             }
             case ColumnType::Float: {
                 const float v = reader.parseReal<float>(tokens[t], fmt::format("grid '{}'", w.column.name));
-                if (active) w.floatAcc->setValueOn(at, v);
-                else w.floatAcc->setValueOff(at, v);
+                if (active)
+                    w.floatAcc->setValueOn(at, v);
+                else
+                    w.floatAcc->setValueOff(at, v);
                 break;
             }
             case ColumnType::Vec3: {
@@ -481,8 +495,10 @@ VoxelSet readVxfText(const std::string& path, Interrupter* interrupter)
                 for (int a = 0; a < 3; ++a) {
                     v[a] = reader.parseReal<float>(tokens[t + std::size_t(a)], fmt::format("grid '{}' {}", w.column.name, "rgb"[a]));
                 }
-                if (active) w.vecAcc->setValueOn(at, v);
-                else w.vecAcc->setValueOff(at, v);
+                if (active)
+                    w.vecAcc->setValueOn(at, v);
+                else
+                    w.vecAcc->setValueOff(at, v);
                 break;
             }
             }
@@ -512,8 +528,10 @@ VoxelSet readVxfText(const std::string& path, Interrupter* interrupter)
             if (tokens.empty()) continue;
             const char first = tokens[0].text[0];
             if (!(std::isdigit(static_cast<unsigned char>(first)) || first == '-' || first == '+')) {
-                reader.fail(tokens[0].column, fmt::format("expected a voxel line 'i j k active …', found '{}' "
-                                                          "(header lines must come before the voxels)", tokens[0].text));
+                reader.fail(tokens[0].column,
+                    fmt::format("expected a voxel line 'i j k active …', found '{}' "
+                                "(header lines must come before the voxels)",
+                        tokens[0].text));
             }
             haveVoxelLine = true;
             break;
@@ -524,8 +542,9 @@ VoxelSet readVxfText(const std::string& path, Interrupter* interrupter)
     }
     if (in.bad()) throw Error(fmt::format("{}: read error", path));
     if (declaredCount && *declaredCount != voxelCount) {
-        reader.fail(0, fmt::format("'count' on line {} promises {} voxels but the file has {}{}", countLine,
-                           *declaredCount, voxelCount, voxelCount < *declaredCount ? ": the file looks truncated" : ""));
+        reader.fail(0,
+            fmt::format("'count' on line {} promises {} voxels but the file has {}{}", countLine, *declaredCount, voxelCount,
+                voxelCount < *declaredCount ? ": the file looks truncated" : ""));
     }
 
     VoxelSet set(xform);
@@ -553,7 +572,9 @@ namespace {
 class TextSink
 {
 public:
-    TextSink(const std::string& file, const std::string& target) : mFile(std::fopen(file.c_str(), "wb")), mPath(target)
+    TextSink(const std::string& file, const std::string& target)
+        : mFile(std::fopen(file.c_str(), "wb"))
+        , mPath(target)
     {
         if (!mFile) throw Error(fmt::format("{}: cannot write: {}", target, std::strerror(errno)));
         mBuffer.reserve(1 << 20);
@@ -562,7 +583,7 @@ public:
     {
         if (mFile) std::fclose(mFile);
     }
-    template<typename T>
+    template <typename T>
     void number(T value)
     {
         char buf[64];
@@ -607,7 +628,7 @@ struct ColumnReader
 
 /// Add to @a mask every voxel of @a grid that the text must carry: active voxels and tiles,
 /// and inactive leaf voxels whose value differs from the background.
-template<typename GridT>
+template <typename GridT>
 void collectVoxels(const GridT& grid, openvdb::MaskTree& mask)
 {
     mask.topologyUnion(grid.tree());
@@ -620,22 +641,24 @@ void collectVoxels(const GridT& grid, openvdb::MaskTree& mask)
     }
 }
 
-template<typename T>
+template <typename T>
 void requireFinite(const T& value, const std::string& grid, const openvdb::Coord& ijk)
 {
     bool finite;
-    if constexpr (std::is_same_v<T, openvdb::Vec3f>) finite = std::isfinite(value[0]) && std::isfinite(value[1]) && std::isfinite(value[2]);
-    else finite = std::isfinite(value);
+    if constexpr (std::is_same_v<T, openvdb::Vec3f>)
+        finite = std::isfinite(value[0]) && std::isfinite(value[1]) && std::isfinite(value[2]);
+    else
+        finite = std::isfinite(value);
     if (!finite) {
-        throw Error(fmt::format("grid '{}' holds a non-finite value at voxel ({}, {}, {}); text VXF allows finite numbers only",
-            grid, ijk[0], ijk[1], ijk[2]));
+        throw Error(fmt::format(
+            "grid '{}' holds a non-finite value at voxel ({}, {}, {}); text VXF allows finite numbers only", grid, ijk[0], ijk[1], ijk[2]));
     }
 }
 
 } // namespace
 
-std::vector<std::string> writeVxfText(const std::string& path, const VoxelSet& set,
-    const VxfWriteOptions& options, Interrupter* interrupter)
+std::vector<std::string> writeVxfText(
+    const std::string& path, const VoxelSet& set, const VxfWriteOptions& options, Interrupter* interrupter)
 {
     InterruptStep step(interrupter, "writing text VXF");
     std::vector<std::string> warnings;
@@ -661,7 +684,8 @@ std::vector<std::string> writeVxfText(const std::string& path, const VoxelSet& s
             auto g = set.find(name);
             // A usage error, as vdb2vol's: the argument names no grid of the input.
             if (!g) throw UsageError(fmt::format("{}no grid named '{}' to write", set.path().empty() ? "" : set.path() + ": ", name));
-            if (!supported(*g)) throw Error(fmt::format("grid '{}' holds {} values; text VXF columns are bool, float or vec3", name, g->valueType()));
+            if (!supported(*g))
+                throw Error(fmt::format("grid '{}' holds {} values; text VXF columns are bool, float or vec3", name, g->valueType()));
             for (const auto& other : chosen) {
                 if (other->getName() == name) throw Error(fmt::format("grid '{}' requested twice", name));
             }
@@ -680,7 +704,7 @@ std::vector<std::string> writeVxfText(const std::string& path, const VoxelSet& s
     const openvdb::math::Transform& xform = chosen.front()->transform();
     const auto map = xform.baseMap();
     const bool axisAligned = map->isType<openvdb::math::UniformScaleMap>() || map->isType<openvdb::math::UniformScaleTranslateMap>() ||
-                             map->isType<openvdb::math::ScaleMap>() || map->isType<openvdb::math::ScaleTranslateMap>();
+        map->isType<openvdb::math::ScaleMap>() || map->isType<openvdb::math::ScaleTranslateMap>();
     if (!axisAligned || !map->hasUniformScale()) {
         throw Error(fmt::format("grid '{}' has a {} transform; text VXF needs axis-aligned cubic voxels (resample first)",
             chosen.front()->getName(), map->type()));
@@ -692,9 +716,12 @@ std::vector<std::string> writeVxfText(const std::string& path, const VoxelSet& s
     openvdb::Index64 maxActive = 0;
     for (const auto& g : chosen) {
         maxActive = std::max(maxActive, g->activeVoxelCount());
-        if (auto f = openvdb::gridConstPtrCast<openvdb::FloatGrid>(g)) collectVoxels(*f, mask);
-        else if (auto v = openvdb::gridConstPtrCast<openvdb::Vec3SGrid>(g)) collectVoxels(*v, mask);
-        else if (auto b = openvdb::gridConstPtrCast<openvdb::BoolGrid>(g)) collectVoxels(*b, mask);
+        if (auto f = openvdb::gridConstPtrCast<openvdb::FloatGrid>(g))
+            collectVoxels(*f, mask);
+        else if (auto v = openvdb::gridConstPtrCast<openvdb::Vec3SGrid>(g))
+            collectVoxels(*v, mask);
+        else if (auto b = openvdb::gridConstPtrCast<openvdb::BoolGrid>(g))
+            collectVoxels(*b, mask);
     }
     mask.voxelizeActiveTiles();
     const openvdb::Index64 count = mask.activeVoxelCount();
@@ -799,8 +826,10 @@ std::vector<std::string> writeVxfText(const std::string& path, const VoxelSet& s
                 const openvdb::Coord ijk = it.getCoord();
                 bool active = false;
                 for (const ColumnReader& r : readers) {
-                    active = active || (r.floatAcc ? r.floatAcc->isValueOn(ijk)
-                                                   : r.vecAcc ? r.vecAcc->isValueOn(ijk) : r.boolAcc->isValueOn(ijk));
+                    active = active ||
+                        (r.floatAcc        ? r.floatAcc->isValueOn(ijk)
+                                : r.vecAcc ? r.vecAcc->isValueOn(ijk)
+                                           : r.boolAcc->isValueOn(ijk));
                 }
                 const openvdb::Coord index = ijk - origin;
                 out.number(index.x());

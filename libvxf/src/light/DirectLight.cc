@@ -35,8 +35,8 @@ bool unoccluded(const RayScene* occluders, const Medium& medium, const openvdb::
 
 } // namespace
 
-openvdb::Vec3d sampleTransmittance(const LightSample& sample, Medium::Sampler& sampler, const Medium& medium,
-    const openvdb::Vec3d& xWorld, const MarchOptions& options, const RayScene* occluders)
+openvdb::Vec3d sampleTransmittance(const LightSample& sample, Medium::Sampler& sampler, const Medium& medium, const openvdb::Vec3d& xWorld,
+    const MarchOptions& options, const RayScene* occluders)
 {
     if (!unoccluded(occluders, medium, xWorld, sample)) return openvdb::Vec3d(0.0);
     const openvdb::math::Transform& xform = medium.transform();
@@ -47,8 +47,8 @@ openvdb::Vec3d sampleTransmittance(const LightSample& sample, Medium::Sampler& s
     return transmittanceToBoundary(sampler, medium, xIjk, xform.worldToIndex(xWorld + sample.direction) - xIjk, options);
 }
 
-openvdb::Vec3d lightFluence(const LightSampler& light, Medium::Sampler& sampler, const Medium& medium,
-    const openvdb::Coord& voxel, const MarchOptions& options, const RayScene* occluders, openvdb::Vec3d* flux)
+openvdb::Vec3d lightFluence(const LightSampler& light, Medium::Sampler& sampler, const Medium& medium, const openvdb::Coord& voxel,
+    const MarchOptions& options, const RayScene* occluders, openvdb::Vec3d* flux)
 {
     static thread_local std::vector<LightSample> samples;
     // A rim voxel's light is its medium's, inside the surface: at its centre outside, the light
@@ -187,10 +187,7 @@ Medium::Sampler lightStageSampler(const Medium& medium, const DirectLightOptions
 }
 
 /// Whether sweepLight handles @a light (the others are marched voxel by voxel).
-bool sweepable(const Light& light)
-{
-    return light.type == Light::Type::Directional || light.type == Light::Type::Environment;
-}
+bool sweepable(const Light& light) { return light.type == Light::Type::Directional || light.type == Light::Type::Environment; }
 
 /// The fluence of a directional or environment light at the centre of every voxel of @a lattice
 /// (per voxel), its transmittance by one optical-depth sweep per direction
@@ -200,8 +197,8 @@ bool sweepable(const Light& light)
 /// below options.march.cutoff the light counts as blocked, as a march stops there; occluder
 /// meshes are still asked per voxel and sample. With @a flux, also the light's grey first
 /// moment per voxel (lightFluence).
-std::vector<openvdb::Vec3f> sweepLight(const LightSampler& light, const detail::SweepLattice& lattice, const Medium& medium,
-    const Rim& rim, const DirectLightOptions& options, std::vector<openvdb::Vec3f>* flux)
+std::vector<openvdb::Vec3f> sweepLight(const LightSampler& light, const detail::SweepLattice& lattice, const Medium& medium, const Rim& rim,
+    const DirectLightOptions& options, std::vector<openvdb::Vec3f>* flux)
 {
     const openvdb::math::Transform& xform = medium.transform();
     const std::size_t count = lattice.voxelCount();
@@ -284,7 +281,7 @@ std::vector<openvdb::Vec3f> sweepLight(const LightSampler& light, const detail::
                     if (skip > 0.0 && std::isfinite(skip)) from = xform.worldToIndex(world + s.direction * skip);
                 }
                 const openvdb::Vec3d t = std::isinf(skip) ? openvdb::Vec3d(1.0)
-                    : transmittanceToBoundary(sampler, medium, from, -travel, options.march, handOff);
+                                                          : transmittanceToBoundary(sampler, medium, from, -travel, options.march, handOff);
                 if (t != openvdb::Vec3d(0.0) && unoccluded(options.occluders, medium, xform.indexToWorld(x), s)) {
                     phi[rim.voxels[e]] += openvdb::Vec3f(s.fluence * t);
                     if (flux) (*flux)[rim.voxels[e]] -= openvdb::Vec3f(greyOf(s.fluence * t) * s.direction);
@@ -297,10 +294,7 @@ std::vector<openvdb::Vec3f> sweepLight(const LightSampler& light, const detail::
 
 /// Whether sweepPointLight handles @a light: one point whose light every voxel sees along its
 /// own ray (point and spot lights; an area light's samples are many points).
-bool sweepableFromPoint(const Light& light)
-{
-    return light.type == Light::Type::Point || light.type == Light::Type::Spot;
-}
+bool sweepableFromPoint(const Light& light) { return light.type == Light::Type::Point || light.type == Light::Type::Spot; }
 
 /// A point light's voxels within this many voxels of the surface (either side) are marched to
 /// the light (handing off to the sweep's depth once 2 voxels from the surface, kRimHandOff),
@@ -321,8 +315,8 @@ constexpr float kVacuumSpread = 0.05f;
 /// handing the rest of the way to the sweep kRimHandOff voxels from the surface; the rim marched
 /// from its medium point the same way. Without a surface (a density grid's medium) every voxel
 /// the sweep can blend is swept. With @a flux, also the light's grey first moment per voxel.
-std::vector<openvdb::Vec3f> sweepPointLight(const LightSampler& light, const detail::SweepLattice& lattice,
-    const Medium& medium, const Rim& rim, const DirectLightOptions& options, std::vector<openvdb::Vec3f>* flux)
+std::vector<openvdb::Vec3f> sweepPointLight(const LightSampler& light, const detail::SweepLattice& lattice, const Medium& medium,
+    const Rim& rim, const DirectLightOptions& options, std::vector<openvdb::Vec3f>* flux)
 {
     using detail::SweepLattice;
     const openvdb::math::Transform& xform = medium.transform();
@@ -350,8 +344,8 @@ std::vector<openvdb::Vec3f> sweepPointLight(const LightSampler& light, const det
     std::function<openvdb::Vec3f(const openvdb::Vec3d&, const SweepLattice::SweptSoFar&)> marchedDepth;
     marchedDepth = [&](const openvdb::Vec3d& from, const SweepLattice::SweptSoFar& swept) {
         bool askedMeshes = false;
-        const openvdb::Vec3d t = transmittance(samplers.local(), medium, from, lightIjk, options.march,
-            [&](const openvdb::Vec3d& at, double distance, openvdb::Vec3f& depth) {
+        const openvdb::Vec3d t = transmittance(
+            samplers.local(), medium, from, lightIjk, options.march, [&](const openvdb::Vec3d& at, double distance, openvdb::Vec3f& depth) {
                 if (!surface) return swept.sample(at, depth);
                 if (std::abs(distance) < kRimHandOff) return false;
                 if (distance < 0.0) return swept.sample(at, depth);
@@ -427,8 +421,8 @@ std::vector<openvdb::Vec3f> sweepPointLight(const LightSampler& light, const det
 
 } // namespace
 
-DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const std::vector<Light>& lights,
-    const DirectLightOptions& options, Interrupter* interrupter)
+DirectLightReport computeDirectLight(
+    VoxelSet& set, const Medium& medium, const std::vector<Light>& lights, const DirectLightOptions& options, Interrupter* interrupter)
 {
     InterruptStep step(interrupter, "lighting");
     requireMemory("light", stageMemory(kStageFixedBytes, double(medium.density().activeVoxelCount()), kLightBytesPerVoxel));
@@ -535,10 +529,9 @@ DirectLightReport computeDirectLight(VoxelSet& set, const Medium& medium, const 
         }
     }
 
-    const auto evaluate = [&](Medium::Sampler& sampler, std::vector<VolumeEmission::Sampler>& emitters,
-                              const openvdb::Coord& ijk, const openvdb::Vec3d& pointIjk,
-                              std::vector<openvdb::Vec3d>& sums, openvdb::Vec3f& outDirect, openvdb::Vec3f& outSource,
-                              openvdb::Vec3f& outAnisotropy, double weight) {
+    const auto evaluate = [&](Medium::Sampler& sampler, std::vector<VolumeEmission::Sampler>& emitters, const openvdb::Coord& ijk,
+                              const openvdb::Vec3d& pointIjk, std::vector<openvdb::Vec3d>& sums, openvdb::Vec3f& outDirect,
+                              openvdb::Vec3f& outSource, openvdb::Vec3f& outAnisotropy, double weight) {
         openvdb::Vec3d phi(0.0), flux(0.0);
         // Swept lights from their sweep; the others marched (lightFluence).
         const std::int64_t index = lattice ? lattice->indexOf(ijk) : -1;

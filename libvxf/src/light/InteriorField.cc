@@ -25,7 +25,7 @@ openvdb::Vec3SGrid::Ptr sourceFromFluence(const Medium& medium, const openvdb::V
     auto j = phi.deepCopy();
     j->setName(grids::kScatterSource);
     openvdb::tree::LeafManager<openvdb::Vec3STree> leaves(j->tree());
-    leaves.foreach([&](openvdb::Vec3STree::LeafNodeType& leaf, std::size_t) {
+    leaves.foreach ([&](openvdb::Vec3STree::LeafNodeType& leaf, std::size_t) {
         Medium::Sampler sampler(medium);
         // Inactive values too: trilinear lookups read them.
         for (auto it = leaf.beginValueAll(); it; ++it) {
@@ -59,7 +59,7 @@ void InteriorField::continueOutward(const Medium& medium, const openvdb::Vec3SGr
     // voxels to continue, per thread. Tiles lie wholly inside.
     tbb::enumerable_thread_specific<std::vector<openvdb::Coord>> outside;
     openvdb::tree::LeafManager<openvdb::Vec3STree> leaves(values.tree());
-    leaves.foreach([&](openvdb::Vec3STree::LeafNodeType& leaf, std::size_t) {
+    leaves.foreach ([&](openvdb::Vec3STree::LeafNodeType& leaf, std::size_t) {
         Medium::Sampler sampler(medium);
         for (auto it = leaf.beginValueOn(); it; ++it) {
             const double d = sampler.signedDistance(it.getCoord().asVec3d());
@@ -109,8 +109,8 @@ void InteriorField::continueOutward(const Medium& medium, const openvdb::Vec3SGr
             // path of grazing light to the surface grows as the square root of the depth and
             // the log-linear continuation comes out low.
             const openvdb::Vec3d q1 = c - n * (d + 1.0);
-            const openvdb::Vec3d bound = sampler.sigmaS(q1) * sampler.interiorScale(q1, -1.0) *
-                openvdb::Vec3d(fluence.getValue(coords[i])) / (4.0 * M_PI);
+            const openvdb::Vec3d bound =
+                sampler.sigmaS(q1) * sampler.interiorScale(q1, -1.0) * openvdb::Vec3d(fluence.getValue(coords[i])) / (4.0 * M_PI);
             for (int ch = 0; ch < 3; ++ch) {
                 if (deep && v1[ch] > v2[ch]) out[ch] = std::max(out[ch], bound[ch]);
             }
@@ -127,7 +127,7 @@ void InteriorField::continueOutward(const Medium& medium, const openvdb::Vec3SGr
         return l;
     };
     openvdb::tree::LeafManager<openvdb::Vec3STree> logLeaves(mLogs->tree());
-    logLeaves.foreach([&](openvdb::Vec3STree::LeafNodeType& leaf, std::size_t) {
+    logLeaves.foreach ([&](openvdb::Vec3STree::LeafNodeType& leaf, std::size_t) {
         for (auto it = leaf.beginValueAll(); it; ++it) it.setValue(toLog(*it));
     });
     for (auto it = mLogs->tree().beginValueAll(); it; ++it) {
@@ -153,8 +153,10 @@ openvdb::Vec3d InteriorField::Sampler::sample(const openvdb::Vec3d& ijk) const
     for (int i = 0; i < 8; ++i) {
         const openvdb::Vec3f l = logs[i & 1][(i >> 1) & 1][(i >> 2) & 1];
         for (int ch = 0; ch < 3; ++ch) {
-            if (l[ch] == kNoLog) positive[ch] = false;
-            else logSum[ch] += cell.weight[i] * double(l[ch]);
+            if (l[ch] == kNoLog)
+                positive[ch] = false;
+            else
+                logSum[ch] += cell.weight[i] * double(l[ch]);
         }
     }
     if (positive[0] && positive[1] && positive[2]) return openvdb::Vec3d(std::exp(logSum[0]), std::exp(logSum[1]), std::exp(logSum[2]));

@@ -96,8 +96,8 @@ std::size_t LightSampler::count() const
     return 0;
 }
 
-void LightSampler::sample(const openvdb::Vec3d& x, std::uint64_t key, double minDistance, std::vector<LightSample>& out,
-    std::size_t first, std::size_t last) const
+void LightSampler::sample(const openvdb::Vec3d& x, std::uint64_t key, double minDistance, std::vector<LightSample>& out, std::size_t first,
+    std::size_t last) const
 {
     out.clear();
     last = std::min(last, count());

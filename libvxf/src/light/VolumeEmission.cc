@@ -16,8 +16,8 @@ VolumeEmission::VolumeEmission(const Light& light)
     if (!grid) {
         std::string names;
         for (const auto& g : source.grids()) names += (names.empty() ? "" : ", ") + g->getName();
-        throw Error(fmt::format("light '{}': no grid '{}' in {} (the file has: {})", light.name, light.grid, light.file,
-            names.empty() ? "none" : names));
+        throw Error(fmt::format(
+            "light '{}': no grid '{}' in {} (the file has: {})", light.name, light.grid, light.file, names.empty() ? "none" : names));
     }
     if (light.gridToWorld != openvdb::Mat4d::identity()) {
         // Moved as its object is (SceneMedium's volume object: the same product of transforms).
@@ -28,8 +28,8 @@ VolumeEmission::VolumeEmission(const Light& light)
     mFloat = openvdb::gridConstPtrCast<openvdb::FloatGrid>(grid);
     mVec3 = openvdb::gridConstPtrCast<openvdb::Vec3SGrid>(grid);
     if (!mFloat && !mVec3) {
-        throw Error(fmt::format("light '{}': grid '{}' in {} must be float or vec3s, not {}", light.name, light.grid, light.file,
-            grid->valueType()));
+        throw Error(fmt::format(
+            "light '{}': grid '{}' in {} must be float or vec3s, not {}", light.name, light.grid, light.file, grid->valueType()));
     }
 }
 

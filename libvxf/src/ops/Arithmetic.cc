@@ -2,7 +2,6 @@
 
 #include "Dispatch.h"
 
-
 #include <cmath>
 
 namespace vxf::ops {
@@ -15,7 +14,8 @@ void arithmetic(openvdb::GridBase& grid, ArithmeticOp op, const openvdb::Vec3d& 
         const ValueT operand = detail::fromColor<ValueT>(value);
         const auto apply = [&g, &operand](auto&& op) {
             detail::forEachActiveValue(g, [&](ValueT& v) {
-                for (int c = 0; c < detail::channels(v); ++c) detail::ref(v, c) = detail::finite(op(detail::get(v, c), detail::get(operand, c)));
+                for (int c = 0; c < detail::channels(v); ++c)
+                    detail::ref(v, c) = detail::finite(op(detail::get(v, c), detail::get(operand, c)));
             });
         };
         switch (op) {

@@ -35,12 +35,12 @@ openvdb::GridBase::Ptr resampleLike(const openvdb::GridBase& grid, const openvdb
 void blend(openvdb::GridBase& a, const openvdb::GridBase& b, const BlendOptions& options)
 {
     if (a.valueType() != b.valueType()) {
-        throw UsageError(fmt::format("blend: grids '{}' ({}) and '{}' ({}) hold different value types", a.getName(),
-            a.valueType(), b.getName(), b.valueType()));
+        throw UsageError(fmt::format(
+            "blend: grids '{}' ({}) and '{}' ({}) hold different value types", a.getName(), a.valueType(), b.getName(), b.valueType()));
     }
     if (a.transform() != b.transform()) {
-        throw UsageError(fmt::format("blend: grids '{}' and '{}' have different transforms; resample B onto A (resample=true)",
-            a.getName(), b.getName()));
+        throw UsageError(fmt::format(
+            "blend: grids '{}' and '{}' have different transforms; resample B onto A (resample=true)", a.getName(), b.getName()));
     }
     const double scaleB = options.normalizeB && maxMagnitude(b) > 0.0 ? 1.0 / maxMagnitude(b) : 1.0;
     detail::dispatch(a, "blend", [&](auto& ga) {
@@ -76,7 +76,7 @@ void blend(openvdb::GridBase& a, const openvdb::GridBase& b, const BlendOptions&
         using TreeT = typename GridT::TreeType;
         detail::splitTilesWhereVaries(ga.tree(), gb.tree());
         openvdb::tree::LeafManager<TreeT> leaves(ga.tree());
-        leaves.foreach([&](typename TreeT::LeafNodeType& leaf, std::size_t) {
+        leaves.foreach ([&](typename TreeT::LeafNodeType& leaf, std::size_t) {
             auto other = gb.getConstAccessor();
             auto* values = leaf.buffer().data();
             const typename TreeT::LeafNodeType* otherLeaf = other.probeConstLeaf(leaf.origin());

@@ -18,7 +18,7 @@ std::array<openvdb::FloatGrid::Ptr, 3> splitChannels(const openvdb::Vec3SGrid& g
         g->tree().topologyUnion(grid.tree());
         // Leaf by leaf, straight from the source leaf's buffer; tiles take the tile's channel.
         openvdb::tree::LeafManager<openvdb::FloatTree> leaves(g->tree());
-        leaves.foreach([&grid, c](openvdb::FloatTree::LeafNodeType& leaf, std::size_t) {
+        leaves.foreach ([&grid, c](openvdb::FloatTree::LeafNodeType& leaf, std::size_t) {
             const auto* source = grid.tree().probeConstLeaf(leaf.origin());
             auto* values = leaf.buffer().data();
             for (auto on = leaf.getValueMask().beginOn(); on; ++on) {
@@ -33,8 +33,8 @@ std::array<openvdb::FloatGrid::Ptr, 3> splitChannels(const openvdb::Vec3SGrid& g
     return out;
 }
 
-openvdb::Vec3SGrid::Ptr mergeChannels(const openvdb::FloatGrid& x, const openvdb::FloatGrid& y, const openvdb::FloatGrid& z,
-    const std::string& name)
+openvdb::Vec3SGrid::Ptr mergeChannels(
+    const openvdb::FloatGrid& x, const openvdb::FloatGrid& y, const openvdb::FloatGrid& z, const std::string& name)
 {
     if (x.transform() != y.transform() || x.transform() != z.transform()) {
         throw UsageError(fmt::format("merge: '{}', '{}' and '{}' must share one transform", x.getName(), y.getName(), z.getName()));

@@ -36,7 +36,7 @@ openvdb::GridBase::Ptr difference(const openvdb::GridBase& a, const openvdb::Gri
             return differs;
         };
         openvdb::tree::LeafManager<typename GridT::TreeType> leaves(tree);
-        leaves.foreach([&](typename GridT::TreeType::LeafNodeType& leaf, std::size_t) {
+        leaves.foreach ([&](typename GridT::TreeType::LeafNodeType& leaf, std::size_t) {
             auto va = ga.getConstAccessor();
             auto vb = gb.getConstAccessor();
             for (auto on = leaf.beginValueOn(); on; ++on) {
@@ -70,7 +70,8 @@ openvdb::GridBase::Ptr difference(const openvdb::GridBase& a, const openvdb::Gri
 void applyDifference(openvdb::GridBase& a, const openvdb::GridBase& d)
 {
     if (a.valueType() != d.valueType() || a.transform() != d.transform()) {
-        throw UsageError(fmt::format("apply_diff: grids '{}' and '{}' must hold the same value type on one transform", a.getName(), d.getName()));
+        throw UsageError(
+            fmt::format("apply_diff: grids '{}' and '{}' must hold the same value type on one transform", a.getName(), d.getName()));
     }
     detail::dispatch(a, "apply_diff", [&](auto& ga) {
         using GridT = std::decay_t<decltype(ga)>;

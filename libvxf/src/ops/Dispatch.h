@@ -13,7 +13,7 @@
 namespace vxf::ops::detail {
 
 /// Call @a f with @a grid as FloatGrid& or Vec3SGrid&; vxf::UsageError for other types.
-template<typename GridBaseT, typename F>
+template <typename GridBaseT, typename F>
 decltype(auto) dispatch(GridBaseT& grid, const char* op, F&& f)
 {
     using FloatT = std::conditional_t<std::is_const_v<GridBaseT>, const openvdb::FloatGrid, openvdb::FloatGrid>;
@@ -26,12 +26,12 @@ decltype(auto) dispatch(GridBaseT& grid, const char* op, F&& f)
 /// Apply @a f (ValueT&) to every active value of @a grid in place: leaf voxels straight in
 /// their buffers (parallel over leaves), then the active tiles (one value each). Topology
 /// unchanged; deterministic (each value is changed alone).
-template<typename GridT, typename F>
+template <typename GridT, typename F>
 void forEachActiveValue(GridT& grid, const F& f)
 {
     using TreeT = typename GridT::TreeType;
     openvdb::tree::LeafManager<TreeT> leaves(grid.tree());
-    leaves.foreach([&f](typename TreeT::LeafNodeType& leaf, std::size_t) {
+    leaves.foreach ([&f](typename TreeT::LeafNodeType& leaf, std::size_t) {
         auto* values = leaf.buffer().data();
         for (auto on = leaf.getValueMask().beginOn(); on; ++on) f(values[on.pos()]);
     });
@@ -47,12 +47,12 @@ void forEachActiveValue(GridT& grid, const F& f)
 /// Apply @a f (const Coord&, ValueT&) to every active leaf voxel (parallel over leaves) and
 /// to every active tile, given the coordinate of its first voxel and its bounding box in
 /// @a tileBox (so a tile can be evaluated at its centre).
-template<typename GridT, typename LeafF, typename TileF>
+template <typename GridT, typename LeafF, typename TileF>
 void forEachActiveVoxel(GridT& grid, const LeafF& leafF, const TileF& tileF)
 {
     using TreeT = typename GridT::TreeType;
     openvdb::tree::LeafManager<TreeT> leaves(grid.tree());
-    leaves.foreach([&leafF](typename TreeT::LeafNodeType& leaf, std::size_t) {
+    leaves.foreach ([&leafF](typename TreeT::LeafNodeType& leaf, std::size_t) {
         auto* values = leaf.buffer().data();
         for (auto on = leaf.getValueMask().beginOn(); on; ++on) leafF(leaf.offsetToGlobalCoord(on.pos()), values[on.pos()]);
     });
@@ -70,7 +70,7 @@ void forEachActiveVoxel(GridT& grid, const LeafF& leafF, const TileF& tileF)
 /// Split the active tiles of @a target into leaves wherever @a reference's values vary under
 /// them (a reference tile smaller than the target tile, or reference voxels), so a per-leaf
 /// pass can read one reference value per target voxel or tile.
-template<typename TreeT, typename OtherTreeT>
+template <typename TreeT, typename OtherTreeT>
 void splitTilesWhereVaries(TreeT& target, const OtherTreeT& reference)
 {
     openvdb::tree::ValueAccessor<const OtherTreeT> other(reference);
@@ -83,8 +83,10 @@ void splitTilesWhereVaries(TreeT& target, const OtherTreeT& reference)
         // Depth of the node holding the reference value there: −1 background, 0 a root tile
         // (4096³), 1 a 128³ tile, 2 an 8³ tile, 3 a voxel.
         const int depth = other.getValueDepth(box.min());
-        const openvdb::Index64 held = depth <= 0 ? ~openvdb::Index64(0) : depth == 1 ? openvdb::Index64(128 * 128 * 128)
-                                                                     : depth == 2 ? openvdb::Index64(512) : 1;
+        const openvdb::Index64 held = depth <= 0 ? ~openvdb::Index64(0)
+            : depth == 1                         ? openvdb::Index64(128 * 128 * 128)
+            : depth == 2                         ? openvdb::Index64(512)
+                                                 : 1;
         if (held < box.volume()) split.push_back(box);
     }
     constexpr int leafDim = TreeT::LeafNodeType::DIM;
@@ -105,7 +107,7 @@ inline float& ref(openvdb::Vec3f& v, int c) { return v[c]; }
 
 /// A value of the grid's type from an RGB colour (float grids take the first channel
 /// when all three agree, else the mean).
-template<typename T>
+template <typename T>
 T fromColor(const openvdb::Vec3d& c)
 {
     if constexpr (std::is_same_v<T, float>) {

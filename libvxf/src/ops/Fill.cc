@@ -3,7 +3,6 @@
 #include "Dispatch.h"
 #include "Topology.h"
 
-
 #include <vector>
 
 namespace vxf::ops {
@@ -12,7 +11,8 @@ openvdb::Index64 fill(openvdb::GridBase& grid, const FillOptions& options, Inter
 {
     if (!options.region) throw UsageError("blur_special: needs a region grid (where values are wanted)");
     if (options.region->transform() != grid.transform()) {
-        throw UsageError(fmt::format("blur_special: region '{}' does not share grid '{}''s transform", options.region->getName(), grid.getName()));
+        throw UsageError(
+            fmt::format("blur_special: region '{}' does not share grid '{}''s transform", options.region->getName(), grid.getName()));
     }
     InterruptStep step(interrupter, "filling");
     return detail::dispatch(grid, "blur_special", [&](auto& g) -> openvdb::Index64 {

@@ -5,7 +5,6 @@
 
 #include <openvdb/tools/Interpolation.h>
 
-
 namespace vxf::ops {
 
 openvdb::Vec3d rampColor(const std::vector<ColorStop>& stops, double t)
@@ -51,7 +50,8 @@ openvdb::Vec3SGrid::Ptr gradient(const openvdb::GridBase& topology, const openvd
         }
         return openvdb::Vec3f(rampColor(o.stops, std::isfinite(t) ? t : 0.0));
     };
-    detail::forEachActiveVoxel(*out, [&](const openvdb::Coord& c, openvdb::Vec3f& v) { v = at(xform.indexToWorld(c)); },
+    detail::forEachActiveVoxel(
+        *out, [&](const openvdb::Coord& c, openvdb::Vec3f& v) { v = at(xform.indexToWorld(c)); },
         [&](const openvdb::CoordBBox& box, openvdb::Vec3f& v) { v = at(xform.indexToWorld(box.getCenter())); });
     return out;
 }

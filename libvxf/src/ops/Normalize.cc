@@ -46,7 +46,8 @@ void normalize(openvdb::GridBase& grid, const NormalizeOptions& options)
             for (int c = 0; c < detail::channels(v); ++c) r.add(clampFirst ? std::max(0.0f, detail::get(v, c)) : detail::get(v, c));
         };
         openvdb::tree::LeafManager<const typename GridT::TreeType> leaves(g.tree());
-        Range range = tbb::parallel_reduce(leaves.leafRange(), Range(),
+        Range range = tbb::parallel_reduce(
+            leaves.leafRange(), Range(),
             [&](const auto& leafRange, Range r) {
                 for (auto leaf = leafRange.begin(); leaf; ++leaf) {
                     const auto* values = leaf->buffer().data();

@@ -1,5 +1,6 @@
 #include <vxf/ops/Registry.h>
 
+#include <vxf/core/GridRoles.h>
 #include <vxf/io/VoxelSetFile.h>
 #include <vxf/ops/Arithmetic.h>
 #include <vxf/ops/Blend.h>
@@ -44,7 +45,8 @@ std::vector<openvdb::Vec3d> Args::colors(const std::string& name) const
 {
     std::vector<openvdb::Vec3d> out;
     for (const nlohmann::json& c : at(name)) {
-        out.push_back(c.is_number() ? openvdb::Vec3d(c.get<double>()) : openvdb::Vec3d(c[0].get<double>(), c[1].get<double>(), c[2].get<double>()));
+        out.push_back(
+            c.is_number() ? openvdb::Vec3d(c.get<double>()) : openvdb::Vec3d(c[0].get<double>(), c[1].get<double>(), c[2].get<double>()));
     }
     return out;
 }
@@ -114,7 +116,9 @@ void checkValue(const Operator& op, const Param& p, const json& v)
     case ParamType::Integer: ok = v.is_number_integer(); break;
     case ParamType::Boolean: ok = v.is_boolean(); break;
     case ParamType::Text: ok = v.is_string() && !v.get<std::string>().empty(); break;
-    case ParamType::Choice: ok = v.is_string() && std::find(p.choices.begin(), p.choices.end(), v.get<std::string>()) != p.choices.end(); break;
+    case ParamType::Choice:
+        ok = v.is_string() && std::find(p.choices.begin(), p.choices.end(), v.get<std::string>()) != p.choices.end();
+        break;
     case ParamType::Color: ok = isColor(v); break;
     case ParamType::Vector: ok = v.is_array() && v.size() == 3 && isColor(v); break;
     case ParamType::ColorList:
@@ -150,7 +154,8 @@ Args checkArgs(const Operator& op, const json& values)
         const auto owner = std::find_if(op.params.begin(), op.params.end(), [&](const Param& q) { return q.name == key; });
         const std::string actual = values.contains(key) ? values[key].get<std::string>() : owner->defaultValue.get<std::string>();
         if (actual != wanted) {
-            throw UsageError(fmt::format("{}: parameter '{}' is unused with {}={} (it applies to {})", op.name, p.name, key, actual, p.when));
+            throw UsageError(
+                fmt::format("{}: parameter '{}' is unused with {}={} (it applies to {})", op.name, p.name, key, actual, p.when));
         }
     }
     for (const auto& p : op.params) {
@@ -270,7 +275,9 @@ const openvdb::BoolGrid* optionalSelection(OpContext& ctx, const std::string& op
     if (!ctx.args.has(param)) return nullptr;
     auto g = requireGrid(ctx.set, op, ctx.args.text(param));
     keep = openvdb::gridPtrCast<openvdb::BoolGrid>(g);
-    if (!keep) throw UsageError(fmt::format("{}: '{}' grid '{}' holds {} values; a selection is a bool grid (vxf op select)", op, param, g->getName(), g->valueType()));
+    if (!keep)
+        throw UsageError(fmt::format(
+            "{}: '{}' grid '{}' holds {} values; a selection is a bool grid (vxf op select)", op, param, g->getName(), g->valueType()));
     return keep.get();
 }
 
@@ -283,9 +290,8 @@ std::vector<Operator> makeRegistry()
     // Arithmetic with a number.
     const std::pair<const char*, ArithmeticOp> arithmetic[] = {{"add", ArithmeticOp::Add}, {"sub", ArithmeticOp::Sub},
         {"mul", ArithmeticOp::Mul}, {"div", ArithmeticOp::Div}, {"pow", ArithmeticOp::Pow}};
-    const char* arithmeticSummary[] = {"v + value on the active values", "v - value on the active values",
-        "v * value on the active values", "v / value on the active values (x / 0 = 0)",
-        "v ^ value on the active values (negative v: -|v|^value; 0 ^ negative = 0)"};
+    const char* arithmeticSummary[] = {"v + value on the active values", "v - value on the active values", "v * value on the active values",
+        "v / value on the active values (x / 0 = 0)", "v ^ value on the active values (negative v: -|v|^value; 0 ^ negative = 0)"};
     for (std::size_t i = 0; i < 5; ++i) {
         const ArithmeticOp kind = arithmetic[i].second;
         ops.push_back({arithmetic[i].first, arithmeticSummary[i],
@@ -300,8 +306,8 @@ std::vector<Operator> makeRegistry()
     ops.push_back({"blend", "blend grid B into grid A: add, subtract, multiply, darker, lighter or mix; active where either is",
         {gridParam("grid A (the result replaces it unless out is given)"), withParam("grid B"), withFileParam(),
             choice("mode", "how to combine", {"add", "subtract", "multiply", "darker", "lighter", "mix"}, "add"),
-            when(number("weight", "mix: A (1 - w) + B w", 0.5, 0.0, 1.0), "mode=mix"), flag("clamp_negatives", "clamp A and B to >= 0 first"),
-            flag("normalize_b", "divide B by its largest |value| first"),
+            when(number("weight", "mix: A (1 - w) + B w", 0.5, 0.0, 1.0), "mode=mix"),
+            flag("clamp_negatives", "clamp A and B to >= 0 first"), flag("normalize_b", "divide B by its largest |value| first"),
             flag("resample", "resample B onto A's transform when they differ (trilinear)"), outParam()},
         [](OpContext& ctx) {
             auto a = target(ctx, "blend");
@@ -309,9 +315,12 @@ std::vector<Operator> makeRegistry()
             if (ctx.args.flag("resample") && a->transform() != b->transform()) b = resampleLike(*b, *a);
             BlendOptions o;
             const std::string mode = ctx.args.text("mode");
-            o.mode = mode == "subtract" ? BlendMode::Subtract : mode == "multiply" ? BlendMode::Multiply
-                     : mode == "darker" ? BlendMode::Darker : mode == "lighter" ? BlendMode::Lighter
-                     : mode == "mix" ? BlendMode::Mix : BlendMode::Add;
+            o.mode = mode == "subtract" ? BlendMode::Subtract
+                : mode == "multiply"    ? BlendMode::Multiply
+                : mode == "darker"      ? BlendMode::Darker
+                : mode == "lighter"     ? BlendMode::Lighter
+                : mode == "mix"         ? BlendMode::Mix
+                                        : BlendMode::Add;
             o.weight = ctx.args.number("weight");
             o.clampNegatives = ctx.args.flag("clamp_negatives");
             o.normalizeB = ctx.args.flag("normalize_b");
@@ -353,7 +362,8 @@ std::vector<Operator> makeRegistry()
             return fmt::format("filled {} voxels of '{}'", filled, g->getName());
         }});
 
-    ops.push_back({"normalize", "scale the active values into [0, 1] by a power of two (bit-exact round trip), recording offset and scale in the grid's metadata",
+    ops.push_back({"normalize",
+        "scale the active values into [0, 1] by a power of two (bit-exact round trip), recording offset and scale in the grid's metadata",
         {gridParam(), flag("clamp_negatives", "clamp negative values to 0 first"),
             flag("max_to_one", "put the largest value on 1 exactly (the round trip is then exact to 1 ulp, not bit for bit)"), outParam()},
         [](OpContext& ctx) {
@@ -366,13 +376,12 @@ std::vector<Operator> makeRegistry()
                 g->metaValue<double>(kNormalizeScaleKey));
         }});
 
-    ops.push_back({"denormalize", "restore the values normalize scaled, from the grid's metadata",
-        {gridParam(), outParam()},
-        [](OpContext& ctx) {
-            auto g = target(ctx, "denormalize");
-            ops::denormalize(*g);
-            return fmt::format("denormalized '{}'", g->getName());
-        }});
+    ops.push_back(
+        {"denormalize", "restore the values normalize scaled, from the grid's metadata", {gridParam(), outParam()}, [](OpContext& ctx) {
+             auto g = target(ctx, "denormalize");
+             ops::denormalize(*g);
+             return fmt::format("denormalized '{}'", g->getName());
+         }});
 
     ops.push_back({"gradient", "a colour gradient over the active voxels of a grid: directional, radial or distance from the surface",
         {choice("kind", "the gradient's shape", {"directional", "radial", "surface_distance"}, "directional"),
@@ -382,14 +391,17 @@ std::vector<Operator> makeRegistry()
             when(typed("centre", ParamType::Vector, "radial: centre", json::array({0, 0, 0})), "kind=radial"),
             when(number("radius", "radial: where the ramp ends", 1.0, 1e-30), "kind=radial"),
             when(number("falloff", "radial: exponent on the distance", 1.0, 1e-3, 1e3), "kind=radial"),
-            when(number("distance", "surface_distance: depth where the ramp ends (within the narrow band)", 1.0, 1e-30), "kind=surface_distance"),
+            when(number("distance", "surface_distance: depth where the ramp ends (within the narrow band)", 1.0, 1e-30),
+                "kind=surface_distance"),
             typed("colors", ParamType::ColorList, "ramp colours, first to last", json::array({0, 1})),
             typed("positions", ParamType::NumberList, "(optional) ramp positions in [0, 1], one per colour (default: even)"),
             text("out", "the new grid's name", "gradient")},
         [](OpContext& ctx) {
             GradientOptions o;
             const std::string kind = ctx.args.text("kind");
-            o.kind = kind == "radial" ? GradientKind::Radial : kind == "surface_distance" ? GradientKind::SurfaceDistance : GradientKind::Directional;
+            o.kind = kind == "radial"        ? GradientKind::Radial
+                : kind == "surface_distance" ? GradientKind::SurfaceDistance
+                                             : GradientKind::Directional;
             o.from = ctx.args.color("from");
             o.to = ctx.args.color("to");
             o.centre = ctx.args.color("centre");
@@ -418,16 +430,19 @@ std::vector<Operator> makeRegistry()
             return fmt::format("{} gradient '{}' over '{}' ({})", kind, g->getName(), topology->getName(), count(*g));
         }});
 
+    ops.back().grids = [](const Args& a) {
+        GridUse use{{a.text("topology")}, {a.text("out")}};
+        if (a.text("kind") == "surface_distance") use.reads.insert(grids::kSurface);
+        return use;
+    };
     ops.push_back({"remove", "deactivate the voxels of a grid that are active in another",
-        {gridParam(), withParam("the grid whose active voxels are removed"), withFileParam()},
-        [](OpContext& ctx) {
+        {gridParam(), withParam("the grid whose active voxels are removed"), withFileParam()}, [](OpContext& ctx) {
             auto a = requireGrid(ctx.set, "remove", ctx.args.text("grid"));
             removeActive(*a, *withGrid(ctx, "remove"));
             return fmt::format("'{}' now has {}", a->getName(), count(*a));
         }});
     ops.push_back({"include", "activate the voxels of a grid that are inactive there and active in another",
-        {gridParam(), withParam("the grid whose active voxels are added"), withFileParam()},
-        [](OpContext& ctx) {
+        {gridParam(), withParam("the grid whose active voxels are added"), withFileParam()}, [](OpContext& ctx) {
             auto a = requireGrid(ctx.set, "include", ctx.args.text("grid"));
             includeActive(*a, *withGrid(ctx, "include"));
             return fmt::format("'{}' now has {}", a->getName(), count(*a));
@@ -457,6 +472,7 @@ std::vector<Operator> makeRegistry()
             return fmt::format("selected {} voxels of '{}' into '{}'", mask->activeVoxelCount(), g->getName(), mask->getName());
         }});
 
+    ops.back().grids = [](const Args& a) { return GridUse{{a.text("grid")}, {a.text("out")}}; };
     ops.push_back({"edit", "on a selection: set RGB, shift hue, scale saturation and value, add or remove voxels",
         {gridParam("a vec3s grid"), text("selection", "(optional) bool grid (vxf op select); default: every active voxel"),
             typed("set", ParamType::Color, "(optional) the new colour"), number("hue_shift", "degrees", 0.0, -360.0, 360.0),
@@ -480,7 +496,8 @@ std::vector<Operator> makeRegistry()
 
     ops.push_back({"diff", "the voxels where grid B differs from grid A, as B - A (the thesis's difference export)",
         {gridParam("grid A (the original)"), withParam("grid B (the edited one)"), withFileParam(),
-            number("tolerance", "differences up to this are equal", 0.0, 0.0), text("out", "(optional) the difference grid's name (default GRID_diff)")},
+            number("tolerance", "differences up to this are equal", 0.0, 0.0),
+            text("out", "(optional) the difference grid's name (default GRID_diff)")},
         [](OpContext& ctx) {
             auto a = requireGrid(ctx.set, "diff", ctx.args.text("grid"));
             auto d = difference(*a, *withGrid(ctx, "diff"), ctx.args.number("tolerance"));
@@ -489,6 +506,11 @@ std::vector<Operator> makeRegistry()
             return fmt::format("'{}': {} differ", d->getName(), count(*d));
         }});
 
+    ops.back().grids = [](const Args& a) {
+        GridUse use{{a.text("grid")}, {a.has("out") ? a.text("out") : a.text("grid") + "_diff"}};
+        if (!a.has("with_file")) use.reads.insert(a.text("with"));
+        return use;
+    };
     ops.push_back({"apply_diff", "replay a difference grid onto a grid, optionally blending its edge (difference + smooth)",
         {gridParam(), withParam("the difference grid (vxf op diff)"), withFileParam(),
             integer("smooth", "blend this many voxels around the edit with blur_special (0: none)", 0, 0, 64), outParam()},
@@ -499,8 +521,7 @@ std::vector<Operator> makeRegistry()
             return fmt::format("applied '{}' to '{}'", d->getName(), a->getName());
         }});
 
-    ops.push_back({"split", "split a vec3s grid into float grids NAME.x, NAME.y, NAME.z (Houdini's Cd.x/y/z)",
-        {gridParam("a vec3s grid")},
+    ops.push_back({"split", "split a vec3s grid into float grids NAME.x, NAME.y, NAME.z (Houdini's Cd.x/y/z)", {gridParam("a vec3s grid")},
         [](OpContext& ctx) {
             auto g = openvdb::gridPtrCast<openvdb::Vec3SGrid>(requireGrid(ctx.set, "split", ctx.args.text("grid")));
             if (!g) throw UsageError(fmt::format("split: grid '{}' is not a vec3s grid", ctx.args.text("grid")));
@@ -508,6 +529,10 @@ std::vector<Operator> makeRegistry()
             return fmt::format("split '{}' into {}.x, .y, .z", g->getName(), g->getName());
         }});
 
+    ops.back().grids = [](const Args& a) {
+        const std::string g = a.text("grid");
+        return GridUse{{g}, {g + ".x", g + ".y", g + ".z"}};
+    };
     ops.push_back({"merge", "merge three float grids into one vec3s grid",
         {text("x", "the first channel's grid"), text("y", "the second channel's grid"), text("z", "the third channel's grid"),
             text("out", "the vec3s grid's name")},
@@ -523,20 +548,22 @@ std::vector<Operator> makeRegistry()
             return fmt::format("merged into '{}' ({})", g->getName(), count(*g));
         }});
 
-    ops.push_back({"rename", "rename a grid", {gridParam(), text("to", "the new name")},
-        [](OpContext& ctx) {
-            auto g = requireGrid(ctx.set, "rename", ctx.args.text("grid"));
-            const std::string to = ctx.args.text("to");
-            if (ctx.set.find(to)) throw UsageError(fmt::format("rename: a grid named '{}' exists already", to));
-            ctx.set.remove(g->getName());
-            g->setName(to);
-            ctx.set.put(g);
-            return fmt::format("renamed '{}' to '{}'", ctx.args.text("grid"), to);
-        }});
+    ops.back().grids = [](const Args& a) { return GridUse{{a.text("x"), a.text("y"), a.text("z")}, {a.text("out")}}; };
+    ops.push_back({"rename", "rename a grid", {gridParam(), text("to", "the new name")}, [](OpContext& ctx) {
+                       auto g = requireGrid(ctx.set, "rename", ctx.args.text("grid"));
+                       const std::string to = ctx.args.text("to");
+                       if (ctx.set.find(to)) throw UsageError(fmt::format("rename: a grid named '{}' exists already", to));
+                       ctx.set.remove(g->getName());
+                       g->setName(to);
+                       ctx.set.put(g);
+                       return fmt::format("renamed '{}' to '{}'", ctx.args.text("grid"), to);
+                   }});
 
+    ops.back().grids = [](const Args& a) { return GridUse{{a.text("grid")}, {a.text("grid"), a.text("to")}}; };
     ops.push_back({"copy", "copy a grid from another .vdb (or within the file) under a name",
         {gridParam("the grid to copy"), text("from_file", "(optional) the .vdb it comes from (default: this file)"),
-            text("to", "(optional) its name here (default: the same)"), flag("resample", "resample it onto this file's transform when it differs")},
+            text("to", "(optional) its name here (default: the same)"),
+            flag("resample", "resample it onto this file's transform when it differs")},
         [](OpContext& ctx) {
             openvdb::GridBase::Ptr g;
             if (ctx.args.has("from_file")) {
@@ -553,6 +580,11 @@ std::vector<Operator> makeRegistry()
             return fmt::format("copied '{}' as '{}'", ctx.args.text("grid"), g->getName());
         }});
 
+    ops.back().grids = [](const Args& a) {
+        GridUse use{{}, {a.has("to") ? a.text("to") : a.text("grid")}};
+        if (!a.has("from_file")) use.reads.insert(a.text("grid"));
+        return use;
+    };
     return ops;
 }
 
@@ -562,6 +594,22 @@ const std::vector<Operator>& artistOperators()
 {
     static const std::vector<Operator> ops = makeRegistry();
     return ops;
+}
+
+GridUse gridUse(const Operator& op, const Args& args)
+{
+    if (op.grids) return op.grids(args);
+    GridUse use;
+    for (const char* name : {"grid", "mask", "selection", "region", "topology"}) {
+        if (args.has(name)) use.reads.insert(args.text(name));
+    }
+    if (args.has("with") && !args.has("with_file")) use.reads.insert(args.text("with"));
+    if (args.has("out")) {
+        use.writes.insert(args.text("out"));
+    } else if (args.has("grid")) {
+        use.writes.insert(args.text("grid"));
+    }
+    return use;
 }
 
 const Operator& findOperatorIn(const std::vector<Operator>& operators, const std::string& name)
@@ -583,9 +631,10 @@ std::string operatorTableMarkdown(const std::vector<Operator>& operators)
     for (const auto& op : operators) {
         std::string params;
         for (const auto& p : op.params) {
-            std::string def = p.defaultValue.is_null() ? (p.summary.rfind("(optional)", 0) == 0 ? "optional" : "required") : "default " + p.defaultValue.dump();
-            params += fmt::format("{}`{}` ({}, {}{})", params.empty() ? "" : "<br>", p.name, describeType(p), def,
-                p.when.empty() ? "" : ", with " + p.when);
+            std::string def = p.defaultValue.is_null() ? (p.summary.rfind("(optional)", 0) == 0 ? "optional" : "required")
+                                                       : "default " + p.defaultValue.dump();
+            params += fmt::format(
+                "{}`{}` ({}, {}{})", params.empty() ? "" : "<br>", p.name, describeType(p), def, p.when.empty() ? "" : ", with " + p.when);
         }
         const auto escape = [](std::string text) { // a bare | would split the table's cell
             for (std::size_t at = text.find('|'); at != std::string::npos; at = text.find('|', at + 2)) text.replace(at, 1, "\\|");
@@ -600,8 +649,8 @@ namespace {
 
 json paramSchema(const Param& p)
 {
-    json color = {{"oneOf", json::array({{{"type", "number"}},
-                                 {{"type", "array"}, {"items", {{"type", "number"}}}, {"minItems", 3}, {"maxItems", 3}}})}};
+    json color = {{"oneOf",
+        json::array({{{"type", "number"}}, {{"type", "array"}, {"items", {{"type", "number"}}}, {"minItems", 3}, {"maxItems", 3}}})}};
     json s;
     switch (p.type) {
     case ParamType::Number: s = {{"type", "number"}}; break;
@@ -640,35 +689,41 @@ json pipelineSchema(const std::vector<Operator>& operators)
         cases.push_back({{"if", {{"properties", {{"op", {{"const", op.name}}}}}, {"required", {"op"}}}},
             {"then", {{"properties", {{"params", params}}}}}});
     }
-    return {
-        {"$schema", "http://json-schema.org/draft-07/schema#"},
-        {"$id", "https://vxf.invalid/schemas/pipeline.schema.json"},
+    return {{"$schema", "http://json-schema.org/draft-07/schema#"}, {"$id", "https://vxf.invalid/schemas/pipeline.schema.json"},
         {"title", "vxf pipeline (node graph)"},
-        {"description", "Generated from the operator registry by `vxf op --schema`; do not edit (a test fails when it drifts). "
-                        "Named nodes: each reads a .vdb file, or applies an operator to the voxel set of its input node; "
-                        "outputs name the nodes to write."},
-        {"type", "object"},
-        {"additionalProperties", false},
-        {"required", {"nodes", "outputs"}},
+        {"description",
+            "Generated from the operator registry by `vxf op --schema`; do not edit (a test fails when it drifts). "
+            "Named nodes: each reads a .vdb file, or applies an operator to the voxel set of its input node; "
+            "outputs name the nodes to write."},
+        {"type", "object"}, {"additionalProperties", false}, {"required", {"nodes", "outputs"}},
         {"properties",
             {{"nodes",
-                 {{"type", "object"},
-                     {"minProperties", 1},
+                 {{"type", "object"}, {"minProperties", 1},
                      {"additionalProperties",
-                         {{"type", "object"},
-                             {"additionalProperties", false},
+                         {{"type", "object"}, {"additionalProperties", false},
                              {"properties",
                                  {{"file", {{"type", "string"}, {"minLength", 1}, {"description", "a source node: this .vdb"}}},
                                      {"op", {{"enum", opNames}}},
-                                     {"input", {{"type", "string"}, {"minLength", 1}, {"description", "the node whose voxel set it edits (none for a source operator such as voxelize)"}}},
-                                     {"with", {{"type", "string"}, {"minLength", 1}, {"description", "a node whose voxel set provides the operator's second input (its 'with' grid), instead of with_file"}}},
+                                     {"input",
+                                         {{"type", "string"}, {"minLength", 1},
+                                             {"description",
+                                                 "the node whose voxel set it edits (none for a source operator such as voxelize)"}}},
+                                     {"with",
+                                         {{"type", "string"}, {"minLength", 1},
+                                             {"description",
+                                                 "a node whose voxel set provides the operator's second input (its 'with' grid), instead "
+                                                 "of with_file"}}},
                                      {"params", {{"type", "object"}}}}},
-                             {"oneOf", json::array({{{"required", {"file"}}, {"not", {{"anyOf", json::array({{{"required", {"op"}}}, {{"required", {"input"}}}, {{"required", {"with"}}}})}}}},
-                                           {{"required", {"op"}}, {"not", {{"required", {"file"}}}}}})},
+                             {"oneOf",
+                                 json::array({{{"required", {"file"}},
+                                                  {"not",
+                                                      {{"anyOf",
+                                                          json::array({{{"required", {"op"}}}, {{"required", {"input"}}},
+                                                              {{"required", {"with"}}}})}}}},
+                                     {{"required", {"op"}}, {"not", {{"required", {"file"}}}}}})},
                              {"allOf", cases}}}}},
                 {"outputs",
-                    {{"type", "object"},
-                        {"description", "node name → .vdb path to write"},
+                    {{"type", "object"}, {"description", "node name → .vdb path to write"},
                         {"additionalProperties", {{"type", "string"}, {"minLength", 1}}}}}}}};
 }
 

@@ -58,14 +58,8 @@ openvdb::BoolGrid::Ptr selectRange(const openvdb::GridBase& grid, double lo, dou
     });
 }
 
-void removeActive(openvdb::GridBase& a, const openvdb::GridBase& b)
-{
-    detail::subtractTopology(a, *detail::activeTopology(b));
-}
+void removeActive(openvdb::GridBase& a, const openvdb::GridBase& b) { detail::subtractTopology(a, *detail::activeTopology(b)); }
 
-void includeActive(openvdb::GridBase& a, const openvdb::GridBase& b)
-{
-    detail::unionTopology(a, *detail::activeTopology(b));
-}
+void includeActive(openvdb::GridBase& a, const openvdb::GridBase& b) { detail::unionTopology(a, *detail::activeTopology(b)); }
 
 } // namespace vxf::ops

@@ -85,7 +85,8 @@ public:
             }
         }
         for (auto it = mOutputs.begin(); it != mOutputs.end(); ++it) {
-            if (!mNodes.contains(it.key())) throw InputError(mPath, 0, 0, fmt::format("/outputs/{}: no node named '{}'", it.key(), it.key()));
+            if (!mNodes.contains(it.key()))
+                throw InputError(mPath, 0, 0, fmt::format("/outputs/{}: no node named '{}'", it.key(), it.key()));
         }
     }
 
@@ -149,10 +150,12 @@ private:
         const json& node = mNodes[name];
         bool outputsExist = true; // a node writing an image reruns when the image is gone
         for (const char* key : kOutputParams) {
-            if (node.contains("params") && node["params"].contains(key)) outputsExist = outputsExist && fs::exists(node["params"][key].get<std::string>());
+            if (node.contains("params") && node["params"].contains(key))
+                outputsExist = outputsExist && fs::exists(node["params"][key].get<std::string>());
         }
         if (fs::exists(file) && outputsExist) {
-            mReport.nodes.push_back({name, "reused", node.contains("file") ? "the file is unchanged" : "its operator, parameters and inputs are unchanged", "", 0.0});
+            mReport.nodes.push_back({name, "reused",
+                node.contains("file") ? "the file is unchanged" : "its operator, parameters and inputs are unchanged", "", 0.0});
             return mFiles[name] = file;
         }
         const auto start = std::chrono::steady_clock::now();
@@ -202,8 +205,8 @@ GraphReport runGraph(const std::string& path, const std::string& cacheDir, Inter
 
 void checkGraph(const std::string& path) { GraphRunner(path, "", nullptr); }
 
-void recordStep(const std::string& graphPath, const std::string& op, const json& params, const std::string& input,
-    const std::string& output)
+void recordStep(
+    const std::string& graphPath, const std::string& op, const json& params, const std::string& input, const std::string& output)
 {
     json graph = {{"nodes", json::object()}, {"outputs", json::object()}};
     if (fs::exists(graphPath)) graph = parseJsonText(readBoundedFile(graphPath, kMaxGraphBytes, "a pipeline graph"), graphPath);

@@ -47,14 +47,18 @@ std::vector<Operator> stageOperators()
             return fmt::format("voxelized {} ({})", mesh, count(*ctx.set.find(grids::kDensity)));
         }};
     voxelizeStage.source = true;
+    voxelizeStage.grids = [](const Args&) { return GridUse{{}, {grids::kSurface, grids::kDensity}}; };
     ops.push_back(voxelizeStage);
+    // What the medium is made of, which every later stage reads.
+    const std::set<std::string> mediumGrids = {grids::kSurface, grids::kDensity, grids::kSigmaA, grids::kSigmaS};
 
     ops.push_back({"light", "the light stage: `direct` and `scatter_source` from a scene's lights, material and occluders",
         {text("scene", "scene file (schemas/scene.schema.json)"),
             number("step", "march step, voxels (0: the scene's scatter.step, 1 unless set there, as vxf run lights it)", 0.0, 0.0, 64.0),
             number("cutoff", "stop marching below this transmittance", 1e-4, 0.0, 0.5),
-            flag("march", "every light by a march per voxel and sample (the reference; slow) instead of one optical-depth sweep "
-                          "per direction for directional and environment lights")},
+            flag("march",
+                "every light by a march per voxel and sample (the reference; slow) instead of one optical-depth sweep "
+                "per direction for directional and environment lights")},
         [](OpContext& ctx) {
             const double step = ctx.args.number("step");
             if (step > 0.0 && step < 0.01) {
@@ -68,6 +72,9 @@ std::vector<Operator> stageOperators()
             const auto report = lightScene(ctx.set, scene, o, ctx.interrupter);
             return fmt::format("lit by {} lights", report.lights.size());
         }});
+    ops.back().grids = [mediumGrids](const Args&) {
+        return GridUse{mediumGrids, {grids::kDirect, grids::kScatterSource, grids::kSourceAnisotropy}};
+    };
 
     ops.push_back({"scatter", "the scatter stage: passes of source iteration into `scatter` and `illumination` (material from the file)",
         {integer("passes", "at most this many", 16, 0, 10000), integer("directions", "per voxel", 64, 1, 65536),
@@ -78,8 +85,11 @@ std::vector<Operator> stageOperators()
             flag("keep_passes", "keep scatter_pass_K"),
             integer("fine_passes", "passes at full resolution before the rest run on a coarser lattice (0: all)", 0, 0, 10000),
             integer("coarse_factor", "how much coarser (2, 4 or 8)", 4, 2, 8),
-            choice("kernel", "gather (a march per voxel and direction) or sweep (one upwind sweep over the tree per direction)", {"gather", "sweep"}, "gather"),
-            flag("no_accelerate", "plain source iteration (one scattering order per pass) instead of accelerated sweeps (a diffusion correction) or gathers (corrected by accelerated sweeps)")},
+            choice("kernel", "gather (a march per voxel and direction) or sweep (one upwind sweep over the tree per direction)",
+                {"gather", "sweep"}, "gather"),
+            flag("no_accelerate",
+                "plain source iteration (one scattering order per pass) instead of accelerated sweeps (a diffusion correction) or gathers "
+                "(corrected by accelerated sweeps)")},
         [](OpContext& ctx) {
             ScatterOptions o;
             o.pass.kernel = scatterKernelNamed(ctx.args.text("kernel"));
@@ -98,14 +108,27 @@ std::vector<Operator> stageOperators()
             const auto report = scatter(ctx.set, medium, o, ctx.interrupter);
             return fmt::format("{} passes ({})", report.passes.size(), report.stopReason);
         }});
+    ops.back().grids = [mediumGrids](const Args& a) {
+        GridUse use{mediumGrids, {grids::kScatter, grids::kIllumination, grids::kScatterAnisotropy}};
+        use.reads.insert({grids::kDirect, grids::kScatterSource, grids::kSourceAnisotropy});
+        if (a.flag("keep_passes")) {
+            for (int k = 1; k <= a.integer("passes"); ++k) use.writes.insert(fmt::format("scatter_pass_{}", k));
+        }
+        return use;
+    };
 
-    ops.push_back({"render", "the renderer: writes an OpenEXR image (and a PNG preview) of the voxel set with a scene's camera; the set passes on unchanged",
+    ops.push_back({"render",
+        "the renderer: writes an OpenEXR image (and a PNG preview) of the voxel set with a scene's camera; the set passes on unchanged",
         {text("scene", "scene file (camera, lights, objects, render settings)"), text("image", "the .exr to write"),
-            text("png", "(optional) an sRGB PNG preview to write"), integer("width", "(optional) override the scene's width", nullptr, 1, 32768),
+            text("png", "(optional) an sRGB PNG preview to write"),
+            integer("width", "(optional) override the scene's width", nullptr, 1, 32768),
             integer("height", "(optional) override the scene's height", nullptr, 1, 32768),
             integer("samples", "(optional) override the samples per pixel", nullptr, 1, 65536),
-            integer("max_samples", "(optional) override the scene's max_samples: adaptive, up to this many rays in a pixel whose first ones disagree", nullptr, 0, 65536),
-            number("noise_level", "(optional) override the scene's noise_level: the relative standard error a pixel may keep", nullptr, 1e-6, 1.0)},
+            integer("max_samples",
+                "(optional) override the scene's max_samples: adaptive, up to this many rays in a pixel whose first ones disagree", nullptr,
+                0, 65536),
+            number("noise_level", "(optional) override the scene's noise_level: the relative standard error a pixel may keep", nullptr,
+                1e-6, 1.0)},
         [](OpContext& ctx) {
             const Scene scene = loadScene(ctx.args.text("scene"));
             RenderOptions o = renderOptionsFrom(scene.settings);
@@ -116,11 +139,17 @@ std::vector<Operator> stageOperators()
             if (ctx.args.has("noise_level")) o.noiseLevel = ctx.args.number("noise_level");
             const Medium medium(ctx.set, recordedMaterial(ctx.set));
             const SceneRayScenes meshes = sceneRayScenes(scene);
-            const RenderedImage image = vxf::render(ctx.set, medium, scene, o, {&meshes.visible, &meshes.occluders, &meshes.media}, ctx.interrupter);
+            const RenderedImage image =
+                vxf::render(ctx.set, medium, scene, o, {&meshes.visible, &meshes.occluders, &meshes.media}, ctx.interrupter);
             writeExr(ctx.args.text("image"), image);
             if (ctx.args.has("png")) writePng(ctx.args.text("png"), image);
             return fmt::format("rendered {}x{} to {}", o.width, o.height, ctx.args.text("image"));
         }});
+    ops.back().grids = [mediumGrids](const Args&) {
+        GridUse use{mediumGrids, {}};
+        use.reads.insert({grids::kDirect, grids::kScatter, grids::kScatterAnisotropy});
+        return use;
+    };
     return ops;
 }
 

@@ -46,10 +46,9 @@ json matrix(const openvdb::Mat4d& m)
 
 json lightJson(const Light& l)
 {
-    return {{"type", int(l.type)}, {"name", l.name}, {"color", vec(l.color)}, {"intensity", l.intensity},
-        {"falloff", int(l.falloff)}, {"position", vec(l.position)}, {"direction", vec(l.direction)},
-        {"cone", {l.coneAngleDegrees, l.coneSoftnessDegrees}}, {"shape", int(l.shape)},
-        {"size", {l.width, l.height, l.radius}}, {"samples", l.samples}, {"file", l.file}, {"grid", l.grid},
+    return {{"type", int(l.type)}, {"name", l.name}, {"color", vec(l.color)}, {"intensity", l.intensity}, {"falloff", int(l.falloff)},
+        {"position", vec(l.position)}, {"direction", vec(l.direction)}, {"cone", {l.coneAngleDegrees, l.coneSoftnessDegrees}},
+        {"shape", int(l.shape)}, {"size", {l.width, l.height, l.radius}}, {"samples", l.samples}, {"file", l.file}, {"grid", l.grid},
         {"grid_to_world", matrix(l.gridToWorld)}};
 }
 
@@ -72,8 +71,8 @@ VoxelSet readCacheEntry(const fs::path& path)
     } catch (const Error& e) {
         std::error_code ignored;
         fs::remove(path, ignored);
-        throw UnreadableCacheEntry{fmt::format("cache entry {} could not be read ({}): removed, and its stage recomputed",
-            path.string(), e.what())};
+        throw UnreadableCacheEntry{
+            fmt::format("cache entry {} could not be read ({}): removed, and its stage recomputed", path.string(), e.what())};
     }
 }
 
@@ -119,8 +118,8 @@ void claimImageName(const fs::path& out, const std::string& stem, const std::str
     std::ifstream in(claim);
     std::string theirs;
     if (in && std::getline(in, theirs) && !theirs.empty() && theirs != mine) {
-        throw UsageError(fmt::format("{}: {} is rendered there from {}; give this scene another --out (or rename it)",
-            out.string(), (out / (stem + ".exr")).string(), theirs));
+        throw UsageError(fmt::format("{}: {} is rendered there from {}; give this scene another --out (or rename it)", out.string(),
+            (out / (stem + ".exr")).string(), theirs));
     }
     if (theirs != mine) {
         writeAtomically(claim.string(), [&](const std::string& tmp) {
@@ -168,14 +167,14 @@ PipelineReport runPipelineOnce(const Scene& scene, const std::string& outDir, In
         if (o.role != SceneObject::Role::Medium) continue;
         const Material& m = *o.material;
         const std::string& file = o.isVolume() ? o.volume : o.mesh;
-        media.push_back({{o.isVolume() ? "volume" : "mesh", file}, {"grid", o.isVolume() ? json(o.grid) : json()},
-            {"bytes", fileFingerprint(file)}, {"transform", matrix(o.objectToWorld)},
-            {"sigma", mediaCount(scene) > 1 ? json{vec(m.sigmaA), vec(m.sigmaS)} : json()},
-            {"grids", m.gridsFile.empty() ? json() : json{fileFingerprint(m.gridsFile), m.sigmaAGrid, m.sigmaSGrid}}});
+        media.push_back(
+            {{o.isVolume() ? "volume" : "mesh", file}, {"grid", o.isVolume() ? json(o.grid) : json()}, {"bytes", fileFingerprint(file)},
+                {"transform", matrix(o.objectToWorld)}, {"sigma", mediaCount(scene) > 1 ? json{vec(m.sigmaA), vec(m.sigmaS)} : json()},
+                {"grids", m.gridsFile.empty() ? json() : json{fileFingerprint(m.gridsFile), m.sigmaAGrid, m.sigmaSGrid}}});
     }
     // The program too: the light and scatter stages' keys chain from this one.
-    const json voxelInputs = {{"media", media}, {"dim", s.dim}, {"voxel_size", s.voxelSize}, {"band", s.band},
-        {"program", programFingerprint()}};
+    const json voxelInputs = {
+        {"media", media}, {"dim", s.dim}, {"voxel_size", s.voxelSize}, {"band", s.band}, {"program", programFingerprint()}};
     const std::string voxelHash = hashOf(voxelInputs);
     const fs::path voxelFile = cache / ("voxelize-" + voxelHash + ".vdb");
     VoxelSet set;
@@ -206,8 +205,8 @@ PipelineReport runPipelineOnce(const Scene& scene, const std::string& outDir, In
     for (const auto& l : scene.lights) {
         if (!l.file.empty()) lights.push_back(fileFingerprint(l.file)); // environment map, emission grid: their bytes
     }
-    json lightInputs = {{"voxels", voxelHash}, {"sigma_a", vec(material.sigmaA)}, {"sigma_s", vec(material.sigmaS)},
-        {"lights", lights}, {"occluders", occluders}, {"step", s.step}, {"sweep", true}};
+    json lightInputs = {{"voxels", voxelHash}, {"sigma_a", vec(material.sigmaA)}, {"sigma_s", vec(material.sigmaS)}, {"lights", lights},
+        {"occluders", occluders}, {"step", s.step}, {"sweep", true}};
     // A forward phase's first moment is carried by the accelerated sweeps alone (Scatter.h);
     // for any other scatter the light stage lights the similarity relation's medium too.
     const bool carriesMoment = s.kernel == "sweep" && s.accelerate && !wants("scatter_passes") && s.finePasses == 0;
@@ -245,8 +244,9 @@ PipelineReport runPipelineOnce(const Scene& scene, const std::string& outDir, In
         record("scatter", "skipped", "no requested output needs it", "", 0.0);
     } else {
         const json scatterInputs = {{"lit", lightHash}, {"passes", s.passes}, {"directions", s.directions}, {"step", s.step},
-            {"cutoff", s.cutoff}, {"tolerance", s.tolerance}, {"extrapolate", s.extrapolate}, {"band", s.scatterBand}, {"keep", wants("scatter_passes")},
-            {"fine_passes", s.finePasses}, {"coarse_factor", s.coarseFactor}, {"kernel", s.kernel}, {"accelerate", s.accelerate}};
+            {"cutoff", s.cutoff}, {"tolerance", s.tolerance}, {"extrapolate", s.extrapolate}, {"band", s.scatterBand},
+            {"keep", wants("scatter_passes")}, {"fine_passes", s.finePasses}, {"coarse_factor", s.coarseFactor}, {"kernel", s.kernel},
+            {"accelerate", s.accelerate}};
         // (every field scatterOptionsFrom reads)
         volumeHash = hashOf(scatterInputs);
         volumeFile = cache / ("scatter-" + volumeHash + ".vdb");
@@ -282,7 +282,8 @@ PipelineReport runPipelineOnce(const Scene& scene, const std::string& outDir, In
         const Medium medium(volume, material);
         const RenderOptions options = renderOptionsFrom(s);
         const SceneRayScenes meshes = sceneRayScenes(scene);
-        const RenderedImage image = render(volume, medium, scene, options, {&meshes.visible, &meshes.occluders, &meshes.media}, interrupter);
+        const RenderedImage image =
+            render(volume, medium, scene, options, {&meshes.visible, &meshes.occluders, &meshes.media}, interrupter);
         writeExr(report.image, image);
         writePng(report.preview, image);
         if (image.refinedPixels > 0) why += "; " + refinedSummary(image, options);

@@ -34,7 +34,10 @@ const JsonSchema& sceneSchema()
 class SceneReader
 {
 public:
-    SceneReader(std::string path) : mPath(std::move(path)) {}
+    SceneReader(std::string path)
+        : mPath(std::move(path))
+    {
+    }
 
     [[noreturn]] void fail(const std::string& where, const std::string& what) const
     {
@@ -118,18 +121,19 @@ public:
     {
         const double power = std::abs(l.intensity) * std::max({l.color[0], l.color[1], l.color[2]});
         if (!(power <= kMaxLightPower)) {
-            fail(where + "/intensity", fmt::format("intensity × colour is {:.3g}, beyond the {:.0e} vxf carries (its grids hold "
-                                                   "32-bit floats, up to 3.4e38, and the stages multiply a light by distances and "
-                                                   "densities); scale the scene's units instead",
-                                           power, kMaxLightPower));
+            fail(where + "/intensity",
+                fmt::format("intensity × colour is {:.3g}, beyond the {:.0e} vxf carries (its grids hold "
+                            "32-bit floats, up to 3.4e38, and the stages multiply a light by distances and "
+                            "densities); scale the scene's units instead",
+                    power, kMaxLightPower));
         }
     }
 
     Light light(const json& j, const std::string& where) const
     {
-        static const std::map<std::string, Light::Type> types = {{"point", Light::Type::Point},
-            {"spot", Light::Type::Spot}, {"directional", Light::Type::Directional}, {"area", Light::Type::Area},
-            {"volume", Light::Type::Volume}, {"environment", Light::Type::Environment}};
+        static const std::map<std::string, Light::Type> types = {{"point", Light::Type::Point}, {"spot", Light::Type::Spot},
+            {"directional", Light::Type::Directional}, {"area", Light::Type::Area}, {"volume", Light::Type::Volume},
+            {"environment", Light::Type::Environment}};
         Light l;
         l.type = types.at(j["type"].get<std::string>());
         l.name = j.value("name", fmt::format("{}{}", j["type"].get<std::string>(), where.substr(where.rfind('/') + 1)));
@@ -137,16 +141,15 @@ public:
         l.intensity = j.value("intensity", 1.0);
         checkPower(l, where);
         const std::string falloff = j.value("falloff", std::string("inverse_square"));
-        l.falloff = falloff == "linear" ? Light::Falloff::Linear
-                    : falloff == "none" ? Light::Falloff::None
-                                        : Light::Falloff::InverseSquare;
+        l.falloff = falloff == "linear" ? Light::Falloff::Linear : falloff == "none" ? Light::Falloff::None : Light::Falloff::InverseSquare;
         if (j.contains("position")) l.position = vec3(j["position"]);
         if (j.contains("direction")) l.direction = direction(j["direction"], where + "/direction");
         l.coneAngleDegrees = j.value("cone_angle", 0.0);
         l.coneSoftnessDegrees = j.value("cone_softness", 0.0);
         if (l.coneSoftnessDegrees > l.coneAngleDegrees * 0.5 && l.type == Light::Type::Spot) {
-            fail(where + "/cone_softness", fmt::format("the soft edge ({} degrees) must fit inside half the cone ({} degrees)",
-                                               l.coneSoftnessDegrees, l.coneAngleDegrees * 0.5));
+            fail(where + "/cone_softness",
+                fmt::format("the soft edge ({} degrees) must fit inside half the cone ({} degrees)", l.coneSoftnessDegrees,
+                    l.coneAngleDegrees * 0.5));
         }
         const std::string shape = j.value("shape", std::string("rectangle"));
         l.shape = shape == "disk" ? Light::Shape::Disk : shape == "sphere" ? Light::Shape::Sphere : Light::Shape::Rectangle;
@@ -323,9 +326,6 @@ Scene parseScene(const std::string& text, const std::string& path)
     return scene;
 }
 
-Scene loadScene(const std::string& path)
-{
-    return parseScene(readBoundedFile(path, kMaxSceneBytes, "a scene file"), path);
-}
+Scene loadScene(const std::string& path) { return parseScene(readBoundedFile(path, kMaxSceneBytes, "a scene file"), path); }
 
 } // namespace vxf

@@ -42,13 +42,15 @@ void attachMaterialGrids(VoxelSet& set, const Material& material)
 {
     if (material.gridsFile.empty()) return;
     const VoxelSet source = readVoxelSet(material.gridsFile);
-    for (const auto& [role, name] : {std::pair<std::string, std::string>{"sigma_a", material.sigmaAGrid}, {"sigma_s", material.sigmaSGrid}}) {
+    for (const auto& [role, name] :
+        {std::pair<std::string, std::string>{"sigma_a", material.sigmaAGrid}, {"sigma_s", material.sigmaSGrid}}) {
         if (name.empty()) continue;
         auto grid = source.find(name);
         if (!grid) throw InputError(material.gridsFile, 0, 0, fmt::format("no grid named '{}' (for {})", name, role));
         auto typed = openvdb::gridPtrCast<openvdb::Vec3SGrid>(grid);
         if (!typed) {
-            throw InputError(material.gridsFile, 0, 0, fmt::format("grid '{}' holds {} values; {} needs vec3s", name, grid->valueType(), role));
+            throw InputError(
+                material.gridsFile, 0, 0, fmt::format("grid '{}' holds {} values; {} needs vec3s", name, grid->valueType(), role));
         }
         openvdb::Vec3SGrid::Ptr placed;
         if (typed->transform() == set.transform()) {
@@ -77,25 +79,28 @@ VoxelSet volumeMedium(const SceneObject& object)
     if (!found) {
         std::string names;
         for (const auto& g : file.grids()) names += (names.empty() ? "" : ", ") + g->getName();
-        fail(fmt::format("no grid named '{}' for object '{}' (the file has: {})", object.grid, object.name,
-            names.empty() ? "none" : names));
+        fail(
+            fmt::format("no grid named '{}' for object '{}' (the file has: {})", object.grid, object.name, names.empty() ? "none" : names));
     }
     const auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(found);
     if (!grid) fail(fmt::format("grid '{}' holds {} values; a density is float", object.grid, found->valueType()));
     if (grid->getGridClass() == openvdb::GRID_LEVEL_SET) {
         fail(fmt::format("grid '{}' is a level set (signed distances), not a density; make a fog volume of it "
-                         "(vdb_tool -ls2fog, OpenVDB's sdfToFogVolume) or give the mesh", object.grid));
+                         "(vdb_tool -ls2fog, OpenVDB's sdfToFogVolume) or give the mesh",
+            object.grid));
     }
     if (grid->background() != 0.0f) {
-        fail(fmt::format("grid '{}' has background {}; a density's is 0 (the medium would fill all space)", object.grid,
-            grid->background()));
+        fail(fmt::format(
+            "grid '{}' has background {}; a density's is 0 (the medium would fill all space)", object.grid, grid->background()));
     }
     openvdb::FloatGrid::Ptr density = grid->deepCopy();
     bool finite = true;
     for (auto it = density->beginValueOn(); it; ++it) {
         const float v = *it;
-        if (!std::isfinite(v)) finite = false;
-        else if (v < 0.0f) it.setValue(0.0f);
+        if (!std::isfinite(v))
+            finite = false;
+        else if (v < 0.0f)
+            it.setValue(0.0f);
     }
     if (!finite) fail(fmt::format("grid '{}' holds a non-finite density", object.grid));
 
@@ -104,8 +109,8 @@ VoxelSet volumeMedium(const SceneObject& object)
     density->setTransform(moved);
     // Cubic, axis-aligned voxels, which the marches and sweeps take (one voxel size).
     const openvdb::Vec3d size = moved->voxelSize();
-    const bool cubic = moved->isLinear() && moved->hasUniformScale() &&
-        openvdb::math::isDiagonal(moved->baseMap()->getAffineMap()->getMat4().getMat3());
+    const bool cubic =
+        moved->isLinear() && moved->hasUniformScale() && openvdb::math::isDiagonal(moved->baseMap()->getAffineMap()->getMat4().getMat3());
     if (!cubic) {
         auto target = openvdb::FloatGrid::create(0.0f);
         target->setTransform(openvdb::math::Transform::createLinearTransform(std::cbrt(size[0] * size[1] * size[2])));
@@ -130,8 +135,8 @@ VoxelSet voxelizeMedia(const Scene& scene, const VoxelizeOptions& options, Inter
     if (media.empty()) throw UsageError(fmt::format("{}: no object is a medium", scene.path));
     for (const SceneObject* o : media) {
         if (o->isVolume() && media.size() > 1) {
-            throw UsageError(fmt::format("{}: object '{}': a volume object must be the scene's only medium (it has {})",
-                scene.path, o->name, media.size()));
+            throw UsageError(fmt::format(
+                "{}: object '{}': a volume object must be the scene's only medium (it has {})", scene.path, o->name, media.size()));
         }
     }
     if (media.size() == 1 && media.front()->isVolume()) {
@@ -147,7 +152,8 @@ VoxelSet voxelizeMedia(const Scene& scene, const VoxelizeOptions& options, Inter
     for (const SceneObject* o : media) {
         if (!o->material->gridsFile.empty()) {
             throw UsageError(fmt::format("{}: object '{}': per-voxel coefficient grids need the scene's only medium "
-                                         "(it has {})", scene.path, o->name, media.size()));
+                                         "(it has {})",
+                scene.path, o->name, media.size()));
         }
     }
 

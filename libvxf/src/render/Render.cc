@@ -56,10 +56,9 @@ public:
     /// medium is.
     /// With @a boundary (the media's meshes) the marches cross the surface where the meshes
     /// do (Medium::Sampler::snapCrossingsTo): grazing rays, at silhouettes and terminators.
-    Marcher(const Medium& medium, const RenderOptions& options, const InteriorField* direct,
-        const SourceField* scatter,
-        const std::vector<LightSampler>* lights = nullptr, const RayScene* occluders = nullptr,
-        const RayScene* boundary = nullptr, const std::vector<VolumeEmission>* emitters = nullptr, double gridForward = 0.0,
+    Marcher(const Medium& medium, const RenderOptions& options, const InteriorField* direct, const SourceField* scatter,
+        const std::vector<LightSampler>* lights = nullptr, const RayScene* occluders = nullptr, const RayScene* boundary = nullptr,
+        const std::vector<VolumeEmission>* emitters = nullptr, double gridForward = 0.0,
         const openvdb::Vec3SGrid* scatterAnisotropy = nullptr, const RestPhase& rest = {},
         const openvdb::Vec3SGrid* directAnisotropy = nullptr)
         : mMedium(medium)
@@ -102,8 +101,8 @@ public:
     }
 
     /// March from world point @a start along unit world direction @a dir, at most @a maxDistance (world).
-    Gathered march(const openvdb::Vec3d& start, const openvdb::Vec3d& dir,
-        double maxDistance = std::numeric_limits<double>::infinity(), std::uint64_t key = 0)
+    Gathered march(const openvdb::Vec3d& start, const openvdb::Vec3d& dir, double maxDistance = std::numeric_limits<double>::infinity(),
+        std::uint64_t key = 0)
     {
         Gathered g;
         if (mMedium.activeBounds().empty()) return g;
@@ -123,7 +122,7 @@ public:
         InsideSteps inside(mSampler, o, d, t0, h);
         InsideStep step;
         Emission eStart, eMiddle, eEnd; // J at the step's start, middle and end
-        bool endRead = false;           // eEnd is the last step's (an empty step reads none)
+        bool endRead = false; // eEnd is the last step's (an empty step reads none)
         const UniformBricks* uniform = mMedium.uniformBricks();
         for (int i = 0; i < steps; ++i) {
             // Empty space (a region of density 0, or outside the surface) crossed at once.
@@ -146,9 +145,7 @@ public:
                 continue;
             }
             // The interior scale at the step's ends, where σs is read there (lights).
-            const auto scaleAt = [&](const openvdb::Vec3d& p) {
-                return mLights ? mSampler.interiorScale(p, step.distanceBound) : 1.0;
-            };
+            const auto scaleAt = [&](const openvdb::Vec3d& p) { return mLights ? mSampler.interiorScale(p, step.distanceBound) : 1.0; };
             // A joined step starts where the last ended: its J there, read as the last step's end
             // (point − 1) would have been.
             eStart = !step.joined ? emission(step.start, scaleAt(step.start), key, point)
@@ -205,9 +202,9 @@ private:
     /// step's three points counted it several times over. On a sphere lit by a point light (1.3
     /// voxels per mean free path) the darkest third's single scattering came out 7.9% bright
     /// at one-voxel steps and 1.8% at a tenth of a voxel; halved so from one-voxel steps, 1.6%.
-    template<typename ScaleAt>
-    void integrate(const Segment& s, const openvdb::Vec3d& sigmaT, const openvdb::Vec3d* reducedSigmaT,
-        const ScaleAt& scaleAt, std::uint64_t key, int depth, Gathered& g)
+    template <typename ScaleAt>
+    void integrate(const Segment& s, const openvdb::Vec3d& sigmaT, const openvdb::Vec3d* reducedSigmaT, const ScaleAt& scaleAt,
+        std::uint64_t key, int depth, Gathered& g)
     {
         const std::array<EmissionWeights, 3> w = emissionWeights(sigmaT, s.length);
         if (depth > 0 && needsRefinement(s, w, g)) {
@@ -215,10 +212,8 @@ private:
             const openvdb::Vec3d q1 = 0.5 * (s.start + middle), q3 = 0.5 * (middle + s.end);
             const Emission e1 = emission(q1, scaleAt(q1), key, mExtraPoint++);
             const Emission e3 = emission(q3, scaleAt(q3), key, mExtraPoint++);
-            integrate(Segment{s.start, middle, 0.5 * s.length, s.eStart, e1, s.eMiddle}, sigmaT, reducedSigmaT, scaleAt,
-                key, depth - 1, g);
-            integrate(Segment{middle, s.end, 0.5 * s.length, s.eMiddle, e3, s.eEnd}, sigmaT, reducedSigmaT, scaleAt, key,
-                depth - 1, g);
+            integrate(Segment{s.start, middle, 0.5 * s.length, s.eStart, e1, s.eMiddle}, sigmaT, reducedSigmaT, scaleAt, key, depth - 1, g);
+            integrate(Segment{middle, s.end, 0.5 * s.length, s.eMiddle, e3, s.eEnd}, sigmaT, reducedSigmaT, scaleAt, key, depth - 1, g);
             return;
         }
         if (!mEmitters.empty()) { // seen as emitted, through the medium's own σt
@@ -236,8 +231,8 @@ private:
             const EmissionWeights& wDirect = directMarched ? w[c] : wReduced[c];
             const double directWeight = directMarched ? g.transmittance[c] : g.reducedTransmittance[c];
             g.direct[c] += directWeight * emissionIntegral(wDirect, s.eStart.direct[c], s.eMiddle.direct[c], s.eEnd.direct[c]);
-            g.scatter[c] += g.reducedTransmittance[c] *
-                emissionIntegral(wReduced[c], s.eStart.scatter[c], s.eMiddle.scatter[c], s.eEnd.scatter[c]);
+            g.scatter[c] +=
+                g.reducedTransmittance[c] * emissionIntegral(wReduced[c], s.eStart.scatter[c], s.eMiddle.scatter[c], s.eEnd.scatter[c]);
             g.transmittance[c] *= w[c].transmittance;
             g.reducedTransmittance[c] *= wReduced[c].transmittance;
         }
@@ -260,9 +255,9 @@ private:
         return false;
     }
 
-    static constexpr double kRefineRatio = 4.0;  ///< J's max/min over a step piece beyond which it is halved
+    static constexpr double kRefineRatio = 4.0; ///< J's max/min over a step piece beyond which it is halved
     static constexpr double kRefineShare = 1e-3; ///< ... when it could add this share of the ray's light
-    static constexpr int kRefineDepth = 4;       ///< halvings at most: pieces down to 1/16 of a step
+    static constexpr int kRefineDepth = 4; ///< halvings at most: pieces down to 1/16 of a step
 
     /// The rest of the phase toward the camera (−mRayDirection) of light whose mean direction of
     /// travel @a anisotropy holds, at index point @a p (the medium's index space).
@@ -348,15 +343,15 @@ private:
     openvdb::BBoxd mBounds;
     double mTauCutoff;
     std::uint64_t mExtraPoint = 0; ///< the next refined point's index along the ray (after the steps' 3 per step)
-    double mPhaseG;                ///< Henyey-Greenstein g (0: isotropic)
-    double mGridForward;           ///< the share of σs the grids' transport kept in the beam
-    RestPhase mRest;               ///< the rest of the phase, with mScatterAnisotropy or mDirectAnisotropy
+    double mPhaseG; ///< Henyey-Greenstein g (0: isotropic)
+    double mGridForward; ///< the share of σs the grids' transport kept in the beam
+    RestPhase mRest; ///< the rest of the phase, with mScatterAnisotropy or mDirectAnisotropy
     /// The `scatter_anisotropy` grid, read trilinearly (none: the scattered light isotropic).
     std::optional<openvdb::Vec3SGrid::ConstAccessor> mScatterAnisotropy;
     /// The `scatter_source_anisotropy` grid with the `direct` grid read (none: its J isotropic).
     std::optional<openvdb::Vec3SGrid::ConstAccessor> mDirectAnisotropy;
     std::vector<VolumeEmission::Sampler> mEmitters; ///< volume lights (none: empty)
-    openvdb::Vec3d mRayDirection;  ///< the marched ray's world direction (the phase's outgoing one)
+    openvdb::Vec3d mRayDirection; ///< the marched ray's world direction (the phase's outgoing one)
 };
 
 } // namespace
@@ -392,7 +387,8 @@ struct CameraSample
 {
     openvdb::Vec3d combined{0.0}, surface{0.0}, direct{0.0}, scatter{0.0}, normal{0.0};
     double alpha = 0.0, depth = 0.0;
-    int object = -1; ///< what it met first (an index in Scene::objects; the level set and a volume are the medium object's, 0 without one), -1: nothing
+    int object = -1; ///< what it met first (an index in Scene::objects; the level set and a volume are the medium object's, 0 without one),
+                     ///< -1: nothing
 };
 
 /// A pixel's camera rays so far, and whether they disagree enough to call for more.
@@ -442,8 +438,8 @@ public:
     /// @a media: the medium's meshes (null: none), which tell a shadow ray where it meets the
     /// medium, so that it marches only from there (visibility). Shadow rays march at @a march's
     /// step and cutoff, as the camera rays' do.
-    SurfaceShader(const Medium& medium, const std::vector<LightSampler>& lights, const RayScene* occluders,
-        const RayScene* media, const MarchOptions& march)
+    SurfaceShader(const Medium& medium, const std::vector<LightSampler>& lights, const RayScene* occluders, const RayScene* media,
+        const MarchOptions& march)
         : mMedium(medium)
         , mSampler(medium)
         , mLights(lights)
@@ -453,8 +449,8 @@ public:
     {
     }
 
-    openvdb::Vec3d shade(const SurfaceShading& shading, const openvdb::Vec3d& x, const openvdb::Vec3d& n,
-        const openvdb::Vec3d& v, std::uint64_t key)
+    openvdb::Vec3d shade(
+        const SurfaceShading& shading, const openvdb::Vec3d& x, const openvdb::Vec3d& n, const openvdb::Vec3d& v, std::uint64_t key)
     {
         // Start half a voxel off the surface: the medium's own fog ramp must not shadow it.
         const openvdb::Vec3d start = x + n * (0.5 * mMedium.voxelSize());
@@ -506,8 +502,8 @@ private:
 /// each term samples, the camera's frame and what camera rays hit.
 struct RenderContext
 {
-    RenderContext(const VoxelSet& set_, const Medium& medium_, const Scene& scene_, const RenderOptions& options_,
-        const RenderMeshes& meshes_)
+    RenderContext(
+        const VoxelSet& set_, const Medium& medium_, const Scene& scene_, const RenderOptions& options_, const RenderMeshes& meshes_)
         : set(set_)
         , medium(medium_)
         , actual(medium_.actual())
@@ -521,8 +517,8 @@ struct RenderContext
         // Hits report RayScene ids, which index scene.objects.
         for (const RayScene* rays : {meshes.visible, meshes.occluders, meshes.media}) {
             if (rays && rays->largestId() >= int(scene.objects.size())) {
-                throw Error(fmt::format("render: a mesh is given as object {}, but the scene has {} object(s)",
-                    rays->largestId(), scene.objects.size()));
+                throw Error(fmt::format(
+                    "render: a mesh is given as object {}, but the scene has {} object(s)", rays->largestId(), scene.objects.size()));
             }
         }
         // What the level set stands for: the scene's medium object, if it names one.
@@ -552,7 +548,8 @@ struct RenderContext
         }
         if (!options.directFromLights && set.find(grids::kDirect)) directField.emplace(grids, *set.get<openvdb::Vec3SGrid>(grids::kDirect));
         if (set.find(grids::kScatter)) {
-            scatterField.emplace(grids, *sourceFromFluence(grids, *set.get<openvdb::Vec3SGrid>(grids::kScatter)), SourceField::Near::Layers);
+            scatterField.emplace(
+                grids, *sourceFromFluence(grids, *set.get<openvdb::Vec3SGrid>(grids::kScatter)), SourceField::Near::Layers);
         }
         if (firstMoment) {
             scatterAnisotropy = set.get<openvdb::Vec3SGrid>(grids::kScatterAnisotropy);
@@ -601,7 +598,7 @@ struct RenderContext
     /// isotropically otherwise.)
     const Medium grids;
     openvdb::Vec3SGrid::ConstPtr scatterAnisotropy; ///< with firstMoment
-    openvdb::Vec3SGrid::ConstPtr sourceAnisotropy;  ///< with firstMoment, where the set has it
+    openvdb::Vec3SGrid::ConstPtr sourceAnisotropy; ///< with firstMoment, where the set has it
     const Scene& scene;
     const RenderOptions& options;
     const RenderMeshes& meshes;
@@ -615,11 +612,11 @@ struct RenderContext
     /// The medium is a volume object's grid: no surface, every camera ray marches from the camera.
     bool volumeMedium = false;
     std::vector<LightSampler> surfaceLights; ///< the lights the surface term reflects (none: no surface term)
-    std::vector<LightSampler> volumeLights;  ///< the lights single scattering is marched to (directFromLights)
+    std::vector<LightSampler> volumeLights; ///< the lights single scattering is marched to (directFromLights)
     std::optional<InteriorField> directField; ///< single scattering read from the `direct` grid (not directFromLights)
     std::optional<SourceField> scatterField; ///< J = σs·φ/4π of the `scatter` grid, or none
-    std::vector<VolumeEmission> emitters;    ///< the volume lights, seen along camera rays
-    openvdb::Vec3d forward, right, up;       ///< the camera's frame
+    std::vector<VolumeEmission> emitters; ///< the volume lights, seen along camera rays
+    openvdb::Vec3d forward, right, up; ///< the camera's frame
     double aspect = 1.0, tanHalf = 1.0;
 };
 
@@ -635,8 +632,7 @@ public:
               context.scatterField ? &*context.scatterField : nullptr, context.options.directFromLights ? &context.volumeLights : nullptr,
               context.meshes.occluders, context.meshes.media, &context.emitters,
               context.firstMoment ? transportScaling(context.medium.phaseG()).forward : context.medium.phaseG(),
-              context.scatterAnisotropy.get(),
-              context.firstMoment ? RestPhase(transportScaling(context.medium.phaseG())) : RestPhase(),
+              context.scatterAnisotropy.get(), context.firstMoment ? RestPhase(transportScaling(context.medium.phaseG())) : RestPhase(),
               context.directField ? context.sourceAnisotropy.get() : nullptr)
         , mShader(context.actual, context.surfaceLights, context.meshes.occluders, context.meshes.media,
               MarchOptions{context.options.step, context.options.cutoff})
@@ -674,7 +670,7 @@ private:
     {
         openvdb::Vec3d point, normal;
         double distance = 0.0;
-        int id = 0;                          ///< CameraSample::object
+        int id = 0; ///< CameraSample::object
         const SceneObject* object = nullptr; ///< null: the level set of a scene without a medium object
     };
 
@@ -683,7 +679,7 @@ private:
     {
         openvdb::Vec3d direct{0.0}, scatter{0.0}, transmittance{0.0}, behind{0.0};
         bool touched = false; ///< the march met medium
-        int opaque = -1;      ///< the occluder or emitter behind (its object index), or −1
+        int opaque = -1; ///< the occluder or emitter behind (its object index), or −1
     };
 
     std::optional<Hit> firstSurface(const openvdb::Vec3d& origin, const openvdb::Vec3d& dir)
@@ -708,8 +704,8 @@ private:
         return hit;
     }
 
-    openvdb::Vec3d surfaceTerm(const SceneObject* object, const openvdb::Vec3d& x, const openvdb::Vec3d& normal,
-        const openvdb::Vec3d& dir, std::uint64_t key)
+    openvdb::Vec3d surfaceTerm(
+        const SceneObject* object, const openvdb::Vec3d& x, const openvdb::Vec3d& normal, const openvdb::Vec3d& dir, std::uint64_t key)
     {
         if (!object) return openvdb::Vec3d(0.0);
         if (mContext.surfaceLights.empty() || !object->surface.reflects()) return object->surface.emission;
@@ -801,7 +797,8 @@ private:
             const double a = (k + unitHash(key, std::uint64_t(k), 2)) / directions;
             const double phi = 2.0 * M_PI * unitHash(key, std::uint64_t(k), 3);
             const double r = std::sqrt(a);
-            const openvdb::Vec3d w = (t1 * (r * std::cos(phi)) + t2 * (r * std::sin(phi)) + inward * std::sqrt(std::max(0.0, 1.0 - a))).unit();
+            const openvdb::Vec3d w =
+                (t1 * (r * std::cos(phi)) + t2 * (r * std::sin(phi)) + inward * std::sqrt(std::max(0.0, 1.0 - a))).unit();
             const auto g = mMarcher.march(hit.point, w, std::numeric_limits<double>::infinity(), mixBits(key + std::uint64_t(k) * 7919u));
             if (!g.touched) continue;
             out.direct += g.direct;
@@ -849,10 +846,12 @@ RenderedImage render(const VoxelSet& set, const Medium& medium, const Scene& sce
 {
     InterruptStep step(interrupter, "rendering");
     if (options.width < 1 || options.height < 1 || options.samples < 1) {
-        throw UsageError(fmt::format("image size {}x{} with {} samples per pixel is empty", options.width, options.height, options.samples));
+        throw UsageError(
+            fmt::format("image size {}x{} with {} samples per pixel is empty", options.width, options.height, options.samples));
     }
-    requireMemory("render", stageMemory(kStageFixedBytes, double(medium.density().activeVoxelCount()), kRenderBytesPerVoxel,
-                                double(options.width) * double(options.height), kRenderBytesPerPixel));
+    requireMemory("render",
+        stageMemory(kStageFixedBytes, double(medium.density().activeVoxelCount()), kRenderBytesPerVoxel,
+            double(options.width) * double(options.height), kRenderBytesPerPixel));
     const RenderContext context(set, medium, scene, options, meshes);
 
     RenderedImage image;
@@ -879,7 +878,7 @@ RenderedImage render(const VoxelSet& set, const Medium& medium, const Scene& sce
     // (same keys, same values) rather than keeping every pixel's sums.
     constexpr int kMixed = -3;
     const bool adaptive = maxSpp > spp;
-    std::vector<int> seen(adaptive ? n : 0);  // the object the first rays all met (-1: none), or kMixed
+    std::vector<int> seen(adaptive ? n : 0); // the object the first rays all met (-1: none), or kMixed
     std::vector<char> noisy(adaptive ? n : 0); // the first rays' mean is noisier than options.noiseLevel
     const auto needsMore = [&](int x, int y) {
         const std::size_t pixel = std::size_t(y) * std::size_t(options.width) + std::size_t(x);

@@ -11,7 +11,7 @@ int floorDiv(int a, int f) { return a >= 0 ? a / f : -((-a + f - 1) / f); }
 
 openvdb::Coord floorDiv(const openvdb::Coord& c, int f) { return {floorDiv(c.x(), f), floorDiv(c.y(), f), floorDiv(c.z(), f)}; }
 
-template<typename GridT>
+template <typename GridT>
 typename GridT::Ptr average(const GridT& fine, int factor, const openvdb::math::Transform::Ptr& xform)
 {
     using ValueT = typename GridT::ValueType;
@@ -73,7 +73,7 @@ openvdb::Vec3SGrid::Ptr prolong(const openvdb::Vec3SGrid& coarse, const openvdb:
         return openvdb::tools::BoxSampler::sample(acc, coarseXform.worldToIndex(fineXform.indexToWorld(fineIjk)));
     };
     openvdb::tree::LeafManager<openvdb::Vec3STree> leaves(out->tree());
-    leaves.foreach([&](openvdb::Vec3STree::LeafNodeType& leaf, std::size_t) {
+    leaves.foreach ([&](openvdb::Vec3STree::LeafNodeType& leaf, std::size_t) {
         auto acc = coarse.getConstAccessor();
         for (auto it = leaf.beginValueOn(); it; ++it) it.setValue(sampleAt(acc, it.getCoord().asVec3d()));
     });

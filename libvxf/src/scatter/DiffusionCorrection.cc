@@ -42,9 +42,7 @@ DiffusionCorrection::DiffusionCorrection(const SweepLattice& lattice, int coarse
     const double h = dx * mFactor; // a cell's width
     const std::vector<openvdb::Vec3f>& sigmaT = lattice.sigmaT();
     const std::vector<openvdb::Vec3f>& sigmaS = lattice.sigmaS();
-    const auto inDomain = [&](const openvdb::Vec3f& t) {
-        return std::min({t[0], t[1], t[2]}) * dx >= kThinVoxel;
-    };
+    const auto inDomain = [&](const openvdb::Vec3f& t) { return std::min({t[0], t[1], t[2]}) * dx >= kThinVoxel; };
     // Cells (blocks of mFactor³ voxels holding a voxel of the domain) in lattice order, and
     // each voxel's cell.
     std::unordered_map<openvdb::Coord, std::int32_t, CoordHash> cellIndex;
@@ -211,8 +209,9 @@ DiffusionCorrection::Solve DiffusionCorrection::solve(const std::vector<openvdb:
                     const double own = mMomentFactor[c][ch];
                     for (int f = 0; f < 6; ++f) {
                         const int j = mNeighbours[c * 6 + std::size_t(f)];
-                        const double g = j < 0 ? 0.0
-                                               : 0.5 * (own * cellFlux[c][f >> 1] + mMomentFactor[std::size_t(j)][ch] * cellFlux[std::size_t(j)][f >> 1]);
+                        const double g = j < 0
+                            ? 0.0
+                            : 0.5 * (own * cellFlux[c][f >> 1] + mMomentFactor[std::size_t(j)][ch] * cellFlux[std::size_t(j)][f >> 1]);
                         rhs -= (f & 1) ? g : -g;
                     }
                 }
@@ -226,7 +225,8 @@ DiffusionCorrection::Solve DiffusionCorrection::solve(const std::vector<openvdb:
         termination.iterations = maxIterations;
         termination.relativeError = tolerance;
         openvdb::util::NullInterrupter never;
-        const openvdb::math::pcg::State state = openvdb::math::pcg::solve(*channel.matrix, b, x, *channel.preconditioner, never, termination);
+        const openvdb::math::pcg::State state =
+            openvdb::math::pcg::solve(*channel.matrix, b, x, *channel.preconditioner, never, termination);
         result.iterations = std::max(result.iterations, state.iterations);
         result.residual = std::max(result.residual, state.relativeError);
         for (std::size_t c = 0; c < cells; ++c) {

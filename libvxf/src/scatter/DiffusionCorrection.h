@@ -56,7 +56,7 @@ public:
 
     struct Solve
     {
-        int iterations = 0;    ///< most conjugate-gradient iterations of a channel
+        int iterations = 0; ///< most conjugate-gradient iterations of a channel
         double residual = 0.0; ///< largest relative residual |b − Aδ|/|b| of a channel
     };
 
@@ -88,11 +88,11 @@ private:
     };
     const SweepLattice& mLattice;
     int mFactor = 1;
-    std::vector<std::int32_t> mCellOf;   ///< per voxel, its cell (−1: not in the domain)
-    std::vector<std::uint32_t> mStart;   ///< cell c's voxels: mMembers[mStart[c] … mStart[c + 1])
+    std::vector<std::int32_t> mCellOf; ///< per voxel, its cell (−1: not in the domain)
+    std::vector<std::uint32_t> mStart; ///< cell c's voxels: mMembers[mStart[c] … mStart[c + 1])
     std::vector<std::uint32_t> mMembers; ///< the domain's voxels (per-voxel indices), cell by cell
     Channel mChannels[3];
-    std::vector<std::int32_t> mNeighbours;     ///< with a phase, 6 per cell (−x, +x, −y, +y, −z, +z), −1: vacuum
+    std::vector<std::int32_t> mNeighbours; ///< with a phase, 6 per cell (−x, +x, −y, +y, −z, +z), −1: vacuum
     std::vector<openvdb::Vec3d> mMomentFactor; ///< with a phase, per cell, χ1·σs/σtr (faded)
     std::vector<double> mSolution[3]; ///< per channel, δ per cell (empty: none yet)
 };

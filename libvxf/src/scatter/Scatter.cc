@@ -73,9 +73,9 @@ double maxChannel(const openvdb::Vec3d& v) { return std::max({v[0], v[1], v[2]})
 /// What is known of the rest of a series of passes, Σ_{k>K} φ_k, from its last two passes.
 struct SeriesTail
 {
-    bool known = false;            ///< every channel's pass ratio is in [0, 1): the series converges
-    openvdb::Vec3d ratio{0.0};     ///< r = E_K/E_{K−1} per channel (E: energy, Σ over voxels)
-    openvdb::Vec3d rest{0.0};      ///< energy of the rest were it geometric from here: E_K·r/(1−r)
+    bool known = false; ///< every channel's pass ratio is in [0, 1): the series converges
+    openvdb::Vec3d ratio{0.0}; ///< r = E_K/E_{K−1} per channel (E: energy, Σ over voxels)
+    openvdb::Vec3d rest{0.0}; ///< energy of the rest were it geometric from here: E_K·r/(1−r)
     openvdb::Vec3d uncertainty{std::numeric_limits<double>::infinity()}; ///< bound on |true rest − rest|
 };
 
@@ -87,8 +87,8 @@ struct SeriesTail
 /// rest's energy and of every voxel's share in it. (A ratio of energies alone settles long
 /// before the shape does: albedo 0.9999 stopped with 1.4% too much light at the brightest
 /// voxel while its energy was within 0.03%.)
-SeriesTail seriesTail(const openvdb::Vec3SGrid& last, const openvdb::Vec3SGrid& before,
-    const openvdb::Vec3d& energy, const openvdb::Vec3d& energyBefore)
+SeriesTail seriesTail(
+    const openvdb::Vec3SGrid& last, const openvdb::Vec3SGrid& before, const openvdb::Vec3d& energy, const openvdb::Vec3d& energyBefore)
 {
     SeriesTail t;
     t.known = true;
@@ -123,7 +123,7 @@ template <typename Combine>
 void combineInPlace(openvdb::Vec3SGrid& y, const openvdb::Vec3SGrid& x, const Combine& combine)
 {
     openvdb::tree::LeafManager<openvdb::Vec3STree> leaves(y.tree());
-    leaves.foreach([&](openvdb::Vec3STree::LeafNodeType& leaf, std::size_t) {
+    leaves.foreach ([&](openvdb::Vec3STree::LeafNodeType& leaf, std::size_t) {
         auto acc = x.getConstAccessor();
         for (auto it = leaf.beginValueOn(); it; ++it) it.setValue(combine(*it, acc.getValue(it.getCoord())));
     });
@@ -173,7 +173,7 @@ void axpy(openvdb::Vec3SGrid& y, const openvdb::Vec3d& a, const openvdb::Vec3SGr
 openvdb::Vec3SGrid::Ptr scaled(const openvdb::Vec3d& a, const openvdb::Vec3SGrid& x)
 {
     auto y = x.deepCopy();
-    openvdb::tools::foreach(y->beginValueOn(), [a](const openvdb::Vec3STree::ValueOnIter& it) {
+    openvdb::tools::foreach (y->beginValueOn(), [a](const openvdb::Vec3STree::ValueOnIter& it) {
         const openvdb::Vec3f v = *it;
         it.setValue(openvdb::Vec3f(float(v[0] * a[0]), float(v[1] * a[1]), float(v[2] * a[2])));
     });
@@ -188,8 +188,7 @@ openvdb::Vec3SGrid::Ptr scaled(const openvdb::Vec3d& a, const openvdb::Vec3SGrid
 /// @a gram[j][i] = ⟨v_j, Mv_i⟩, @a along[j] = ⟨v_j, ρ⟩. Where the system is singular (a
 /// direction adds nothing new) only the newest direction steps, by ⟨v, ρ⟩/⟨v, Mv⟩ in [0, 16]
 /// (1, the plain step, if even that fails).
-std::vector<openvdb::Vec3d> cycleStep(const std::vector<std::vector<openvdb::Vec3d>>& gram,
-    const std::vector<openvdb::Vec3d>& along)
+std::vector<openvdb::Vec3d> cycleStep(const std::vector<std::vector<openvdb::Vec3d>>& gram, const std::vector<openvdb::Vec3d>& along)
 {
     const std::size_t n = along.size();
     std::vector<openvdb::Vec3d> c(n, openvdb::Vec3d(0.0));
@@ -207,7 +206,10 @@ std::vector<openvdb::Vec3d> cycleStep(const std::vector<std::vector<openvdb::Vec
             std::size_t pivot = k;
             for (std::size_t j = k + 1; j < n; ++j) pivot = std::abs(m[j][k]) > std::abs(m[pivot][k]) ? j : pivot;
             std::swap(m[k], m[pivot]);
-            if (!(std::abs(m[k][k]) > 1e-9 * scale)) { solved = false; break; }
+            if (!(std::abs(m[k][k]) > 1e-9 * scale)) {
+                solved = false;
+                break;
+            }
             for (std::size_t j = k + 1; j < n; ++j) {
                 const double f = m[j][k] / m[k][k];
                 for (std::size_t i = k; i <= n; ++i) m[j][i] -= f * m[k][i];
@@ -254,7 +256,8 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
         j = set.get<openvdb::Vec3SGrid>(grids::kScatterSource);
         if (options.band > 0.0 || sourceScale != 1.0f) j = j->deepCopy(); // the file's scatter_source stays as it was
         if (sourceScale != 1.0f) {
-            openvdb::tools::foreach(j->beginValueAll(), [sourceScale](const openvdb::Vec3SGrid::ValueAllIter& it) { it.setValue(*it * sourceScale); });
+            openvdb::tools::foreach (
+                j->beginValueAll(), [sourceScale](const openvdb::Vec3SGrid::ValueAllIter& it) { it.setValue(*it * sourceScale); });
         }
         report.band = coarsenBeyondBand(*j, medium.density(), options.band);
         sum = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
@@ -321,11 +324,11 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
         const Medium* levelMedium = &medium;
         CoarseMedium coarse;
         openvdb::Vec3SGrid::Ptr levelSum = sum; // Σ φ_k on the level (sum itself while fine)
-        double levelVoxels = 1.0;               // fine voxels per level voxel (energies in fine units)
+        double levelVoxels = 1.0; // fine voxels per level voxel (energies in fine units)
         const auto energy = [&levelVoxels](const openvdb::Vec3SGrid& g) { return gridEnergy(g) * levelVoxels; };
         openvdb::Vec3SGrid::Ptr last, beforeLast;
         openvdb::Vec3SGrid::Ptr fineSource; // J_N, the fine source when the passes went coarse
-        openvdb::Vec3d energyBefore(0.0);   // E_{K−1}
+        openvdb::Vec3d energyBefore(0.0); // E_{K−1}
         bool tailAdded = false;
         for (int pass = 0; pass < options.passes; ++pass) {
             const auto start = std::chrono::steady_clock::now();
@@ -381,8 +384,9 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
             bool settled = tail.known;
             for (int c = 0; c < 3; ++c) settled = settled && tail.uncertainty[c] * levelVoxels <= options.tolerance * std::abs(summed[c]);
             if (!settled) continue;
-            const openvdb::Vec3f factor(tail.ratio[0] / (1.0 - tail.ratio[0]), tail.ratio[1] / (1.0 - tail.ratio[1]), tail.ratio[2] / (1.0 - tail.ratio[2]));
-            openvdb::tools::foreach(last->beginValueOn(), [factor](const openvdb::Vec3STree::ValueOnIter& it) {
+            const openvdb::Vec3f factor(
+                tail.ratio[0] / (1.0 - tail.ratio[0]), tail.ratio[1] / (1.0 - tail.ratio[1]), tail.ratio[2] / (1.0 - tail.ratio[2]));
+            openvdb::tools::foreach (last->beginValueOn(), [factor](const openvdb::Vec3STree::ValueOnIter& it) {
                 const openvdb::Vec3f v = *it;
                 it.setValue(openvdb::Vec3f(v[0] * factor[0], v[1] * factor[1], v[2] * factor[2]));
             });
@@ -390,8 +394,8 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
             const int c = summed[0] >= summed[1] && summed[0] >= summed[2] ? 0 : summed[1] >= summed[2] ? 1 : 2;
             report.tailFactor = factor[c];
             report.stopReason = fmt::format("after pass {} the rest of the series, phi_K r/(1-r) with pass ratio r = {:.4f}, "
-                "is {:.2g} of the sum, known to within {:.2g}, below the tolerance {:.2g}; added", k, tail.ratio[c],
-                tail.rest[c] * levelVoxels / summed[c], tail.uncertainty[c] * levelVoxels / summed[c], options.tolerance);
+                                            "is {:.2g} of the sum, known to within {:.2g}, below the tolerance {:.2g}; added",
+                k, tail.ratio[c], tail.rest[c] * levelVoxels / summed[c], tail.uncertainty[c] * levelVoxels / summed[c], options.tolerance);
             tailAdded = true;
             break;
         }
@@ -404,8 +408,8 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
             const bool corrected = levelSum != sum && options.coarseCorrection;
             if (!options.extrapolateTail && !corrected && last && beforeLast) {
                 const std::size_t n = report.passes.size();
-                const SeriesTail tail = seriesTail(*last, *beforeLast, report.passes[n - 1].energy / levelVoxels,
-                    report.passes[n - 2].energy / levelVoxels);
+                const SeriesTail tail =
+                    seriesTail(*last, *beforeLast, report.passes[n - 1].energy / levelVoxels, report.passes[n - 2].energy / levelVoxels);
                 const openvdb::Vec3d total = levelSum == sum ? gridEnergy(*sum) : gridEnergy(*sum) + energy(*levelSum);
                 double missing = 0.0, ratio = 0.0;
                 for (int c = 0; c < 3; ++c) {
@@ -416,7 +420,8 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
                 }
                 // (Not when the ratios say nothing, e.g. an artist's source of both signs.)
                 if (tail.known && missing > std::max(options.tolerance, 1e-3)) {
-                    report.stopReason += fmt::format("; the rest of the series would add about {:.2g}% or more to the scattered light (pass ratio {:.4f}): {}",
+                    report.stopReason += fmt::format(
+                        "; the rest of the series would add about {:.2g}% or more to the scattered light (pass ratio {:.4f}): {}",
                         100.0 * missing, ratio,
                         options.finePasses > 0 ? "raise passes"
                                                : "raise passes, or set fine_passes (the passes after them run on a coarser lattice, "
@@ -434,15 +439,18 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
             report.tailFactor = global / (1.0 - global);
             auto before = beforeLast->getConstAccessor();
             const float cap = float(global);
-            openvdb::tools::foreach(last->beginValueOn(), [&before, cap](const openvdb::Vec3STree::ValueOnIter& it) {
-                const openvdb::Vec3f b = before.getValue(it.getCoord());
-                openvdb::Vec3f tail = *it;
-                for (int c = 0; c < 3; ++c) {
-                    const float r = b[c] > 0.0f ? std::clamp(tail[c] / b[c], 0.0f, cap) : cap;
-                    tail[c] *= r / (1.0f - r);
-                }
-                it.setValue(tail);
-            }, /*threaded=*/false);
+            openvdb::tools::foreach (
+                last->beginValueOn(),
+                [&before, cap](const openvdb::Vec3STree::ValueOnIter& it) {
+                    const openvdb::Vec3f b = before.getValue(it.getCoord());
+                    openvdb::Vec3f tail = *it;
+                    for (int c = 0; c < 3; ++c) {
+                        const float r = b[c] > 0.0f ? std::clamp(tail[c] / b[c], 0.0f, cap) : cap;
+                        tail[c] *= r / (1.0f - r);
+                    }
+                    it.setValue(tail);
+                },
+                /*threaded=*/false);
             openvdb::tools::compSum(*levelSum, *last);
             report.stopReason += fmt::format("; geometric tail extrapolated per voxel (global ratio {:.4f})", global);
         }
@@ -484,7 +492,8 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
                     if (!settled) jc = sourceFromFluence(*coarse.medium, *phi);
                     if (settled) {
                         const float scale = float(1.0 / (1.0 - dominant));
-                        openvdb::tools::foreach(phi->beginValueOn(), [scale](const openvdb::Vec3STree::ValueOnIter& it) { it.setValue(*it * scale); });
+                        openvdb::tools::foreach (
+                            phi->beginValueOn(), [scale](const openvdb::Vec3STree::ValueOnIter& it) { it.setValue(*it * scale); });
                     }
                     openvdb::tools::compSum(*acc, *phi);
                     if (settled || size == 0.0 || (count > 0 && r < 1.0 && size * r / (1.0 - r) < tolerance * sizes)) {
@@ -527,7 +536,7 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
             // other errors are larger than that), or for at most kMaxCorrectionCycles.
             const double cycleTolerance = std::max(options.tolerance, 3e-3);
             double previousSize = 0.0;
-            std::string added;  // each cycle's step as a share of the sum
+            std::string added; // each cycle's step as a share of the sum
             std::string ending; // why the cycles stopped, unless the rest fell below the tolerance
             // The directions so far, v_i (each cycle's δ), their images Mv_i, and ⟨v_j, Mv_i⟩_S
             // (2 fine grids per cycle kept: Sv_j is made again when needed).
@@ -587,16 +596,19 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
                     ending = "";
                     break;
                 }
-                ending = fmt::format("; stopped at the limit of {} cycles, the rest not yet below {:g} of the sum", kMaxCorrectionCycles, cycleTolerance);
+                ending = fmt::format(
+                    "; stopped at the limit of {} cycles, the rest not yet below {:g} of the sum", kMaxCorrectionCycles, cycleTolerance);
             }
             if (cycles > 0) addCorrection(*sum, *correction);
             report.correctionPasses = correctionPasses;
             report.correctionCycles = cycles;
             report.fineGatherSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-            report.stopReason += fmt::format("; passes after {} on a {}x coarser lattice, their sum gathered on the fine one", options.finePasses, options.coarseFactor);
+            report.stopReason += fmt::format(
+                "; passes after {} on a {}x coarser lattice, their sum gathered on the fine one", options.finePasses, options.coarseFactor);
             if (options.coarseCorrection) {
-                report.stopReason += fmt::format(", corrected by {} more cycle{} (adding {} of the sum{}; {} coarse passes, {} fine gathers in all, {:.2f} s)",
-                    cycles, cycles == 1 ? "" : "s", added, ending, correctionPasses, fineGathers, report.fineGatherSeconds);
+                report.stopReason += fmt::format(
+                    ", corrected by {} more cycle{} (adding {} of the sum{}; {} coarse passes, {} fine gathers in all, {:.2f} s)", cycles,
+                    cycles == 1 ? "" : "s", added, ending, correctionPasses, fineGathers, report.fineGatherSeconds);
             }
         }
     }
@@ -618,4 +630,3 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
 }
 
 } // namespace vxf
-

@@ -69,8 +69,8 @@ ScatterKernel scatterKernelNamed(const std::string& name)
     throw UsageError(fmt::format("unknown scatter kernel '{}' (gather or sweep)", name));
 }
 
-openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGrid& source,
-    const ScatterPassOptions& options, Interrupter* interrupter)
+openvdb::Vec3SGrid::Ptr scatterPass(
+    const Medium& medium, const openvdb::Vec3SGrid& source, const ScatterPassOptions& options, Interrupter* interrupter)
 {
     if (options.kernel == ScatterKernel::Sweep) return sweepPass(medium, source, options, interrupter);
     InterruptStep step(interrupter, "scattering");
@@ -95,8 +95,8 @@ openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGr
     const bool quadratic = medium.surface() != nullptr;
 
     // φ(x) at one voxel, J read from the continued field or fraction-weighted from the grid.
-    const auto gather = [&](Medium::Sampler& sampler, const std::optional<SourceField::Sampler>& field, const GridLookup<openvdb::Vec3SGrid>& grid,
-                            const openvdb::Coord& c) {
+    const auto gather = [&](Medium::Sampler& sampler, const std::optional<SourceField::Sampler>& field,
+                            const GridLookup<openvdb::Vec3SGrid>& grid, const openvdb::Coord& c) {
         openvdb::Vec3d x = c.asVec3d(), normal;
         openvdb::Mat3d rotation = openvdb::Mat3d::identity();
         if (sampler.skinPoint(c, x, normal)) {
@@ -115,8 +115,8 @@ openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGr
             InsideSteps inside(sampler, x, d, 0.0, hStep);
             InsideStep step;
             openvdb::Vec3d jStart(0.0), jEnd(0.0); // J at the step's ends
-            openvdb::Vec3d jBefore(0.0);            // J at the previous step's start
-            double lengthBefore = 0.0;              // the previous step's length, when this one joins it
+            openvdb::Vec3d jBefore(0.0); // J at the previous step's start
+            double lengthBefore = 0.0; // the previous step's length, when this one joins it
             const auto sourceAt = [&](const openvdb::Vec3d& p, double interior) {
                 return field ? field->sample(p) : openvdb::Vec3d(grid.sampleTrilinear(p)) * interior;
             };
@@ -128,7 +128,9 @@ openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGr
                 }
                 openvdb::Vec3d jMiddle;
                 if (quadratic) {
-                    const auto interiorAt = [&](const openvdb::Vec3d& p) { return field ? 1.0 : sampler.interiorScale(p, step.distanceBound); };
+                    const auto interiorAt = [&](const openvdb::Vec3d& p) {
+                        return field ? 1.0 : sampler.interiorScale(p, step.distanceBound);
+                    };
                     if (!step.joined) lengthBefore = 0.0;
                     jStart = step.joined ? jEnd : sourceAt(step.start, interiorAt(step.start));
                     jEnd = sourceAt(step.end, interiorAt(step.end));
@@ -173,8 +175,10 @@ openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGr
 
     std::optional<SourceField> sourceField;
     std::shared_ptr<const DenseCopy<openvdb::Vec3SGrid>> sourceDense;
-    if (options.source == ScatterPassOptions::SourceRead::Continued) sourceField.emplace(medium, source, SourceField::Near::Lattice);
-    else sourceDense = DenseCopy<openvdb::Vec3SGrid>::create(source, 2, kDenseCopyBytes);
+    if (options.source == ScatterPassOptions::SourceRead::Continued)
+        sourceField.emplace(medium, source, SourceField::Near::Lattice);
+    else
+        sourceDense = DenseCopy<openvdb::Vec3SGrid>::create(source, 2, kDenseCopyBytes);
     openvdb::tree::LeafManager<openvdb::Vec3STree> leaves(fluence->tree());
     std::vector<openvdb::CoordBBox> tiles;
     for (auto it = fluence->tree().cbeginValueOn(); it; ++it) {

@@ -49,10 +49,7 @@ private:
 
 /// 1 − E2(τz): how the light scattered from a uniform source rises beneath a surface it leaves
 /// by, z voxels deep, τ = σt·dx (the layer's second shape; the first is z itself).
-double rise(double tau, double z)
-{
-    return 1.0 - E2Table::instance()(tau * std::max(z, 0.0));
-}
+double rise(double tau, double z) { return 1.0 - E2Table::instance()(tau * std::max(z, 0.0)); }
 
 /// J read beneath a surface point over the deep voxels around it, and what the layer's shapes
 /// read there the same way: the trilinear weights' mean depth and mean rise per channel. The
@@ -67,7 +64,7 @@ struct Anchor
     openvdb::Vec3d j{0.0}, depth{0.0}, rise{0.0};
 };
 
-template<typename Values, typename Use>
+template <typename Values, typename Use>
 bool readAnchor(const Values& values, Medium::Sampler& sampler, const openvdb::Vec3d& surfacePoint, const openvdb::Vec3d& normal,
     double depth, const openvdb::Vec3d& tau, const Use& use, Anchor& anchor)
 {
@@ -159,7 +156,8 @@ SourceField::SourceField(const Medium& medium, const openvdb::Vec3SGrid& source,
             for (int ch = 0; ch < 3; ++ch) mNonNegative[ch] = mNonNegative[ch] && (*it)[ch] >= 0.0f;
         }
         openvdb::Vec3SGrid& values = *mValues;
-        openvdb::tools::dilateActiveValues(values.tree(), int(std::ceil(kReach)), openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
+        openvdb::tools::dilateActiveValues(
+            values.tree(), int(std::ceil(kReach)), openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
 
         // J on the surface from the skin voxels (the passes gather them there: skinPoint), the
         // interior's voxels whose centre lies half a voxel inside or deeper, and the band's
@@ -170,7 +168,7 @@ SourceField::SourceField(const Medium& medium, const openvdb::Vec3SGrid& source,
         tbb::enumerable_thread_specific<std::vector<std::pair<openvdb::Coord, openvdb::Vec3f>>> skinLocal;
         tbb::enumerable_thread_specific<std::vector<openvdb::Coord>> shallowLocal;
         openvdb::tree::LeafManager<openvdb::Vec3STree> leaves(values.tree());
-        leaves.foreach([&](openvdb::Vec3STree::LeafNodeType& leaf, std::size_t) {
+        leaves.foreach ([&](openvdb::Vec3STree::LeafNodeType& leaf, std::size_t) {
             Medium::Sampler sampler(medium);
             const auto known = source.getConstAccessor();
             for (auto it = leaf.beginValueOn(); it; ++it) {

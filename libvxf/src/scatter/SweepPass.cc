@@ -8,7 +8,6 @@
 
 #include <openvdb/math/Mat3.h>
 
-
 #include <algorithm>
 #include <cmath>
 #include <utility>
@@ -49,18 +48,18 @@ std::vector<openvdb::Vec3d> sweepDirections(int count, std::uint64_t seed)
     return directions;
 }
 
-openvdb::Vec3SGrid::Ptr sweepPass(const Medium& medium, const openvdb::Vec3SGrid& source, const ScatterPassOptions& options,
-    Interrupter* interrupter)
+openvdb::Vec3SGrid::Ptr sweepPass(
+    const Medium& medium, const openvdb::Vec3SGrid& source, const ScatterPassOptions& options, Interrupter* interrupter)
 {
     InterruptStep step(interrupter, "sweeping");
     const detail::SweepLattice lattice(medium, source);
     std::vector<openvdb::Vec3f> fluence(lattice.voxelCount(), openvdb::Vec3f(0.0f)), skin;
     if (options.directions >= 1) {
         const std::vector<openvdb::Vec3d> directions = sweepDirections(options.directions, options.rotationSeed);
-        std::vector<openvdb::Vec3f> j = options.source == ScatterPassOptions::SourceRead::Continued ? detail::readPassSource(lattice, medium, source)
-                                                                                                      : lattice.read(source);
-        lattice.sweep(lattice.sweepSource(std::move(j)), directions, 4.0 * M_PI / double(directions.size()), fluence, &skin,
-            interrupter);
+        std::vector<openvdb::Vec3f> j = options.source == ScatterPassOptions::SourceRead::Continued
+            ? detail::readPassSource(lattice, medium, source)
+            : lattice.read(source);
+        lattice.sweep(lattice.sweepSource(std::move(j)), directions, 4.0 * M_PI / double(directions.size()), fluence, &skin, interrupter);
     }
     auto grid = lattice.write(lattice.withSkin(fluence, skin), source);
     grid->setName("fluence");

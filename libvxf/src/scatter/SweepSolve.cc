@@ -150,8 +150,9 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
     report.accelerated = options.accelerate;
     report.setupSeconds = secondsSince(start);
 
-    const std::vector<openvdb::Vec3f> j0 = gather ? std::vector<openvdb::Vec3f>()
-        : options.source == ScatterPassOptions::SourceRead::Continued ? detail::readPassSource(lattice, medium, source) : lattice.read(source); // (the gather reads the grid)
+    const std::vector<openvdb::Vec3f> j0 = gather                     ? std::vector<openvdb::Vec3f>()
+        : options.source == ScatterPassOptions::SourceRead::Continued ? detail::readPassSource(lattice, medium, source)
+                                                                      : lattice.read(source); // (the gather reads the grid)
     const std::vector<openvdb::Vec3f>& sigmaS = lattice.sigmaS();
     const std::vector<openvdb::Vec3d> directions = sweepDirections(std::max(options.directions, 1), options.rotationSeed);
     const double weight = 4.0 * M_PI / double(directions.size());
@@ -213,8 +214,8 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
             }
             next = firstFlight;
             if (l > 1) {
-                const auto scattered = lattice.read(*scatterPass(medium, *sourceFromFluence(medium, *lattice.write(phi, source)),
-                    gatherOptions, interrupter));
+                const auto scattered =
+                    lattice.read(*scatterPass(medium, *sourceFromFluence(medium, *lattice.write(phi, source)), gatherOptions, interrupter));
                 tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
                     for (std::size_t v = r.begin(); v != r.end(); ++v) next[v] += scattered[v];
                 });
@@ -285,8 +286,8 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
                 correction.accelerate = correctionAccelerates;
                 correction.source = ScatterPassOptions::SourceRead::Continued;
                 SweepSolveReport solved;
-                const auto delta = lattice.read(*sweepSolve(medium, *sourceFromFluence(medium, *lattice.write(change, source)),
-                    correction, solved, interrupter));
+                const auto delta = lattice.read(
+                    *sweepSolve(medium, *sourceFromFluence(medium, *lattice.write(change, source)), correction, solved, interrupter));
                 tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
                     for (std::size_t v = r.begin(); v != r.end(); ++v) next[v] += delta[v] * float(damping);
                 });
@@ -352,15 +353,18 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
         }
         if (rateKnown && it.ratio < 1.0 && it.error <= options.tolerance) {
             report.converged = true;
-            report.stopReason = correctionNote + fmt::format("converged in {} {} (estimated error {:.2g} of the sum, rate {:.3f})", l, iterations, it.error, it.ratio);
+            report.stopReason = correctionNote +
+                fmt::format("converged in {} {} (estimated error {:.2g} of the sum, rate {:.3f})", l, iterations, it.error, it.ratio);
             break;
         }
         if (l >= 3 && it.ratio >= 1.0 && it.change <= options.tolerance) {
             // The changes stopped falling below the tolerance: the floor the diffusion solve's
             // own residual (1e-2 of each change) leaves, not a divergence.
             report.converged = true;
-            report.stopReason = correctionNote + fmt::format("converged in {} {} (the change {:.2g} of the sum, below the tolerance, "
-                "stopped falling)", l, iterations, it.change);
+            report.stopReason = correctionNote +
+                fmt::format("converged in {} {} (the change {:.2g} of the sum, below the tolerance, "
+                            "stopped falling)",
+                    l, iterations, it.change);
             break;
         }
         if (accelerate && l >= 3 && it.ratio >= 1.0) {
@@ -374,14 +378,15 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
             } else {
                 accelerate = false;
                 report.accelerated = false;
-                correctionNote += fmt::format("{} diverged at {} {} (rate {:.3f}) and was dropped; ", correctionNote.empty() ? correctionName : "it",
-                    iteration, l, it.ratio);
+                correctionNote += fmt::format("{} diverged at {} {} (rate {:.3f}) and was dropped; ",
+                    correctionNote.empty() ? correctionName : "it", iteration, l, it.ratio);
             }
         }
     }
     if (!report.converged) {
-        report.stopReason = correctionNote + fmt::format("stopped after {} {}, estimated error {:.2g} of the sum", report.iterations.size(), iterations,
-            report.iterations.empty() ? 0.0 : report.iterations.back().error);
+        report.stopReason = correctionNote +
+            fmt::format("stopped after {} {}, estimated error {:.2g} of the sum", report.iterations.size(), iterations,
+                report.iterations.empty() ? 0.0 : report.iterations.back().error);
     }
     // The skin voxels hold the fluence on the surface, as the gathers give it.
     std::vector<openvdb::Vec3f> shift;

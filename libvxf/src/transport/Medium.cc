@@ -36,7 +36,7 @@ openvdb::FloatGrid::ConstPtr marchSurface(const openvdb::FloatGrid::ConstPtr& su
     const float dx = float(surface->voxelSize()[0]);
     openvdb::tree::LeafManager<const openvdb::FloatTree> leaves(surface->tree());
     tbb::enumerable_thread_specific<std::vector<openvdb::Coord>> found;
-    leaves.foreach([&](const openvdb::FloatTree::LeafNodeType& leaf, size_t) {
+    leaves.foreach ([&](const openvdb::FloatTree::LeafNodeType& leaf, size_t) {
         openvdb::FloatGrid::ConstAccessor phi = surface->getConstAccessor();
         for (auto it = leaf.cbeginValueOn(); it; ++it) {
             const float v = *it;
@@ -86,8 +86,9 @@ Medium::Medium(const VoxelSet& set, const Material& material)
         auto typed = openvdb::gridConstPtrCast<openvdb::FloatGrid>(grid);
         if (typed && typed->getGridClass() == openvdb::GRID_LEVEL_SET) {
             if (typed->transform() != mDensity->transform()) {
-                throw Error(file + "grid 'surface' does not share the transform of 'density'; resample it or remove it "
-                                   "(then the medium ends where the density does)");
+                throw Error(file +
+                    "grid 'surface' does not share the transform of 'density'; resample it or remove it "
+                    "(then the medium ends where the density does)");
             }
             mSurface = marchSurface(typed);
         }
@@ -120,9 +121,8 @@ void Medium::scaleScattering(double factor, double restG)
     mSigmaSDense = mActualSigmaSDense;
     if (mSigmaS) {
         openvdb::Vec3SGrid::Ptr scaled = mSigmaS->deepCopy();
-        openvdb::tools::foreach(scaled->beginValueAll(), [factor](const openvdb::Vec3SGrid::ValueAllIter& it) {
-            it.setValue(openvdb::Vec3f(openvdb::Vec3d(*it) * factor));
-        });
+        openvdb::tools::foreach (scaled->beginValueAll(),
+            [factor](const openvdb::Vec3SGrid::ValueAllIter& it) { it.setValue(openvdb::Vec3f(openvdb::Vec3d(*it) * factor)); });
         mSigmaS = scaled;
         if (mSigmaSDense) mSigmaSDense = DenseCopy<openvdb::Vec3SGrid>::create(*mSigmaS, 2, kDenseCopyBytes);
     }
@@ -212,8 +212,8 @@ double nearestFacing(const RayScene& meshes, const openvdb::Vec3d& p, const open
 
 } // namespace
 
-double Medium::Sampler::snapCrossing(const openvdb::Vec3d& origin, const openvdb::Vec3d& direction, double t, double lo,
-    double hi, bool entering)
+double Medium::Sampler::snapCrossing(
+    const openvdb::Vec3d& origin, const openvdb::Vec3d& direction, double t, double lo, double hi, bool entering)
 {
     if (!mBoundary) return t;
     const openvdb::Vec3d q = origin + direction * t;
@@ -239,8 +239,8 @@ double Medium::Sampler::snapCrossing(const openvdb::Vec3d& origin, const openvdb
     return std::clamp(tAhead - t < t - tBehind ? tAhead : tBehind, lo, hi);
 }
 
-bool Medium::Sampler::boundaryHit(const openvdb::Vec3d& origin, const openvdb::Vec3d& direction, double lo, double hi,
-    double& t, bool& entering) const
+bool Medium::Sampler::boundaryHit(
+    const openvdb::Vec3d& origin, const openvdb::Vec3d& direction, double lo, double hi, double& t, bool& entering) const
 {
     if (!mBoundary || !(hi > lo)) return false;
     const openvdb::math::Transform& xform = mMedium.transform();
@@ -309,7 +309,9 @@ void recordMaterial(VoxelSet& set, const Material& material)
 Material recordedMaterial(const VoxelSet& set)
 {
     auto meta = set.metadata().getMetadata<openvdb::StringMetadata>(kMaterialMetaKey);
-    if (!meta) throw Error(fmt::format("the voxel set records no material ('{}' metadata); run vxf light first or give --scene", kMaterialMetaKey));
+    if (!meta)
+        throw Error(
+            fmt::format("the voxel set records no material ('{}' metadata); run vxf light first or give --scene", kMaterialMetaKey));
     const auto j = nlohmann::json::parse(meta->value(), nullptr, false);
     Material m;
     try {
@@ -322,8 +324,8 @@ Material recordedMaterial(const VoxelSet& set)
         throw Error(fmt::format("malformed '{}' metadata: {}", kMaterialMetaKey, meta->value()));
     }
     if (!(std::abs(m.phaseG) <= kMaxPhaseG)) {
-        throw Error(fmt::format("malformed '{}' metadata: phase_g {} is outside [-{}, {}]", kMaterialMetaKey, m.phaseG,
-            kMaxPhaseG, kMaxPhaseG));
+        throw Error(
+            fmt::format("malformed '{}' metadata: phase_g {} is outside [-{}, {}]", kMaterialMetaKey, m.phaseG, kMaxPhaseG, kMaxPhaseG));
     }
     return m;
 }

@@ -140,8 +140,8 @@ inline Characteristic characteristic(const openvdb::Vec3d& omega)
     const double am = std::abs(omega[m]);
     const double ub = std::abs(omega[b]) / am, uc = std::abs(omega[c]) / am;
     const int o0 = -sign[m] * stride[m], ob = -sign[b] * stride[b], oc = -sign[c] * stride[c];
-    return {{float((1 - ub) * (1 - uc)), float(ub * (1 - uc)), float((1 - ub) * uc), float(ub * uc)},
-        {o0, o0 + ob, o0 + oc, o0 + ob + oc}, 1.0 / am};
+    return {{float((1 - ub) * (1 - uc)), float(ub * (1 - uc)), float((1 - ub) * uc), float(ub * uc)}, {o0, o0 + ob, o0 + oc, o0 + ob + oc},
+        1.0 / am};
 }
 
 /// opticalDepthAlong continues the outside voxels' depth through the surface where the light
@@ -153,10 +153,7 @@ inline Characteristic characteristic(const openvdb::Vec3d& omega)
 constexpr double kContinuedCosine = 0.45;
 
 /// The octant of direction ω: bit a set where it runs toward −a.
-inline int octantOf(const openvdb::Vec3d& omega)
-{
-    return (omega[0] < 0.0 ? 1 : 0) | (omega[1] < 0.0 ? 2 : 0) | (omega[2] < 0.0 ? 4 : 0);
-}
+inline int octantOf(const openvdb::Vec3d& omega) { return (omega[0] < 0.0 ? 1 : 0) | (omega[1] < 0.0 ? 2 : 0) | (omega[2] < 0.0 ? 4 : 0); }
 
 /// The weights of one step of length h through a constant σt: the radiance at its end is
 /// transmittance·ψ_in + in·J_start + own·J_end for J linear along it (stepWeights' in and own
@@ -354,8 +351,8 @@ std::vector<openvdb::Vec3f> SweepLattice::withSkin(const std::vector<openvdb::Ve
     return out;
 }
 
-void SweepLattice::skinAtCentres(std::vector<openvdb::Vec3f>& values,
-    const std::function<openvdb::Vec3f(const openvdb::Coord&)>& centre) const
+void SweepLattice::skinAtCentres(
+    std::vector<openvdb::Vec3f>& values, const std::function<openvdb::Vec3f(const openvdb::Coord&)>& centre) const
 {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mSkin.size()), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t s = r.begin(); s != r.end(); ++s) {
@@ -402,8 +399,8 @@ std::vector<T> SweepLattice::padded(const std::vector<T>& values) const
                     for (int k = -1; k <= 8; ++k) {
                         const int di = i < 0 ? -1 : (i > 7 ? 1 : 0), dj = j < 0 ? -1 : (j > 7 ? 1 : 0), dk = k < 0 ? -1 : (k > 7 ? 1 : 0);
                         const int leaf = neighbour(n, di, dj, dk);
-                        block[paddedIndex(i, j, k)] = leaf < 0 ? T(0)
-                                                               : values[std::size_t(leaf) * kLeafVoxels + localIndex(i - 8 * di, j - 8 * dj, k - 8 * dk)];
+                        block[paddedIndex(i, j, k)] =
+                            leaf < 0 ? T(0) : values[std::size_t(leaf) * kLeafVoxels + localIndex(i - 8 * di, j - 8 * dj, k - 8 * dk)];
                     }
                 }
             }
@@ -428,7 +425,7 @@ openvdb::Vec3SGrid::Ptr SweepLattice::write(const std::vector<openvdb::Vec3f>& v
     grid->setTransform(topology.transformPtr()->copy());
     grid->tree().topologyUnion(topology.tree());
     openvdb::tree::LeafManager<openvdb::Vec3STree> leaves(grid->tree());
-    leaves.foreach([&](openvdb::Vec3STree::LeafNodeType& leaf, std::size_t) {
+    leaves.foreach ([&](openvdb::Vec3STree::LeafNodeType& leaf, std::size_t) {
         for (auto it = leaf.beginValueOn(); it; ++it) it.setValue(valueAt(it.getCoord()));
     });
     // Active tiles: the mean of their voxels.
@@ -467,8 +464,8 @@ const std::array<SweepLattice::UpwindVoxel, SweepLattice::kLeafVoxels>& SweepLat
                             q[c] = qc;
                             int x[3];
                             for (int a = 0; a < 3; ++a) x[a] = (o >> a) & 1 ? 7 - q[a] : q[a];
-                            all[std::size_t(3 * o + m)][std::size_t(k++)] = {std::int16_t(paddedIndex(x[0], x[1], x[2])),
-                                std::int16_t(localIndex(x[0], x[1], x[2]))};
+                            all[std::size_t(3 * o + m)][std::size_t(k++)] = {
+                                std::int16_t(paddedIndex(x[0], x[1], x[2])), std::int16_t(localIndex(x[0], x[1], x[2]))};
                         }
                     }
                 }
@@ -492,8 +489,8 @@ void SweepLattice::leavesInUpwindOrder(int octant, const Visit& visit) const
 }
 
 template <typename Visit>
-void SweepLattice::inUpwindOrder(const openvdb::Vec3d& omega, const std::vector<openvdb::Vec3f>& values, const Visit& visit,
-    const EnteringDepth& outside) const
+void SweepLattice::inUpwindOrder(
+    const openvdb::Vec3d& omega, const std::vector<openvdb::Vec3f>& values, const Visit& visit, const EnteringDepth& outside) const
 {
     const int octant = octantOf(omega);
     const std::vector<Ghost> upwind = upwindGhosts(octant);
@@ -527,8 +524,9 @@ void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::v
         throw Error("sweep: source or fluence does not match the lattice");
     }
     const float w = float(weight);
-    if (moment && (moment->worldDirections.size() != directions.size() || !moment->sourceAnisotropy ||
-                      moment->sourceAnisotropy->size() != source.size() || !moment->flux || moment->flux->size() != voxelCount())) {
+    if (moment &&
+        (moment->worldDirections.size() != directions.size() || !moment->sourceAnisotropy ||
+            moment->sourceAnisotropy->size() != source.size() || !moment->flux || moment->flux->size() != voxelCount())) {
         throw Error("sweep: the first moment's arrays do not match the lattice");
     }
     std::vector<openvdb::Vec3f>* flux = moment ? moment->flux : nullptr;
@@ -544,8 +542,8 @@ void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::v
             if (octantOf(directions[d]) == o) inOctant.push_back(d);
         }
         for (std::size_t i = 0; i < inOctant.size(); i += kSweepBatch) {
-            batches.emplace_back(inOctant.begin() + std::ptrdiff_t(i),
-                inOctant.begin() + std::ptrdiff_t(std::min(inOctant.size(), i + kSweepBatch)));
+            batches.emplace_back(
+                inOctant.begin() + std::ptrdiff_t(i), inOctant.begin() + std::ptrdiff_t(std::min(inOctant.size(), i + kSweepBatch)));
         }
     }
     const std::size_t leaves = mOrigins.size();
@@ -583,7 +581,8 @@ void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::v
                     const openvdb::Vec3f* a = &(*moment->sourceAnisotropy)[n * kPaddedVoxels];
                     if (moment->quadratureCorrection) {
                         const openvdb::Vec3f* beta = &(*moment->quadratureCorrection)[n * kPaddedVoxels];
-                        for (int q = 0; q < kPaddedVoxels; ++q) scratch.toward[std::size_t(q)] = j[q] * moment->rest(a[q], worldOmega, beta[q]);
+                        for (int q = 0; q < kPaddedVoxels; ++q)
+                            scratch.toward[std::size_t(q)] = j[q] * moment->rest(a[q], worldOmega, beta[q]);
                     } else {
                         for (int q = 0; q < kPaddedVoxels; ++q) scratch.toward[std::size_t(q)] = j[q] * moment->rest(a[q], worldOmega);
                     }
@@ -618,8 +617,8 @@ void SweepLattice::sweepLeaf(std::size_t n, const openvdb::Vec3d& omega, const U
         // both ends, no skin), to the bit, without its tests, the step's weights once a leaf.
         const openvdb::Vec3f sigmaT = st[0]; // the leaf's one σt: its padded block is not streamed
         for (int ch = 0; ch < 3; ++ch) uniformWeights(sigmaT[ch], len, uw[ch]);
-        const openvdb::Vec3f transmittance(uw[0].transmittance, uw[1].transmittance, uw[2].transmittance),
-            in(uw[0].in, uw[1].in, uw[2].in), own(uw[0].own, uw[1].own, uw[2].own);
+        const openvdb::Vec3f transmittance(uw[0].transmittance, uw[1].transmittance, uw[2].transmittance), in(uw[0].in, uw[1].in, uw[2].in),
+            own(uw[0].own, uw[1].own, uw[2].own);
         for (int k = 0; k < kLeafVoxels; ++k) {
             const int p = voxels[k].padded, v = voxels[k].local;
             openvdb::Vec3f psiIn(0.0f), jIn(0.0f);
@@ -725,8 +724,8 @@ openvdb::Vec3f SweepLattice::depthStep(std::size_t leaf, int p, const openvdb::V
     // with this voxel's σt, and the step taken whole.
     double cosine = 0.0;
     if (outside && inside && dHere < 0.0f) {
-        const openvdb::Vec3d normal(distance[p + 100] - distance[p - 100], distance[p + 10] - distance[p - 10],
-            distance[p + 1] - distance[p - 1]);
+        const openvdb::Vec3d normal(
+            distance[p + 100] - distance[p - 100], distance[p + 10] - distance[p - 10], distance[p + 1] - distance[p - 1]);
         if (normal.length() > 1e-6) cosine = -omega.dot(normal.unit());
     }
     openvdb::Vec3f result = tauIn;
@@ -754,35 +753,38 @@ void SweepLattice::opticalDepthAlong(const openvdb::Vec3d& omega, std::vector<op
     tau.assign(voxelCount(), openvdb::Vec3f(0.0f));
     const Characteristic c = characteristic(omega);
     const float halfStep = float(0.5 * c.length * mVoxelSize);
-    inUpwindOrder(omega, tau, [&](std::size_t n, openvdb::Vec3f* buffer, const UpwindVoxel* voxels) {
-        openvdb::Vec3f* out = &tau[n * kLeafVoxels];
-        if (mUniform[n]) {
-            // One σt over the padded block: every step adds the same (its upwind blend of σt
-            // the same sum at every voxel), the block's σt not read (it is most of a sweep's
-            // memory traffic).
-            const openvdb::Vec3f sigmaT = mSigmaT[n * kPaddedVoxels];
-            openvdb::Vec3f stIn(0.0f);
-            for (int k = 0; k < 4; ++k) stIn += c.weight[k] * sigmaT;
-            const openvdb::Vec3f own = halfStep * (stIn + sigmaT);
+    inUpwindOrder(
+        omega, tau,
+        [&](std::size_t n, openvdb::Vec3f* buffer, const UpwindVoxel* voxels) {
+            openvdb::Vec3f* out = &tau[n * kLeafVoxels];
+            if (mUniform[n]) {
+                // One σt over the padded block: every step adds the same (its upwind blend of σt
+                // the same sum at every voxel), the block's σt not read (it is most of a sweep's
+                // memory traffic).
+                const openvdb::Vec3f sigmaT = mSigmaT[n * kPaddedVoxels];
+                openvdb::Vec3f stIn(0.0f);
+                for (int k = 0; k < 4; ++k) stIn += c.weight[k] * sigmaT;
+                const openvdb::Vec3f own = halfStep * (stIn + sigmaT);
+                for (int voxel = 0; voxel < kLeafVoxels; ++voxel) {
+                    const int p = voxels[voxel].padded;
+                    openvdb::Vec3f tauIn(0.0f);
+                    for (int k = 0; k < 4; ++k) tauIn += c.weight[k] * buffer[p + c.offset[k]];
+                    const openvdb::Vec3f result = tauIn + own;
+                    buffer[p] = result;
+                    out[voxels[voxel].local] = result;
+                }
+                return;
+            }
             for (int voxel = 0; voxel < kLeafVoxels; ++voxel) {
                 const int p = voxels[voxel].padded;
-                openvdb::Vec3f tauIn(0.0f);
-                for (int k = 0; k < 4; ++k) tauIn += c.weight[k] * buffer[p + c.offset[k]];
-                const openvdb::Vec3f result = tauIn + own;
+                const openvdb::Vec3f upwind[4] = {
+                    buffer[p + c.offset[0]], buffer[p + c.offset[1]], buffer[p + c.offset[2]], buffer[p + c.offset[3]]};
+                const openvdb::Vec3f result = depthStep(n, p, omega, c.weight, c.offset, c.length, upwind);
                 buffer[p] = result;
                 out[voxels[voxel].local] = result;
             }
-            return;
-        }
-        for (int voxel = 0; voxel < kLeafVoxels; ++voxel) {
-            const int p = voxels[voxel].padded;
-            const openvdb::Vec3f upwind[4] = {buffer[p + c.offset[0]], buffer[p + c.offset[1]], buffer[p + c.offset[2]],
-                buffer[p + c.offset[3]]};
-            const openvdb::Vec3f result = depthStep(n, p, omega, c.weight, c.offset, c.length, upwind);
-            buffer[p] = result;
-            out[voxels[voxel].local] = result;
-        }
-    }, entering);
+        },
+        entering);
 }
 
 int SweepLattice::octantAround(const openvdb::Coord& ijk, const openvdb::Vec3d& point)
@@ -790,8 +792,8 @@ int SweepLattice::octantAround(const openvdb::Coord& ijk, const openvdb::Vec3d& 
     return (ijk[0] < point[0] ? 1 : 0) | (ijk[1] < point[1] ? 2 : 0) | (ijk[2] < point[2] ? 4 : 0);
 }
 
-void SweepLattice::opticalDepthFrom(const openvdb::Vec3d& point, std::vector<openvdb::Vec3f>& tau, std::vector<std::uint8_t>& state,
-    const MarchedDepth& marched) const
+void SweepLattice::opticalDepthFrom(
+    const openvdb::Vec3d& point, std::vector<openvdb::Vec3f>& tau, std::vector<std::uint8_t>& state, const MarchedDepth& marched) const
 {
     tau.assign(voxelCount(), openvdb::Vec3f(0.0f));
     state.assign(voxelCount(), kPending);

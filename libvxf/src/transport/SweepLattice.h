@@ -104,16 +104,16 @@ public:
     /// voxel). ω_i and a are in world space (worldDirections: @a directions carried to it).
     struct FirstMoment
     {
-        RestPhase rest;                                                ///< the rest's moments
+        RestPhase rest; ///< the rest's moments
         const std::vector<openvdb::Vec3f>* sourceAnisotropy = nullptr; ///< a, padded
         /// β, padded (RestPhase::quadratureCorrection for worldDirections), or null: none.
         const std::vector<openvdb::Vec3f>* quadratureCorrection = nullptr;
-        std::vector<openvdb::Vec3d> worldDirections;                  ///< one per sweep direction, unit
-        std::vector<openvdb::Vec3f>* flux = nullptr;                   ///< per voxel, added to
+        std::vector<openvdb::Vec3d> worldDirections; ///< one per sweep direction, unit
+        std::vector<openvdb::Vec3f>* flux = nullptr; ///< per voxel, added to
     };
     void sweep(const std::vector<openvdb::Vec3f>& source, const std::vector<openvdb::Vec3d>& directions, double weight,
-        std::vector<openvdb::Vec3f>& fluence, std::vector<openvdb::Vec3f>* skinFluence = nullptr,
-        Interrupter* interrupter = nullptr, const FirstMoment* moment = nullptr) const;
+        std::vector<openvdb::Vec3f>& fluence, std::vector<openvdb::Vec3f>* skinFluence = nullptr, Interrupter* interrupter = nullptr,
+        const FirstMoment* moment = nullptr) const;
 
     /// Optical depth τ = ∫ σt ds (per channel, world σt × world length) of light crossing the
     /// lattice, at every voxel centre (per voxel), by one upwind sweep: a voxel's τ is the
@@ -133,8 +133,7 @@ public:
     /// @a direction (unit, index space).
     class SweptSoFar;
     using EnteringDepth = std::function<openvdb::Vec3f(const openvdb::Coord&, const SweptSoFar&)>;
-    void opticalDepthAlong(const openvdb::Vec3d& direction, std::vector<openvdb::Vec3f>& tau,
-        const EnteringDepth& entering = {}) const;
+    void opticalDepthAlong(const openvdb::Vec3d& direction, std::vector<openvdb::Vec3f>& tau, const EnteringDepth& entering = {}) const;
 
     /// Optical depth τ from a point light at @a point (index space) to every voxel centre (per
     /// voxel), by one upwind sweep per octant around it (octant by octant, bit a set for voxels
@@ -152,10 +151,10 @@ public:
     /// yet. @a swept reads what is final so far (SweptSoFar), e.g. for a march that hands off.
     /// @a state (per voxel): kMarched where @a marched gave the depth, kBlended where the sweep
     /// did (SweptSoFar::sample reads only marched ones where asked).
-    using MarchedDepth = std::function<bool(const openvdb::Coord& ijk, float signedDistance, bool mustMarch,
-        const SweptSoFar& swept, openvdb::Vec3f& depth)>;
-    void opticalDepthFrom(const openvdb::Vec3d& point, std::vector<openvdb::Vec3f>& tau, std::vector<std::uint8_t>& state,
-        const MarchedDepth& marched) const;
+    using MarchedDepth = std::function<bool(
+        const openvdb::Coord& ijk, float signedDistance, bool mustMarch, const SweptSoFar& swept, openvdb::Vec3f& depth)>;
+    void opticalDepthFrom(
+        const openvdb::Vec3d& point, std::vector<openvdb::Vec3f>& tau, std::vector<std::uint8_t>& state, const MarchedDepth& marched) const;
     /// opticalDepthFrom's states of a voxel: not yet swept, blended from upwind, marched.
     static constexpr std::uint8_t kPending = 0, kBlended = 1, kMarched = 2;
     /// The octant around @a point voxel @a ijk lies in (bit a set: ijk[a] < point[a]).
@@ -190,7 +189,10 @@ public:
         const std::vector<openvdb::Vec3f>* shift = nullptr) const;
 
     /// The leaf at @a leaf's origin + 8·(dx, dy, dz), dx… ∈ {−1, 0, 1}, or −1 for none.
-    int neighbour(std::size_t leaf, int dx, int dy, int dz) const { return mNeighbours[leaf * 27 + (dx + 1) * 9 + (dy + 1) * 3 + (dz + 1)]; }
+    int neighbour(std::size_t leaf, int dx, int dy, int dz) const
+    {
+        return mNeighbours[leaf * 27 + (dx + 1) * 9 + (dy + 1) * 3 + (dz + 1)];
+    }
 
     /// Wavefront key of leaf @a leaf along @a octant's diagonal: a leaf's upwind neighbours
     /// have smaller keys, and a wavefront's leaves are swept once every smaller key's are.
@@ -230,8 +232,8 @@ private:
     /// τ at voxel @a p (padded index in leaf @a leaf) from its four upwind voxels' @a tauUpwind
     /// (bilinear @a weight at padded @a offset, the step @a length voxels along unit @a omega):
     /// the step of opticalDepthAlong and opticalDepthFrom.
-    openvdb::Vec3f depthStep(std::size_t leaf, int p, const openvdb::Vec3d& omega, const float (&weight)[4],
-        const int (&offset)[4], double length, const openvdb::Vec3f (&tauUpwind)[4]) const;
+    openvdb::Vec3f depthStep(std::size_t leaf, int p, const openvdb::Vec3d& omega, const float (&weight)[4], const int (&offset)[4],
+        double length, const openvdb::Vec3f (&tauUpwind)[4]) const;
     /// One leaf of a transport sweep along @a omega (sweep): its voxels in the order @a voxels,
     /// the upwind ghosts already in @a buffer (padded), the source @a j (padded, the leaf's);
     /// each voxel's ψ into @a buffer, @a weight·ψ added to @a phi (the leaf's, per voxel) and, with
@@ -248,17 +250,17 @@ private:
     /// cut into wavefronts: leaves of one wavefront depend on none of each other.
     std::array<std::vector<std::int32_t>, 8> mOrder;
     std::array<std::vector<std::size_t>, 8> mWavefronts; ///< start of each wavefront in mOrder, then its end
-    std::vector<openvdb::Vec3f> mSigmaT;      ///< padded, inside the surface (σt/f)
-    std::vector<float> mDistance;             ///< padded, signed distance to the surface (voxels; −1 without one)
-    std::vector<std::uint8_t> mDeep;          ///< per leaf: its padded block more than half a voxel inside the surface
-    std::vector<std::uint8_t> mUniform;       ///< per leaf: deep, and one σt over its padded block (sweep's short path)
-    std::vector<float> mInterior;             ///< per voxel, 1/f
+    std::vector<openvdb::Vec3f> mSigmaT; ///< padded, inside the surface (σt/f)
+    std::vector<float> mDistance; ///< padded, signed distance to the surface (voxels; −1 without one)
+    std::vector<std::uint8_t> mDeep; ///< per leaf: its padded block more than half a voxel inside the surface
+    std::vector<std::uint8_t> mUniform; ///< per leaf: deep, and one σt over its padded block (sweep's short path)
+    std::vector<float> mInterior; ///< per voxel, 1/f
     std::vector<openvdb::Vec3f> mSigmaTVoxel, mSigmaS;
     struct Skin
     {
-        std::uint32_t voxel;     ///< per-voxel index
-        openvdb::Vec3f normal;   ///< outward unit normal
-        float depth;             ///< world units from the centre to the surface (0 for a centre outside)
+        std::uint32_t voxel; ///< per-voxel index
+        openvdb::Vec3f normal; ///< outward unit normal
+        float depth; ///< world units from the centre to the surface (0 for a centre outside)
     };
     std::vector<Skin> mSkin;
     std::vector<std::int32_t> mSkinIndex; ///< per voxel, its entry in mSkin or −1
@@ -272,22 +274,34 @@ class SweepLattice::SweptSoFar
 {
 public:
     SweptSoFar(const SweepLattice& lattice, const std::vector<openvdb::Vec3f>& values, int octant, long long key)
-        : mLattice(lattice), mValues(values), mOctant(octant), mKey(key)
+        : mLattice(lattice)
+        , mValues(values)
+        , mOctant(octant)
+        , mKey(key)
     {
     }
     /// A sweep around @a point (opticalDepthFrom) in @a octant while it sweeps @a leaf (at
     /// wavefront @a key), the voxels' @a state: the leaf's own voxels swept so far are final too
     /// (one thread writes them, in an order that takes every voxel after those upwind of it).
-    SweptSoFar(const SweepLattice& lattice, const std::vector<openvdb::Vec3f>& values, int octant, std::size_t leaf,
-        long long key, const openvdb::Vec3d& point, const std::vector<std::uint8_t>* state)
-        : mLattice(lattice), mValues(values), mOctant(octant), mKey(key), mAroundPoint(true), mLeaf(leaf), mPoint(point)
+    SweptSoFar(const SweepLattice& lattice, const std::vector<openvdb::Vec3f>& values, int octant, std::size_t leaf, long long key,
+        const openvdb::Vec3d& point, const std::vector<std::uint8_t>* state)
+        : mLattice(lattice)
+        , mValues(values)
+        , mOctant(octant)
+        , mKey(key)
+        , mAroundPoint(true)
+        , mLeaf(leaf)
+        , mPoint(point)
         , mState(state)
     {
     }
     /// A finished sweep's @a values (per voxel): every leaf; with @a state, opticalDepthFrom's.
-    SweptSoFar(const SweepLattice& lattice, const std::vector<openvdb::Vec3f>& values,
-        const std::vector<std::uint8_t>* state = nullptr)
-        : mLattice(lattice), mValues(values), mOctant(0), mKey(std::numeric_limits<long long>::max()), mState(state)
+    SweptSoFar(const SweepLattice& lattice, const std::vector<openvdb::Vec3f>& values, const std::vector<std::uint8_t>* state = nullptr)
+        : mLattice(lattice)
+        , mValues(values)
+        , mOctant(0)
+        , mKey(std::numeric_limits<long long>::max())
+        , mState(state)
     {
     }
 

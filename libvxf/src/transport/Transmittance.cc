@@ -38,8 +38,8 @@ namespace {
 /// The number of whole steps of @a h voxels from @a p along @a unit that lie in the uniform
 /// region holding @a p (at most @a most; 0 for fewer than two, or no region), their optical
 /// depth added to @a tau as the steps would add it one by one.
-int uniformSteps(const UniformBricks& uniform, const openvdb::Vec3d& p, const openvdb::Vec3d& unit, double h, int most,
-    openvdb::Vec3d& tau, const Medium& medium)
+int uniformSteps(const UniformBricks& uniform, const openvdb::Vec3d& p, const openvdb::Vec3d& unit, double h, int most, openvdb::Vec3d& tau,
+    const Medium& medium)
 {
     float density = 0.0f;
     const int count = uniform.stepsWithin(p, unit, h, most, density);
@@ -50,8 +50,8 @@ int uniformSteps(const UniformBricks& uniform, const openvdb::Vec3d& p, const op
     return count;
 }
 
-openvdb::Vec3d march(Medium::Sampler& sampler, const Medium& medium, const openvdb::Vec3d& origin,
-    const openvdb::Vec3d& unit, double t0, double t1, const MarchOptions& options, const MarchHandOff* handOff = nullptr)
+openvdb::Vec3d march(Medium::Sampler& sampler, const Medium& medium, const openvdb::Vec3d& origin, const openvdb::Vec3d& unit, double t0,
+    double t1, const MarchOptions& options, const MarchHandOff* handOff = nullptr)
 {
     if (medium.activeBounds().empty() || !clipRay(marchBounds(medium), origin, unit, t0, t1)) return openvdb::Vec3d(1.0);
     const double length = t1 - t0;
@@ -93,14 +93,14 @@ openvdb::Vec3d march(Medium::Sampler& sampler, const Medium& medium, const openv
 
 } // namespace
 
-openvdb::Vec3d transmittance(Medium::Sampler& sampler, const Medium& medium, const openvdb::Vec3d& fromIjk,
-    const openvdb::Vec3d& toIjk, const MarchOptions& options)
+openvdb::Vec3d transmittance(
+    Medium::Sampler& sampler, const Medium& medium, const openvdb::Vec3d& fromIjk, const openvdb::Vec3d& toIjk, const MarchOptions& options)
 {
     return transmittance(sampler, medium, fromIjk, toIjk, options, MarchHandOff());
 }
 
-openvdb::Vec3d transmittance(Medium::Sampler& sampler, const Medium& medium, const openvdb::Vec3d& fromIjk,
-    const openvdb::Vec3d& toIjk, const MarchOptions& options, const MarchHandOff& handOff)
+openvdb::Vec3d transmittance(Medium::Sampler& sampler, const Medium& medium, const openvdb::Vec3d& fromIjk, const openvdb::Vec3d& toIjk,
+    const MarchOptions& options, const MarchHandOff& handOff)
 {
     const openvdb::Vec3d d = toIjk - fromIjk;
     const double length = d.length();
@@ -119,8 +119,8 @@ openvdb::Vec3d transmittanceToBoundary(Medium::Sampler& sampler, const Medium& m
 {
     const double length = direction.length();
     if (!(length > 0.0)) return openvdb::Vec3d(1.0);
-    return march(sampler, medium, fromIjk, direction / length, 0.0, std::numeric_limits<double>::max(), options,
-        handOff ? &handOff : nullptr);
+    return march(
+        sampler, medium, fromIjk, direction / length, 0.0, std::numeric_limits<double>::max(), options, handOff ? &handOff : nullptr);
 }
 
 double vacuumAhead(const RayScene& media, const openvdb::Vec3d& xWorld, const openvdb::Vec3d& direction, double margin, double far)

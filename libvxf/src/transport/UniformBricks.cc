@@ -93,7 +93,8 @@ UniformBricks::UniformBricks(const DenseCopy<openvdb::FloatGrid>* density, const
             float v = kNotUniform;
             bool uniform = true;
             for (int i = 0; uniform && i < perAxis * perAxis * perAxis; ++i) {
-                const openvdb::Coord voxel = first.offsetBy(kBrick * (i / (perAxis * perAxis)), kBrick * ((i / perAxis) % perAxis), kBrick * (i % perAxis));
+                const openvdb::Coord voxel =
+                    first.offsetBy(kBrick * (i / (perAxis * perAxis)), kBrick * ((i / perAxis) % perAxis), kBrick * (i % perAxis));
                 const std::int64_t b = indexOf(voxel, kBrickShift, mBrickOrigin, mBrickDims);
                 const float brick = b < 0 ? kNotUniform : mBricks[std::size_t(b)];
                 if (std::isnan(brick)) {

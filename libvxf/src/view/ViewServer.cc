@@ -159,8 +159,9 @@ struct ViewServer::Impl
         , options(std::move(o))
     {
         if (options.renderFolder.empty()) {
-            options.renderFolder = (std::filesystem::temp_directory_path() / fmt::format("vxf-view-{}-{}", ::getpid(),
-                reinterpret_cast<std::uintptr_t>(this))).string();
+            options.renderFolder =
+                (std::filesystem::temp_directory_path() / fmt::format("vxf-view-{}-{}", ::getpid(), reinterpret_cast<std::uintptr_t>(this)))
+                    .string();
             ownFolder = true;
         }
     }
@@ -197,7 +198,8 @@ ViewServer::ViewServer(ViewSession& session, ViewServerOptions options)
         }
         if (req.path.rfind("/api/", 0) != 0) return httplib::Server::HandlerResponse::Unhandled;
         const std::string given = req.has_header(kTokenHeader) ? req.get_header_value(kTokenHeader)
-            : req.has_param("token") ? req.get_param_value("token") : std::string();
+            : req.has_param("token")                           ? req.get_param_value("token")
+                                                               : std::string();
         if (!sameSecret(given, impl.options.token)) {
             return refuse(403, "this request lacks the session's token (open the address vxf view printed, with its ?token=)");
         }
@@ -224,9 +226,8 @@ ViewServer::ViewServer(ViewSession& session, ViewServerOptions options)
         }
     });
     const auto asset = [&server](const char* path, const char* const& body, const char* type) {
-        server.Get(path, [&body, type](const httplib::Request&, httplib::Response& res) {
-            res.set_content(body, std::strlen(body), type);
-        });
+        server.Get(
+            path, [&body, type](const httplib::Request&, httplib::Response& res) { res.set_content(body, std::strlen(body), type); });
     };
     asset("/", detail::kIndexHtml, "text/html; charset=utf-8");
     asset("/view.js", detail::kViewJs, kJavaScript);
@@ -292,8 +293,9 @@ ViewServer::ViewServer(ViewSession& session, ViewServerOptions options)
         const Slice slice = s.slice(param(req, "grid"), int(axis), int(std::clamp<long long>(index, INT32_MIN / 2, INT32_MAX / 2)));
         nlohmann::json values = nlohmann::json::array();
         for (float v : slice.values) values.push_back(std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr));
-        sendJson(res, {{"axis", slice.axis}, {"index", slice.index}, {"origin", {slice.origin.x(), slice.origin.y(), slice.origin.z()}},
-            {"width", slice.width}, {"height", slice.height}, {"channels", slice.channels}, {"values", values}});
+        sendJson(res,
+            {{"axis", slice.axis}, {"index", slice.index}, {"origin", {slice.origin.x(), slice.origin.y(), slice.origin.z()}},
+                {"width", slice.width}, {"height", slice.height}, {"channels", slice.channels}, {"values", values}});
     });
     server.Get("/api/mesh", [&s](const httplib::Request& req, httplib::Response& res) {
         const long long budget = integerParam(req, "triangles", 30000);
@@ -323,10 +325,14 @@ ViewServer::ViewServer(ViewSession& session, ViewServerOptions options)
         const nlohmann::json body = bodyJson(req);
         const std::string mode = stringField(body, "mode", "whole", false);
         ExportMode m;
-        if (mode == "whole") m = ExportMode::Whole;
-        else if (mode == "diff") m = ExportMode::Diff;
-        else if (mode == "smoothed") m = ExportMode::Smoothed;
-        else throw UsageError(fmt::format("export mode '{}' is not whole, diff or smoothed", mode));
+        if (mode == "whole")
+            m = ExportMode::Whole;
+        else if (mode == "diff")
+            m = ExportMode::Diff;
+        else if (mode == "smoothed")
+            m = ExportMode::Smoothed;
+        else
+            throw UsageError(fmt::format("export mode '{}' is not whole, diff or smoothed", mode));
         int smooth = 2;
         if (body.contains("smooth")) {
             if (!body["smooth"].is_number_integer()) throw UsageError("'smooth' must be a whole number of voxels");

@@ -36,7 +36,8 @@ constexpr const char* kPipelineSuffix = ".pipeline.json";
 std::string printable(const std::string& text)
 {
     std::string out;
-    for (const unsigned char c : text.substr(0, 80)) out += c < 0x20 || c == 0x7f ? fmt::format("\\x{:02x}", unsigned(c)) : std::string(1, char(c));
+    for (const unsigned char c : text.substr(0, 80))
+        out += c < 0x20 || c == 0x7f ? fmt::format("\\x{:02x}", unsigned(c)) : std::string(1, char(c));
     return text.size() > 80 ? out + "…" : out;
 }
 
@@ -102,9 +103,8 @@ VoxelSet deepCopy(const VoxelSet& set)
 
 const std::vector<std::string>& ViewSession::editOperators()
 {
-    static const std::vector<std::string> names = {"add", "sub", "mul", "div", "pow", "blend", "blur", "blur_special",
-        "normalize", "denormalize", "gradient", "remove", "include", "select", "edit", "diff", "apply_diff", "split", "merge",
-        "rename", "copy"};
+    static const std::vector<std::string> names = {"add", "sub", "mul", "div", "pow", "blend", "blur", "blur_special", "normalize",
+        "denormalize", "gradient", "remove", "include", "select", "edit", "diff", "apply_diff", "split", "merge", "rename", "copy"};
     return names;
 }
 
@@ -271,8 +271,8 @@ Slice ViewSession::slice(const std::string& name, int axis, int index) const
     s.width = bounds.dim()[u];
     s.height = bounds.dim()[v];
     if (std::int64_t(s.width) * s.height > kMaxSliceCells) {
-        throw UsageError(fmt::format("grid '{}' is {} x {} voxels across axis {}: over the view's {} cells a slice", name, s.width,
-            s.height, axis, kMaxSliceCells));
+        throw UsageError(fmt::format(
+            "grid '{}' is {} x {} voxels across axis {}: over the view's {} cells a slice", name, s.width, s.height, axis, kMaxSliceCells));
     }
     s.origin = bounds.min();
     s.origin[axis] = s.index;
@@ -396,21 +396,11 @@ nlohmann::json ViewSession::pipeline(const std::string& output) const
 
 namespace {
 
-/// The grids an edit step writes (the operator's output; the grid it names when it edits that
-/// grid in place). select, diff, gradient, split and copy only read the grid they name.
+/// The grids an edit step writes, as its operator declares them (ops::gridUse).
 std::set<std::string> writtenGrids(const std::string& op, const nlohmann::json& params)
 {
-    const auto text = [&](const char* key) { return params.contains(key) && params[key].is_string() ? params[key].get<std::string>() : std::string(); };
-    std::set<std::string> out;
-    if (op == "select") out.insert(text("out").empty() ? grids::kMask : text("out"));
-    else if (op == "gradient") out.insert(text("out").empty() ? "gradient" : text("out"));
-    else if (op == "diff") out.insert(text("out").empty() ? text("grid") + "_diff" : text("out"));
-    else if (op == "split") for (const char* c : {".x", ".y", ".z"}) out.insert(text("grid") + c);
-    else if (op == "copy") out.insert(text("to").empty() ? text("grid") : text("to"));
-    else if (op == "rename") out = {text("grid"), text("to")};
-    else out.insert(text("out").empty() ? text("grid") : text("out"));
-    out.erase(std::string());
-    return out;
+    const ops::Operator& declared = findOperator(op);
+    return ops::gridUse(declared, ops::checkArgs(declared, params)).writes;
 }
 
 } // namespace
@@ -423,8 +413,10 @@ ViewSession::Rendered ViewSession::render(const std::string& scenePath, int widt
     // The recorded steps in order: the scatter stage re-runs after the last step that wrote what
     // it reads, and the steps after that one apply to its result (a hue edit of `scatter` after
     // an edit of `density` shows in the render).
-    static const std::set<std::string> upstream = {grids::kSurface, grids::kDensity, grids::kDirect, grids::kScatterSource,
-        grids::kSourceAnisotropy, grids::kSigmaA, grids::kSigmaS};
+    static const std::set<std::string> upstream = [] {
+        const ops::Operator& stage = findOperator("scatter");
+        return ops::gridUse(stage, ops::checkArgs(stage, nlohmann::json::object())).reads;
+    }();
     std::size_t rescatterAfter = 0; // steps [0, rescatterAfter) come before the scatter stage re-runs
     for (std::size_t i = 0; i < mSteps.size(); ++i) {
         for (const std::string& g : writtenGrids(mSteps[i].op, mSteps[i].params)) {
@@ -468,8 +460,10 @@ ViewSession::Rendered ViewSession::render(const std::string& scenePath, int widt
     }
     fs::create_directories(folder);
     result.png = (fs::path(folder) / "view.png").string();
-    run(set, "render", {{"scene", scenePath}, {"image", (fs::path(folder) / "view.exr").string()}, {"png", result.png},
-        {"width", width}, {"height", height}}, nullptr);
+    run(set, "render",
+        {{"scene", scenePath}, {"image", (fs::path(folder) / "view.exr").string()}, {"png", result.png}, {"width", width},
+            {"height", height}},
+        nullptr);
     result.ran.push_back("render");
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return result;
@@ -487,11 +481,13 @@ std::string ViewSession::resolveInside(const std::string& relativePath) const
     }
     const fs::path given(relativePath);
     if (relativePath.empty() || given.is_absolute()) refuse(fmt::format("give a path relative to {} (the served file's folder)", mFolder));
-    if (relativePath.size() > kMaxExportPathBytes) refuse(fmt::format("{} bytes long; at most {}", relativePath.size(), kMaxExportPathBytes));
+    if (relativePath.size() > kMaxExportPathBytes)
+        refuse(fmt::format("{} bytes long; at most {}", relativePath.size(), kMaxExportPathBytes));
     for (const auto& part : given) {
         if (part == "..") refuse(fmt::format("'..' would leave {}", mFolder));
         if (part == "~") refuse("'~' is not your home here: give a path relative to the served file's folder");
-        if (part.string().size() > kMaxNameBytes) refuse(fmt::format("a name of {} bytes; at most {}", part.string().size(), kMaxNameBytes));
+        if (part.string().size() > kMaxNameBytes)
+            refuse(fmt::format("a name of {} bytes; at most {}", part.string().size(), kMaxNameBytes));
     }
     if (given.extension() != ".vdb") refuse("must end in .vdb");
     // NAME.pipeline.json is written beside a whole export: it must be a valid name too.
@@ -547,8 +543,14 @@ std::string ViewSession::exportTo(const std::string& relativePath, ExportMode mo
             }
         }
     }
-    out.setProvenance("view", nlohmann::json{{"file", mPath},
-        {"export", mode == ExportMode::Whole ? "whole" : mode == ExportMode::Diff ? "diff" : "smoothed"}, {"grid", grid}}.dump());
+    out.setProvenance("view",
+        nlohmann::json{{"file", mPath},
+            {"export",
+                mode == ExportMode::Whole      ? "whole"
+                    : mode == ExportMode::Diff ? "diff"
+                                               : "smoothed"},
+            {"grid", grid}}
+            .dump());
     writeVoxelSet(path, out);
     if (mode == ExportMode::Whole) {
         const std::string pipelinePath = (fs::path(path).parent_path() / (fs::path(path).stem().string() + kPipelineSuffix)).string();

@@ -36,8 +36,8 @@ double resolveVoxelSize(const openvdb::BBoxd& bounds, const VoxelizeOptions& opt
                 options.voxelSize, extent / options.voxelSize));
         }
         if (options.voxelSize < kMinVoxelSize) {
-            throw UsageError(fmt::format("voxel_size {} is below {}, the smallest OpenVDB's transforms take; scale the mesh up",
-                options.voxelSize, kMinVoxelSize));
+            throw UsageError(fmt::format(
+                "voxel_size {} is below {}, the smallest OpenVDB's transforms take; scale the mesh up", options.voxelSize, kMinVoxelSize));
         }
         return options.voxelSize;
     }
@@ -47,7 +47,8 @@ double resolveVoxelSize(const openvdb::BBoxd& bounds, const VoxelizeOptions& opt
     const double voxelSize = extent / double(options.dim);
     if (voxelSize < kMinVoxelSize) {
         throw UsageError(fmt::format("dim {} makes voxels of {:.3g}, below {}, the smallest OpenVDB's transforms take; "
-                                     "use a smaller dim or scale the mesh up", options.dim, voxelSize, kMinVoxelSize));
+                                     "use a smaller dim or scale the mesh up",
+            options.dim, voxelSize, kMinVoxelSize));
     }
     return voxelSize;
 }
@@ -136,7 +137,7 @@ VoxelSet voxelize(const TriangleMesh& mesh, const VoxelizeOptions& options, Inte
         density->tree().topologyUnion(surface->tree());
         const float dx = float(surface->voxelSize()[0]);
         openvdb::tree::LeafManager<openvdb::FloatTree> leaves(density->tree());
-        leaves.foreach([&](openvdb::FloatTree::LeafNodeType& leaf, std::size_t) {
+        leaves.foreach ([&](openvdb::FloatTree::LeafNodeType& leaf, std::size_t) {
             auto phi = surface->getConstAccessor();
             for (auto it = leaf.beginValueOn(); it; ++it) {
                 const float fraction = std::clamp(0.5f - phi.getValue(it.getCoord()) / dx, 0.0f, 1.0f);

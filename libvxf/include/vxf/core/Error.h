@@ -13,14 +13,20 @@ namespace vxf {
 class Error : public std::runtime_error
 {
 public:
-    explicit Error(const std::string& message) : std::runtime_error(message) {}
+    explicit Error(const std::string& message)
+        : std::runtime_error(message)
+    {
+    }
 };
 
 /// A bad parameter value or combination (front ends exit with status 2).
 class UsageError : public Error
 {
 public:
-    explicit UsageError(const std::string& message) : Error(message) {}
+    explicit UsageError(const std::string& message)
+        : Error(message)
+    {
+    }
 };
 
 /// Malformed input file content. The message starts with `file:line:column: `
@@ -28,8 +34,7 @@ public:
 class InputError : public Error
 {
 public:
-    InputError(const std::string& path, std::size_t line, std::size_t column,
-        const std::string& what);
+    InputError(const std::string& path, std::size_t line, std::size_t column, const std::string& what);
     const std::string& path() const { return mPath; }
     std::size_t line() const { return mLine; }
     std::size_t column() const { return mColumn; }
@@ -43,7 +48,10 @@ private:
 class Interrupted : public Error
 {
 public:
-    Interrupted() : Error("interrupted") {}
+    Interrupted()
+        : Error("interrupted")
+    {
+    }
 };
 
 } // namespace vxf

@@ -16,7 +16,7 @@ namespace vxf {
 /// order a tree's cache favours; trilinear lookups here (openvdb::tools::BoxSampler accepts
 /// any type with getValue(Coord)) read memory directly: 2.4x faster than a ValueAccessor on
 /// the bunny's density at 64 voxels across. Read-only, shared by threads.
-template<typename GridT>
+template <typename GridT>
 class DenseCopy
 {
 public:
@@ -38,7 +38,7 @@ public:
     /// The N³ values from @a lo on, data[i][j][k] at lo + (i, j, k) (as OpenVDB's samplers
     /// arrange them), read with one bounds check; false (@a data untouched) when the block
     /// leaves the copied box.
-    template<int N>
+    template <int N>
     bool getBlock(const openvdb::Coord& lo, ValueType (&data)[N][N][N]) const
     {
         const openvdb::Coord hi = lo.offsetBy(N - 1);
@@ -69,7 +69,7 @@ private:
 
 /// Per-thread lookups of one grid: from its DenseCopy when there is one, else through a
 /// ValueAccessor. Usable wherever OpenVDB's samplers take a tree or accessor.
-template<typename GridT>
+template <typename GridT>
 class GridLookup
 {
 public:
@@ -84,7 +84,7 @@ public:
     ValueType getValue(const openvdb::Coord& ijk) const { return mDense ? mDense->getValue(ijk) : mAccessor.getValue(ijk); }
 
     /// The N³ values from @a lo on, data[i][j][k] at lo + (i, j, k).
-    template<int N>
+    template <int N>
     void getBlock(const openvdb::Coord& lo, ValueType (&data)[N][N][N]) const
     {
         if (mDense && mDense->getBlock(lo, data)) return;

@@ -11,10 +11,10 @@ namespace vxf {
 /// One role a grid of a voxel set can play, keyed by the grid's name.
 struct GridRole
 {
-    std::string name;      ///< grid name; "scatter_pass_K" stands for scatter_pass_1, _2, …
+    std::string name; ///< grid name; "scatter_pass_K" stands for scatter_pass_1, _2, …
     std::string valueType; ///< OpenVDB value type name: "float", "vec3s", "bool"
     openvdb::GridClass gridClass;
-    std::string units;       ///< written to the grid's "vxf:units" metadata
+    std::string units; ///< written to the grid's "vxf:units" metadata
     std::string description; ///< one line, for `vxf info` and the spec
 };
 

@@ -11,10 +11,10 @@ namespace vxf {
 struct GridStats
 {
     openvdb::Index64 activeVoxels = 0; ///< active voxels, counting active tiles' voxels
-    openvdb::Index64 leafNodes = 0;    ///< allocated 8^3 leaf nodes
-    openvdb::Index64 activeTiles = 0;  ///< active tiles above the leaf level
-    openvdb::Index64 memoryBytes = 0;  ///< in-core size of the tree
-    openvdb::CoordBBox activeBBox;     ///< index-space bounds of the active values (may be empty)
+    openvdb::Index64 leafNodes = 0; ///< allocated 8^3 leaf nodes
+    openvdb::Index64 activeTiles = 0; ///< active tiles above the leaf level
+    openvdb::Index64 memoryBytes = 0; ///< in-core size of the tree
+    openvdb::CoordBBox activeBBox; ///< index-space bounds of the active values (may be empty)
 };
 
 /// Statistics of @a grid's tree; reads only, O(nodes).

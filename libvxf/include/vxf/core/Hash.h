@@ -19,8 +19,8 @@ inline std::uint64_t mixBits(std::uint64_t x)
 /// A key for a voxel coordinate.
 inline std::uint64_t coordKey(const openvdb::Coord& c)
 {
-    return mixBits(std::uint64_t(std::uint32_t(c[0])) ^ mixBits(std::uint64_t(std::uint32_t(c[1])) ^
-                                                                mixBits(std::uint64_t(std::uint32_t(c[2])))));
+    return mixBits(
+        std::uint64_t(std::uint32_t(c[0])) ^ mixBits(std::uint64_t(std::uint32_t(c[1])) ^ mixBits(std::uint64_t(std::uint32_t(c[2])))));
 }
 
 /// coordKey as a hash function object, for unordered containers keyed by coordinates.

@@ -22,7 +22,8 @@ inline void checkInterrupt(Interrupter* interrupter, int percent = -1)
 class InterruptStep
 {
 public:
-    InterruptStep(Interrupter* interrupter, const char* name) : mInterrupter(interrupter)
+    InterruptStep(Interrupter* interrupter, const char* name)
+        : mInterrupter(interrupter)
     {
         if (mInterrupter) mInterrupter->start(name);
     }

@@ -31,8 +31,8 @@ struct TrilinearCell
 /// falling off exponentially), linear otherwise. Returns false, leaving @a out, when the
 /// corners used carry less than @a minWeight of the weight.
 template <typename Values, typename Use>
-bool maskedTrilinear(const Values& values, const openvdb::Vec3d& p, const Use& use, openvdb::Vec3d& out, bool geometric = false,
-    double minWeight = 0.5)
+bool maskedTrilinear(
+    const Values& values, const openvdb::Vec3d& p, const Use& use, openvdb::Vec3d& out, bool geometric = false, double minWeight = 0.5)
 {
     const TrilinearCell cell(p);
     double total = 0.0;
@@ -47,8 +47,10 @@ bool maskedTrilinear(const Values& values, const openvdb::Vec3d& p, const Use& u
         linear += v * cell.weight[i];
         for (int ch = 0; ch < 3; ++ch) {
             if (!positive[ch]) continue;
-            if (v[ch] > 0.0) logSum[ch] += cell.weight[i] * std::log(v[ch]);
-            else positive[ch] = false;
+            if (v[ch] > 0.0)
+                logSum[ch] += cell.weight[i] * std::log(v[ch]);
+            else
+                positive[ch] = false;
         }
     }
     if (total < minWeight || total <= 0.0) return false;

@@ -32,8 +32,7 @@ struct MemoryEstimate
     double bytes = 0.0;
     std::string how; ///< what the estimate counts, for the message
 };
-MemoryEstimate stageMemory(double fixedBytes, double voxels, double bytesPerVoxel, double pixels = 0.0,
-    double bytesPerPixel = 0.0);
+MemoryEstimate stageMemory(double fixedBytes, double voxels, double bytesPerVoxel, double pixels = 0.0, double bytesPerPixel = 0.0);
 
 /// Throws vxf::Error when @a estimate passes the budget, before the stage allocates:
 /// "STAGE needs about 9.1 GiB at its peak (…), more than the memory budget of 8 GiB (…)".

@@ -30,10 +30,10 @@ public:
 
     struct Hit
     {
-        double distance = 0.0;  ///< along the (unit) ray direction
-        openvdb::Vec3d normal;  ///< unit geometric normal, facing against the ray
-        int id = -1;            ///< the object id given to add()
-        bool backFace = false;  ///< the ray met the triangle from behind its orientation
+        double distance = 0.0; ///< along the (unit) ray direction
+        openvdb::Vec3d normal; ///< unit geometric normal, facing against the ray
+        int id = -1; ///< the object id given to add()
+        bool backFace = false; ///< the ray met the triangle from behind its orientation
     };
 
     /// The closest hit of origin + t·direction (direction unit length), t in (tNear, tFar).

@@ -14,8 +14,8 @@ struct RenderedImage
     int width = 0, height = 0;
     std::vector<openvdb::Vec3f> combined, surface, direct, scatter, normal;
     std::vector<float> alpha, depth; ///< depth: distance along the camera ray to the surface (0 where it misses)
-    std::vector<float> samples;      ///< camera rays per pixel (more where adaptive sampling refined it)
-    std::size_t refinedPixels = 0;   ///< pixels that got more than the render's samples per pixel
+    std::vector<float> samples; ///< camera rays per pixel (more where adaptive sampling refined it)
+    std::size_t refinedPixels = 0; ///< pixels that got more than the render's samples per pixel
 };
 
 } // namespace vxf

@@ -15,7 +15,7 @@ namespace vxf {
 struct Material
 {
     openvdb::Vec3d sigmaA{0.0}, sigmaS{0.0};
-    std::string gridsFile;            ///< optional .vdb with per-voxel coefficient grids ("" if none)
+    std::string gridsFile; ///< optional .vdb with per-voxel coefficient grids ("" if none)
     std::string sigmaAGrid, sigmaSGrid; ///< their names in gridsFile ("" if not given)
     /// Henyey-Greenstein asymmetry of the phase function, in [−kMaxPhaseG, kMaxPhaseG]: 0
     /// isotropic, > 0 forward (smoke, clouds, skin), < 0 backward. Medium takes the transport's
@@ -32,9 +32,9 @@ struct Material
 /// How an object's surface reflects the lights (the render's surface term).
 struct SurfaceShading
 {
-    openvdb::Vec3d diffuse{0.0};  ///< Lambert albedo
+    openvdb::Vec3d diffuse{0.0}; ///< Lambert albedo
     openvdb::Vec3d specular{0.0}; ///< normalized Blinn-Phong: specular·(e+8)/(8π)·(n·h)^e
-    double shininess = 64.0;      ///< e
+    double shininess = 64.0; ///< e
     openvdb::Vec3d emission{0.0}; ///< radiance emitted toward the camera (occluders and emitters)
     bool reflects() const { return diffuse != openvdb::Vec3d(0.0) || specular != openvdb::Vec3d(0.0); }
 };
@@ -46,17 +46,17 @@ struct SceneObject
     /// of the scene stands for what it emits: a flame around a point light, a bulb).
     enum class Role { Medium, Occluder, Emitter };
     std::string name;
-    std::string mesh;              ///< resolved path (relative to the scene file) or builtin:NAME; "" for a volume
+    std::string mesh; ///< resolved path (relative to the scene file) or builtin:NAME; "" for a volume
     /// A medium given as a grid instead of a mesh (smoke, clouds, fog volumes from Houdini,
     /// Blender or vdb_tool): the resolved path of a .vdb whose float grid @c grid is its
     /// density, σ = density × the material's coefficients, on the grid's own voxels; "" for a mesh.
     std::string volume;
     std::string grid = "density";
     bool isVolume() const { return !volume.empty(); }
-    openvdb::Mat4d objectToWorld;  ///< scale, then rotate x, y, z (degrees), then translate
+    openvdb::Mat4d objectToWorld; ///< scale, then rotate x, y, z (degrees), then translate
     Role role = Role::Medium;
     std::optional<Material> material; ///< present for media
-    SurfaceShading surface;           ///< diffuse 0.5 by default for occluders, 0 for media and emitters
+    SurfaceShading surface; ///< diffuse 0.5 by default for occluders, 0 for media and emitters
 };
 
 /// The strongest light a scene may hold (intensity × its largest colour channel, in the light's
@@ -109,9 +109,9 @@ struct SceneSettings
     double scatterBand = 0.0; ///< 0: full resolution everywhere
     int finePasses = 0, coarseFactor = 4; ///< passes after finePasses on a coarser lattice (0: none)
     std::string kernel = "gather"; ///< the scatter kernel by name (scatterKernelNamed)
-    bool accelerate = true;        ///< diffusion-accelerated sweeps or gathers (ScatterOptions::accelerate)
+    bool accelerate = true; ///< diffusion-accelerated sweeps or gathers (ScatterOptions::accelerate)
     int width = 640, height = 360, samples = 4, gatherDirections = 64;
-    int maxSamples = 0;       ///< adaptive sampling up to this many rays per pixel (≤ samples: off)
+    int maxSamples = 0; ///< adaptive sampling up to this many rays per pixel (≤ samples: off)
     double noiseLevel = 0.02; ///< refine pixels whose mean luminance has a larger relative standard error
     bool gather = false, surface = true;
     bool directFromLights = false; ///< render "direct": "lights" (single scattering marched per step)

@@ -43,7 +43,7 @@ public:
 
     /// The grid named @a name as a @c GridT; throws vxf::Error naming the grid when it is
     /// missing or of another value type.
-    template<typename GridT>
+    template <typename GridT>
     typename GridT::Ptr get(const std::string& name) const;
 
     /// Add @a grid, replacing a grid of the same name (keeping its position).
@@ -65,7 +65,7 @@ public:
     /// Record that @a stage made this set with @a paramsJson (a JSON object as text),
     /// and stamp the vxf version.
     void setProvenance(const std::string& stage, const std::string& paramsJson);
-    std::string stage() const;      ///< "" when the file carries no vxf provenance
+    std::string stage() const; ///< "" when the file carries no vxf provenance
     std::string paramsJson() const; ///< "" when absent
 
     /// The file this set was read from ("" when made in memory), for error messages.
@@ -80,7 +80,7 @@ private:
     std::string mPath;
 };
 
-template<typename GridT>
+template <typename GridT>
 typename GridT::Ptr VoxelSet::get(const std::string& name) const
 {
     openvdb::GridBase::Ptr grid = find(name);
@@ -88,7 +88,7 @@ typename GridT::Ptr VoxelSet::get(const std::string& name) const
     typename GridT::Ptr typed = openvdb::gridPtrCast<GridT>(grid);
     if (!typed) {
         throw Error("grid '" + name + "' holds " + grid->valueType() + " values, expected " +
-                    openvdb::typeNameAsString<typename GridT::ValueType>());
+            openvdb::typeNameAsString<typename GridT::ValueType>());
     }
     return typed;
 }

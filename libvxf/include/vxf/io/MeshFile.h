@@ -30,12 +30,12 @@ struct MeshReadOptions
 struct MeshReport
 {
     std::size_t inputPoints = 0, inputPolygons = 0;
-    std::size_t mergedPoints = 0;      ///< duplicate or unused points removed
-    std::size_t removedPolygons = 0;   ///< degenerate or duplicate polygons removed
-    std::size_t splitPoints = 0;       ///< points duplicated to make the mesh manifold
+    std::size_t mergedPoints = 0; ///< duplicate or unused points removed
+    std::size_t removedPolygons = 0; ///< degenerate or duplicate polygons removed
+    std::size_t splitPoints = 0; ///< points duplicated to make the mesh manifold
     std::size_t borderEdges = 0, holes = 0, holesFilled = 0;
     bool selfIntersecting = false;
-    bool outwardOriented = false;      ///< whether the result bounds its volume outward
+    bool outwardOriented = false; ///< whether the result bounds its volume outward
     std::size_t triangles = 0;
     std::vector<std::string> warnings;
     std::vector<std::pair<std::string, double>> stepSeconds; ///< wall time of each step, in order
@@ -46,8 +46,8 @@ struct MeshReport
 /// (splitting non-manifold points), triangulate, fill holes when asked, orient outward
 /// when closed. Throws vxf::Error naming the file when it cannot be read or holds no
 /// triangles. Never prints: findings go to @a report.
-TriangleMesh readMesh(const std::string& path, const MeshReadOptions& options = {},
-    MeshReport* report = nullptr, Interrupter* interrupter = nullptr);
+TriangleMesh readMesh(
+    const std::string& path, const MeshReadOptions& options = {}, MeshReport* report = nullptr, Interrupter* interrupter = nullptr);
 
 /// Test @a mesh for intersecting faces; on a hit set report.selfIntersecting and add the
 /// warning. Parallel (TBB). Separate from readMesh() so callers can overlap it with other

@@ -9,9 +9,9 @@ namespace vxf {
 
 struct MitsubaVolumeInfo
 {
-    openvdb::Coord resolution;  ///< voxels along x, y, z
-    int channels = 1;           ///< 1 (float grid) or 3 (Vec3f grid)
-    openvdb::BBoxd bounds;      ///< world-space box the data spans (voxel cells, not centres)
+    openvdb::Coord resolution; ///< voxels along x, y, z
+    int channels = 1; ///< 1 (float grid) or 3 (Vec3f grid)
+    openvdb::BBoxd bounds; ///< world-space box the data spans (voxel cells, not centres)
 };
 
 /// Write a float or Vec3f grid as Mitsuba's .vol: 'VOL', version 3, encoding 1 (float32),

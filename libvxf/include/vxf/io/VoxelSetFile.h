@@ -10,8 +10,8 @@ namespace vxf {
 
 struct VoxelSetWriteOptions
 {
-    bool half = false;     ///< store float and Vec3f grids as 16-bit halves (lossy)
-    bool compress = true;  ///< Blosc compression (+ active-mask compression, always on)
+    bool half = false; ///< store float and Vec3f grids as 16-bit halves (lossy)
+    bool compress = true; ///< Blosc compression (+ active-mask compression, always on)
 };
 
 struct VoxelSetReadOptions

@@ -41,7 +41,7 @@ struct VxfWriteOptions
 /// shortest round-trip form, so text → vdb → text → vdb is lossless. Returns warnings
 /// (e.g. grids skipped or with different topologies). Throws vxf::Error on a NaN or
 /// infinite value, a non-cubic-voxel transform or a grid that cannot be a column.
-std::vector<std::string> writeVxfText(const std::string& path, const VoxelSet& set,
-    const VxfWriteOptions& options = {}, Interrupter* interrupter = nullptr);
+std::vector<std::string> writeVxfText(
+    const std::string& path, const VoxelSet& set, const VxfWriteOptions& options = {}, Interrupter* interrupter = nullptr);
 
 } // namespace vxf

@@ -56,7 +56,7 @@ struct DirectLightReport
     {
         std::string name;
         bool skipped = false;
-        std::string why;              ///< reason it was skipped
+        std::string why; ///< reason it was skipped
         openvdb::Vec3d fluenceSum{0.0}; ///< Σ over active voxels of its φ0 (energy check)
     };
     std::vector<PerLight> lights;
@@ -68,8 +68,8 @@ struct DirectLightReport
 /// T·V for one light sample seen from world point @a xWorld: the medium's transmittance along
 /// the sample's path (to its point, or to the medium's bounds for light from outside) times
 /// 0 when an occluder mesh lies in between (@a occluders may be null).
-openvdb::Vec3d sampleTransmittance(const LightSample& sample, Medium::Sampler& sampler, const Medium& medium,
-    const openvdb::Vec3d& xWorld, const MarchOptions& options, const RayScene* occluders = nullptr);
+openvdb::Vec3d sampleTransmittance(const LightSample& sample, Medium::Sampler& sampler, const Medium& medium, const openvdb::Vec3d& xWorld,
+    const MarchOptions& options, const RayScene* occluders = nullptr);
 
 /// Fluence at a voxel from one light: Σ over its samples (LightSampler) of the sample's
 /// fluence × sampleTransmittance, taken at Medium::Sampler::mediumPoint: the voxel's centre, or
@@ -83,9 +83,8 @@ openvdb::Vec3d sampleTransmittance(const LightSample& sample, Medium::Sampler& s
 /// Volume lights add no fluence (they are a source; see computeDirectLight). Never NaN: a
 /// voxel at a point light's position gets the value of a point half a voxel away. With
 /// @a flux, adds the light's grey first moment there, Σ grey(fluence)·(direction of travel).
-openvdb::Vec3d lightFluence(const LightSampler& light, Medium::Sampler& sampler, const Medium& medium,
-    const openvdb::Coord& voxel, const MarchOptions& options, const RayScene* occluders = nullptr,
-    openvdb::Vec3d* flux = nullptr);
+openvdb::Vec3d lightFluence(const LightSampler& light, Medium::Sampler& sampler, const Medium& medium, const openvdb::Coord& voxel,
+    const MarchOptions& options, const RayScene* occluders = nullptr, openvdb::Vec3d* flux = nullptr);
 
 /// The light stage's peak per active voxel of the medium's density (tiles' voxels counted):
 /// 773 MiB for the bunny's 3.67M at dim 256 (docs/performance.md), less the fixed part,

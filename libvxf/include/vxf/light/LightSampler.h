@@ -44,8 +44,8 @@ public:
     /// Replace @a out with the samples of light arriving at world point @a x, of the sample
     /// numbers [@a first, @a last) only (e.g. one of them, chosen at random and weighted by
     /// count()); samples that carry nothing (behind an area light, black texels) are left out.
-    void sample(const openvdb::Vec3d& x, std::uint64_t key, double minDistance, std::vector<LightSample>& out,
-        std::size_t first = 0, std::size_t last = std::numeric_limits<std::size_t>::max()) const;
+    void sample(const openvdb::Vec3d& x, std::uint64_t key, double minDistance, std::vector<LightSample>& out, std::size_t first = 0,
+        std::size_t last = std::numeric_limits<std::size_t>::max()) const;
 
 private:
     Light mLight;

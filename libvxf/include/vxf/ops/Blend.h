@@ -10,9 +10,9 @@ enum class BlendMode { Add, Subtract, Multiply, Darker, Lighter, Mix };
 struct BlendOptions
 {
     BlendMode mode = BlendMode::Add;
-    double weight = 0.5;         ///< mix: A·(1−w) + B·w
+    double weight = 0.5; ///< mix: A·(1−w) + B·w
     bool clampNegatives = false; ///< clamp A and B to ≥ 0 first
-    bool normalizeB = false;     ///< divide B by its largest |value| first (B in [−1, 1])
+    bool normalizeB = false; ///< divide B by its largest |value| first (B in [−1, 1])
 };
 
 /// A ← A ∘ B per voxel and channel: add, subtract (A − B), multiply, darker (min), lighter

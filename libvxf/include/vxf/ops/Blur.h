@@ -12,7 +12,7 @@ enum class BlurKind { Box, Distance };
 struct BlurOptions
 {
     BlurKind kind = BlurKind::Box; ///< box: mean over the (2r+1)³ neighbourhood; distance: Gaussian-weighted
-    int radius = 1;                ///< in voxels (≥ 1)
+    int radius = 1; ///< in voxels (≥ 1)
     int iterations = 1;
     const openvdb::FloatGrid* mask = nullptr; ///< blend blurred and original by this weight in [0,1] (null: everywhere)
 };

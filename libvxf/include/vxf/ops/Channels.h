@@ -14,7 +14,7 @@ std::array<openvdb::FloatGrid::Ptr, 3> splitChannels(const openvdb::Vec3SGrid& g
 
 /// A Vec3f grid named @a name from three float grids on one transform: active where any is
 /// active; a channel inactive there contributes its grid's background value.
-openvdb::Vec3SGrid::Ptr mergeChannels(const openvdb::FloatGrid& x, const openvdb::FloatGrid& y, const openvdb::FloatGrid& z,
-    const std::string& name);
+openvdb::Vec3SGrid::Ptr mergeChannels(
+    const openvdb::FloatGrid& x, const openvdb::FloatGrid& y, const openvdb::FloatGrid& z, const std::string& name);
 
 } // namespace vxf::ops

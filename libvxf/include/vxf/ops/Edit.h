@@ -10,10 +10,10 @@ namespace vxf::ops {
 struct EditOptions
 {
     std::optional<openvdb::Vec3d> set; ///< set the colour
-    double hueShift = 0.0;             ///< degrees
+    double hueShift = 0.0; ///< degrees
     double saturation = 1.0, value = 1.0; ///< HSV scale factors (≥ 0)
-    bool add = false;                  ///< activate selected voxels that are inactive (then edit them)
-    bool remove = false;               ///< deactivate the selected voxels (no other edit)
+    bool add = false; ///< activate selected voxels that are inactive (then edit them)
+    bool remove = false; ///< deactivate the selected voxels (no other edit)
 };
 
 /// Edit the voxels of a Vec3f grid selected by @a selection (its active voxels; null: every

@@ -19,10 +19,10 @@ struct GradientOptions
 {
     GradientKind kind = GradientKind::Directional;
     openvdb::Vec3d from{0.0}, to{0.0, 0.0, 1.0}; ///< directional: t = 0 at from, 1 at to (projected)
-    openvdb::Vec3d centre{0.0};                  ///< radial: t = (|x − centre| / radius)^falloff
+    openvdb::Vec3d centre{0.0}; ///< radial: t = (|x − centre| / radius)^falloff
     double radius = 1.0, falloff = 1.0;
-    double distance = 1.0;                       ///< surface distance: t = depth below the surface / distance
-    std::vector<ColorStop> stops;                ///< the ramp (two or more); linear between stops, clamped at the ends
+    double distance = 1.0; ///< surface distance: t = depth below the surface / distance
+    std::vector<ColorStop> stops; ///< the ramp (two or more); linear between stops, clamped at the ends
 };
 
 /// The ramp's colour at @a t (linear between stops; t clamped to the first and last stop).

@@ -9,20 +9,20 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <set>
 #include <string>
 #include <vector>
 
 namespace vxf::ops {
 
-enum class ParamType
-{
-    Number,    ///< a real number
-    Integer,   ///< a whole number
-    Boolean,   ///< a flag
-    Text,      ///< a grid name or file path
-    Choice,    ///< one of Param::choices
-    Color,     ///< linear RGB: one number (grey) or three
-    Vector,    ///< three numbers (a world-space point)
+enum class ParamType {
+    Number, ///< a real number
+    Integer, ///< a whole number
+    Boolean, ///< a flag
+    Text, ///< a grid name or file path
+    Choice, ///< one of Param::choices
+    Color, ///< linear RGB: one number (grey) or three
+    Vector, ///< three numbers (a world-space point)
     ColorList, ///< two or more colours (a ramp)
     NumberList ///< numbers (ramp positions)
 };
@@ -56,7 +56,7 @@ public:
     int integer(const std::string& name) const;
     bool flag(const std::string& name) const;
     std::string text(const std::string& name) const;
-    openvdb::Vec3d color(const std::string& name) const;  ///< Color or Vector
+    openvdb::Vec3d color(const std::string& name) const; ///< Color or Vector
     std::vector<openvdb::Vec3d> colors(const std::string& name) const;
     std::vector<double> numbers(const std::string& name) const;
     const nlohmann::json& json() const { return mValues; }
@@ -77,13 +77,30 @@ struct OpContext
 
 /// One operator: name (snake_case, as on the command line and in graphs), one-line summary,
 /// parameters, and run, which edits the set and returns a one-line report.
+/// The grids of the voxel set one call of an operator reads and writes (a removed or renamed
+/// grid is written).
+struct GridUse
+{
+    std::set<std::string> reads, writes;
+};
+
 struct Operator
 {
     std::string name, summary;
     std::vector<Param> params;
     std::function<std::string(OpContext&)> run;
     bool source = false; ///< builds its voxel set from nothing (voxelize): no input node
+    /// The grids a call reads and writes, from its checked arguments; empty: the common case
+    /// (gridUse). Declared with the operator, so that what an edit invalidates (the view re-runs
+    /// the scatter stage after an edit of what it reads) is known without a table kept by hand.
+    std::function<GridUse(const Args&)> grids;
 };
+
+/// What a call of @a op with @a args reads and writes: op.grids when declared, else the
+/// common case: it reads `grid` and the grids named by `with`, `mask`, `selection`, `region`
+/// and `topology` when given (`with_file`'s grid is another file's), and writes `out` when
+/// given, else `grid` (edited in place).
+GridUse gridUse(const Operator& op, const Args& args);
 
 /// The artist operators, in the order help lists them. The pipeline stages a graph runs
 /// (voxelize, light, scatter, render) are registered above them: vxf::operators()
@@ -126,7 +143,10 @@ inline Param integer(std::string name, std::string summary, json def, double lo,
 {
     return {std::move(name), ParamType::Integer, std::move(summary), std::move(def), lo, hi, {}, {}};
 }
-inline Param flag(std::string name, std::string summary) { return {std::move(name), ParamType::Boolean, std::move(summary), false, -INFINITY, INFINITY, {}, {}}; }
+inline Param flag(std::string name, std::string summary)
+{
+    return {std::move(name), ParamType::Boolean, std::move(summary), false, -INFINITY, INFINITY, {}, {}};
+}
 inline Param text(std::string name, std::string summary, json def = nullptr)
 {
     return {std::move(name), ParamType::Text, std::move(summary), std::move(def), -INFINITY, INFINITY, {}, {}};

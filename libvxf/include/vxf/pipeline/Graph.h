@@ -14,14 +14,14 @@ struct GraphNodeRecord
 {
     std::string node;
     std::string action; ///< "ran" or "reused"
-    std::string why;    ///< one phrase for a person
+    std::string why; ///< one phrase for a person
     std::string report; ///< the operator's own report ("" when reused)
     double seconds = 0.0;
 };
 
 struct GraphReport
 {
-    std::vector<GraphNodeRecord> nodes;                     ///< in evaluation order
+    std::vector<GraphNodeRecord> nodes; ///< in evaluation order
     std::vector<std::pair<std::string, std::string>> written; ///< (node, file)
 };
 
@@ -48,7 +48,7 @@ void checkGraph(const std::string& path);
 /// source node for it — and @a output as its output file. So a sequence of one-off
 /// `vxf op … --record P.json` commands becomes a reusable graph. Paths are stored relative
 /// to the pipeline's folder when they lie under it. Written atomically.
-void recordStep(const std::string& graphPath, const std::string& op, const nlohmann::json& params, const std::string& input,
-    const std::string& output);
+void recordStep(
+    const std::string& graphPath, const std::string& op, const nlohmann::json& params, const std::string& input, const std::string& output);
 
 } // namespace vxf

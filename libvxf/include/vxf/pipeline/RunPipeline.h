@@ -11,10 +11,10 @@ namespace vxf {
 
 struct StageRecord
 {
-    std::string stage;   ///< voxelize, light, scatter, render
-    std::string action;  ///< "ran", "reused" or "skipped"
-    std::string why;     ///< one phrase for a person
-    std::string file;    ///< the stage's output file
+    std::string stage; ///< voxelize, light, scatter, render
+    std::string action; ///< "ran", "reused" or "skipped"
+    std::string why; ///< one phrase for a person
+    std::string file; ///< the stage's output file
     double seconds = 0.0;
 };
 
@@ -22,7 +22,7 @@ struct PipelineReport
 {
     std::vector<StageRecord> stages;
     std::string image, preview; ///< written image files ("" when no image was asked for)
-    std::string volume;         ///< the last voxel set of the chain (in the cache)
+    std::string volume; ///< the last voxel set of the chain (in the cache)
     /// Cache entries that could not be read (removed and recomputed), and the light stage's
     /// warnings when it ran (a medium with no positive density).
     std::vector<std::string> warnings;

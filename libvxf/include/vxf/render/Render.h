@@ -15,7 +15,7 @@ namespace vxf {
 struct RenderOptions
 {
     int width = 640, height = 360;
-    int samples = 4;            ///< camera rays per pixel (stratified, deterministic jitter)
+    int samples = 4; ///< camera rays per pixel (stratified, deterministic jitter)
     /// Adaptive sampling: a pixel whose first `samples` rays disagree (some hit and some miss,
     /// they hit different objects, or the standard error of their mean luminance is above
     /// noiseLevel of the mean), or met something else than a neighbour's first rays (a
@@ -24,9 +24,9 @@ struct RenderOptions
     /// ≤ samples: off.
     int maxSamples = 0;
     double noiseLevel = 0.02;
-    bool gather = false;        ///< false: "view" mode (physical); true: the thesis's final gather
-    int gatherDirections = 64;  ///< cosine-weighted directions per hit in gather mode
-    bool surface = true;        ///< add the surface term of objects whose surface reflects
+    bool gather = false; ///< false: "view" mode (physical); true: the thesis's final gather
+    int gatherDirections = 64; ///< cosine-weighted directions per hit in gather mode
+    bool surface = true; ///< add the surface term of objects whose surface reflects
     /// Single scattering marched to the lights at every step of a camera ray (shadow rays
     /// through the medium and occluders), instead of interpolated from the `direct` grid:
     /// exact where the direct light falls off within a voxel (dense media, coarse voxels),
@@ -34,8 +34,8 @@ struct RenderOptions
     /// chosen at random and weighted by their count); ignores edits of `direct`.
     bool directFromLights = false;
     openvdb::Vec3d background{0.0};
-    double step = 1.0;          ///< march step, voxels
-    double cutoff = 1e-4;       ///< stop marching below this transmittance
+    double step = 1.0; ///< march step, voxels
+    double cutoff = 1e-4; ///< stop marching below this transmittance
 };
 
 /// "P% of the pixels refined to M samples", or empty when adaptive sampling refined none.
@@ -47,9 +47,9 @@ RenderOptions renderOptionsFrom(const SceneSettings& settings);
 /// The meshes camera and shadow rays meet (ids: indices in Scene::objects), or none.
 struct RenderMeshes
 {
-    const RayScene* visible = nullptr;   ///< every object; null: camera rays hit the `surface` level set
+    const RayScene* visible = nullptr; ///< every object; null: camera rays hit the `surface` level set
     const RayScene* occluders = nullptr; ///< the occluders only (shadows of the surface term); may be null
-    const RayScene* media = nullptr;     ///< the media only: where camera and shadow rays cross the surface (may be null)
+    const RayScene* media = nullptr; ///< the media only: where camera and shadow rays cross the surface (may be null)
 };
 
 /// The render stage's peak per active voxel of the medium's density and per pixel (its layers,

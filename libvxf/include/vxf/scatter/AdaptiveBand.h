@@ -7,10 +7,10 @@ namespace vxf {
 
 struct AdaptiveBandReport
 {
-    openvdb::Index64 fineVoxels = 0;       ///< active voxels left at full resolution
-    std::size_t leafTiles = 0;             ///< 8³ blocks made one value
-    std::size_t internalTiles = 0;         ///< 128³ blocks made one value
-    openvdb::Index64 coarseVoxels = 0;     ///< voxels those tiles cover
+    openvdb::Index64 fineVoxels = 0; ///< active voxels left at full resolution
+    std::size_t leafTiles = 0; ///< 8³ blocks made one value
+    std::size_t internalTiles = 0; ///< 128³ blocks made one value
+    openvdb::Index64 coarseVoxels = 0; ///< voxels those tiles cover
 };
 
 /// Coarsen the deep interior of @a grid (a quantity on the medium, e.g. a scattering source):

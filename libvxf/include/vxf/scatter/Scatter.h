@@ -15,13 +15,13 @@ namespace vxf {
 
 struct ScatterOptions
 {
-    int passes = 16;          ///< at most this many passes (0: none, `scatter` zero: single scattering alone)
+    int passes = 16; ///< at most this many passes (0: none, `scatter` zero: single scattering alone)
     /// Stop when the rest of the series, φ_K·r/(1−r) with r the last pass's energy ratio (per
     /// channel), is known to within this fraction of the sum so far, and add it (0: never).
     /// Near albedo 1 the passes settle into the slowest mode long before the rest is small.
     double tolerance = 1e-3;
-    bool keepPasses = false;  ///< keep each pass as `scatter_pass_K`
-    int fromPass = 0;         ///< continue from `scatter_pass_K` (0: from `scatter_source`)
+    bool keepPasses = false; ///< keep each pass as `scatter_pass_K`
+    int fromPass = 0; ///< continue from `scatter_pass_K` (0: from `scatter_source`)
     /// After the last pass, add the geometric tail of the series: φ_K·r/(1−r) with
     /// r = φ_K/φ_{K−1} per voxel and channel, capped by the global energy ratio of the last
     /// two passes (itself ≤ 0.99). Makes albedo ≈ 1 converge in few passes.
@@ -51,30 +51,30 @@ struct ScatterReport
 {
     struct Pass
     {
-        int index = 0;                ///< K of φ_K
-        openvdb::Vec3d energy{0.0};   ///< Σ over voxels of φ_K (tiles weighted by their voxels)
-        double ratio = 0.0;           ///< energy (max channel) relative to the previous pass
+        int index = 0; ///< K of φ_K
+        openvdb::Vec3d energy{0.0}; ///< Σ over voxels of φ_K (tiles weighted by their voxels)
+        double ratio = 0.0; ///< energy (max channel) relative to the previous pass
         double seconds = 0.0;
-        bool coarse = false;          ///< ran on the coarse lattice
+        bool coarse = false; ///< ran on the coarse lattice
         /// Accelerated sweeps: |φ_l − φ_{l−1}|₁/|φ_l|₁ of the sum (the residual per iteration);
         /// `energy` is then the whole sum's, not one order's.
         double change = 0.0;
-        int diffusionIterations = 0;  ///< accelerated sweeps: conjugate-gradient iterations of the correction
-        int correctionSweeps = 0;     ///< accelerated gathers: sweeps of the correction (SweepSolveReport)
-        double sweepSeconds = 0.0;    ///< accelerated sweeps: of `seconds`, the transport sweep
+        int diffusionIterations = 0; ///< accelerated sweeps: conjugate-gradient iterations of the correction
+        int correctionSweeps = 0; ///< accelerated gathers: sweeps of the correction (SweepSolveReport)
+        double sweepSeconds = 0.0; ///< accelerated sweeps: of `seconds`, the transport sweep
     };
     std::vector<Pass> passes;
     std::string stopReason;
     double tailFactor = 0.0; ///< r/(1−r) of the global energy ratio (0: no extrapolation); per voxel it varies
-    AdaptiveBandReport band;  ///< the resolution the passes ran at
+    AdaptiveBandReport band; ///< the resolution the passes ran at
     double fineGatherSeconds = 0.0; ///< after coarse passes: the fine gathers and the correction cycle
-    int correctionPasses = 0;       ///< coarse passes of the correction cycles
-    int correctionCycles = 0;       ///< how many correction cycles ran
-    bool accelerated = false;       ///< the sum was solved by accelerated sweeps or gathers (passes are iterations)
-    std::size_t sweptVoxels = 0;    ///< accelerated sweeps: voxels swept per direction (the touched leaves')
+    int correctionPasses = 0; ///< coarse passes of the correction cycles
+    int correctionCycles = 0; ///< how many correction cycles ran
+    bool accelerated = false; ///< the sum was solved by accelerated sweeps or gathers (passes are iterations)
+    std::size_t sweptVoxels = 0; ///< accelerated sweeps: voxels swept per direction (the touched leaves')
     std::size_t diffusionUnknowns = 0; ///< accelerated sweeps: cells of the diffusion correction
-    int diffusionCoarsening = 1;       ///< accelerated sweeps: those cells are blocks of this many voxels cubed
-    double setupSeconds = 0.0;      ///< accelerated sweeps: the lattice and the diffusion matrices
+    int diffusionCoarsening = 1; ///< accelerated sweeps: those cells are blocks of this many voxels cubed
+    double setupSeconds = 0.0; ///< accelerated sweeps: the lattice and the diffusion matrices
 };
 
 /// Scatter options from a scene's settings (keepPasses when "scatter_passes" is an output).
@@ -114,7 +114,6 @@ inline constexpr double kScatterBytesPerVoxel = 260.0;
 /// left is below the tolerance, at least 0.3%, of the sum) solve for what the coarse
 /// lattice's slightly different operator left out; see Scatter.cc.
 /// Throws vxf::Error naming a missing grid, vxf::UsageError for a bad coarseFactor.
-ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions& options = {},
-    Interrupter* interrupter = nullptr);
+ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions& options = {}, Interrupter* interrupter = nullptr);
 
 } // namespace vxf

@@ -20,12 +20,12 @@ ScatterKernel scatterKernelNamed(const std::string& name);
 struct ScatterPassOptions
 {
     ScatterKernel kernel = ScatterKernel::Gather;
-    int directions = 64;        ///< spherical Fibonacci directions per voxel (weights 4π/N)
+    int directions = 64; ///< spherical Fibonacci directions per voxel (weights 4π/N)
     /// Sweep kernel: the whole direction set is turned by a random rotation seeded by this
     /// (deterministic; 0: unturned), so that passes with other seeds put their ray effects
     /// elsewhere. The gather turns its set per voxel instead (rotatePerVoxel).
     std::uint64_t rotationSeed = 0;
-    double step = 1.0;          ///< march step in voxels
+    double step = 1.0; ///< march step in voxels
     /// A march stops when the transmittance of every channel is below this, and adds what lies
     /// beyond as J held at that point over an unbounded medium, T·J/σt (not where its last step
     /// ended at the surface). Without that, every pass lost a share `cutoff` of the light deep
@@ -64,7 +64,7 @@ struct ScatterPassOptions
 /// "fluence" on @a source's topology (active tiles evaluated at their centre). Parallel over
 /// leaves and tiles; every voxel is computed alone, so results do not depend on the thread count.
 /// Cost: active voxels × directions × steps per ray (about −ln(cutoff)/(σt·dx·step) in thick media).
-openvdb::Vec3SGrid::Ptr scatterPass(const Medium& medium, const openvdb::Vec3SGrid& source,
-    const ScatterPassOptions& options = {}, Interrupter* interrupter = nullptr);
+openvdb::Vec3SGrid::Ptr scatterPass(
+    const Medium& medium, const openvdb::Vec3SGrid& source, const ScatterPassOptions& options = {}, Interrupter* interrupter = nullptr);
 
 } // namespace vxf

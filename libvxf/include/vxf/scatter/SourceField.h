@@ -60,8 +60,7 @@ class SourceField
 {
 public:
     /// How points near the surface are read (with a surface; without one, trilinear either way).
-    enum class Near
-    {
+    enum class Near {
         /// The layers to kModelDepth, blended into the lattice over kBlendWidth: the camera's
         /// read of the `scatter` grid (Render), where the eye sees the first voxel's light.
         Layers,

@@ -37,8 +37,8 @@ namespace vxf {
 /// Cost: (voxels of the touched leaves) × directions, the directions of an octant taking a leaf
 /// in turn while it is in cache (about 18-20 ns per voxel and direction on 2 cores); memory: the
 /// source and fluence, and of each leaf only its three downwind faces per direction in flight.
-openvdb::Vec3SGrid::Ptr sweepPass(const Medium& medium, const openvdb::Vec3SGrid& source,
-    const ScatterPassOptions& options = {}, Interrupter* interrupter = nullptr);
+openvdb::Vec3SGrid::Ptr sweepPass(
+    const Medium& medium, const openvdb::Vec3SGrid& source, const ScatterPassOptions& options = {}, Interrupter* interrupter = nullptr);
 
 /// The sweep kernel's directions: for an even @a count, sphericalFibonacci(count/2) and their
 /// opposites (Σ ω = 0, and each direction's reverse is swept too), made isotropic in their

@@ -12,14 +12,14 @@ namespace vxf {
 
 struct SweepSolveOptions
 {
-    int maxSweeps = 40;       ///< at most this many sweeps (iterations)
+    int maxSweeps = 40; ///< at most this many sweeps (iterations)
     /// Stop when the estimated error of the sum, |φ_l − φ_{l−1}|·ρ/(1−ρ) with ρ the ratio of the
     /// last two changes (L1 over voxels, per channel), is below this fraction of the sum.
     double tolerance = 1e-3;
     /// Diffusion synthetic acceleration after each sweep. Off: plain source iteration, each
     /// sweep one more scattering order (slow near albedo 1).
     bool accelerate = true;
-    int directions = 64;         ///< per sweep (ScatterPassOptions::directions)
+    int directions = 64; ///< per sweep (ScatterPassOptions::directions)
     std::uint64_t rotationSeed = 1; ///< one rotation of the direction set for the whole solve
     /// The diffusion correction's cells: blocks of 1, 2 or 4 voxels a side; 0: the largest whose
     /// mean optical thickness is at most 1 (coarse-mesh DSA, see DiffusionCorrection).
@@ -40,25 +40,25 @@ struct SweepSolveReport
 {
     struct Iteration
     {
-        int index = 0;                ///< sweeps so far
-        openvdb::Vec3d energy{0.0};   ///< Σ over voxels of the scattered fluence after it
-        double change = 0.0;          ///< |φ_l − φ_{l−1}|₁ / |φ_l|₁, largest channel
-        double ratio = 0.0;           ///< change over the previous change (ρ, the convergence rate)
-        double error = 0.0;           ///< change·ρ/(1−ρ): the estimated error of the sum
-        int diffusionIterations = 0;  ///< sweeps: conjugate-gradient iterations of the correction
-        int correctionSweeps = 0;     ///< gathers: sweeps of the correction's own solve
+        int index = 0; ///< sweeps so far
+        openvdb::Vec3d energy{0.0}; ///< Σ over voxels of the scattered fluence after it
+        double change = 0.0; ///< |φ_l − φ_{l−1}|₁ / |φ_l|₁, largest channel
+        double ratio = 0.0; ///< change over the previous change (ρ, the convergence rate)
+        double error = 0.0; ///< change·ρ/(1−ρ): the estimated error of the sum
+        int diffusionIterations = 0; ///< sweeps: conjugate-gradient iterations of the correction
+        int correctionSweeps = 0; ///< gathers: sweeps of the correction's own solve
         double diffusionResidual = 0.0;
         double seconds = 0.0;
-        double sweepSeconds = 0.0;    ///< of which the transport sweep (all directions)
+        double sweepSeconds = 0.0; ///< of which the transport sweep (all directions)
     };
     std::vector<Iteration> iterations;
     std::string stopReason;
     bool converged = false;
-    bool accelerated = false;         ///< the diffusion correction ran (and was kept)
-    std::size_t voxels = 0;           ///< voxels swept per direction (the touched leaves')
+    bool accelerated = false; ///< the diffusion correction ran (and was kept)
+    std::size_t voxels = 0; ///< voxels swept per direction (the touched leaves')
     std::size_t diffusionUnknowns = 0;
-    int diffusionCoarsening = 1;      ///< the correction's cells: blocks of this many voxels cubed
-    double setupSeconds = 0.0;        ///< lattice and diffusion matrices
+    int diffusionCoarsening = 1; ///< the correction's cells: blocks of this many voxels cubed
+    double setupSeconds = 0.0; ///< lattice and diffusion matrices
 };
 
 /// The scattered fluence Σ_{k≥1} φ_k of the source J0 = @a source, solved as a whole:

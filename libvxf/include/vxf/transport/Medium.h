@@ -129,12 +129,11 @@ public:
         /// behind when leaving) within kSnapWindow voxels of depth (kSnapWindow / cos along a
         /// ray meeting the surface at cosine cos, at most kSnapReach), clamped to [@a lo, @a hi];
         /// @a t itself without boundary meshes or such a hit.
-        double snapCrossing(const openvdb::Vec3d& origin, const openvdb::Vec3d& direction, double t, double lo, double hi,
-            bool entering);
+        double snapCrossing(const openvdb::Vec3d& origin, const openvdb::Vec3d& direction, double t, double lo, double hi, bool entering);
         /// The first hit @a t of the boundary meshes on the index-space ray in (@a lo, @a hi),
         /// and whether the ray @a entering the meshes there; false without boundary meshes or a hit.
-        bool boundaryHit(const openvdb::Vec3d& origin, const openvdb::Vec3d& direction, double lo, double hi, double& t,
-            bool& entering) const;
+        bool boundaryHit(
+            const openvdb::Vec3d& origin, const openvdb::Vec3d& direction, double lo, double hi, double& t, bool& entering) const;
 
     private:
         const Medium& mMedium;

@@ -42,7 +42,7 @@ inline constexpr int kRestOrders = 3;
 /// rest, whose scattering the sweep solve and the camera's read take by RestPhase.
 struct PhaseScaling
 {
-    double forward = 0.0;                ///< f
+    double forward = 0.0; ///< f
     double rest[kRestOrders] = {0, 0, 0}; ///< χ*_1…χ*_3
     /// g* = χ*_1, the rest's mean cosine.
     double restG() const { return rest[0]; }
@@ -130,7 +130,6 @@ private:
         return 1.0f + c * (3.0f * chi[0] + 3.5f * chi[2] * (5.0f * c * c - 3.0f * k2)) + 2.5f * chi[1] * (3.0f * c * c - k2);
     }
 };
-
 
 /// The mean of a colour's channels: what one anisotropy vector stands for.
 inline double greyOf(const openvdb::Vec3d& c) { return (c[0] + c[1] + c[2]) / 3.0; }

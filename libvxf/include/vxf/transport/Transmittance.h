@@ -13,7 +13,7 @@ namespace vxf {
 
 struct MarchOptions
 {
-    double step = 0.5;    ///< march step in voxels (σt is taken constant over each step)
+    double step = 0.5; ///< march step in voxels (σt is taken constant over each step)
     double cutoff = 1e-4; ///< below this transmittance (every channel) a march stops and returns 0
 };
 
@@ -106,7 +106,11 @@ class InsideSteps
 {
 public:
     InsideSteps(Medium::Sampler& sampler, const openvdb::Vec3d& origin, const openvdb::Vec3d& direction, double t0, double h)
-        : mSampler(sampler), mOrigin(origin), mDirection(direction), mT(t0), mH(h)
+        : mSampler(sampler)
+        , mOrigin(origin)
+        , mDirection(direction)
+        , mT(t0)
+        , mH(h)
         , mDistance(distanceAt(t0))
     {
     }
@@ -231,7 +235,7 @@ private:
         return mSampler.snapCrossing(mOrigin, mDirection, t, lo, hi, sa > 0.0);
     }
 
-    static constexpr int kDipDepth = 3;            ///< a chord down to an eighth of a step is found
+    static constexpr int kDipDepth = 3; ///< a chord down to an eighth of a step is found
     static constexpr int kCrossingIterations = 4;
     static constexpr double kCrossingTolerance = 1e-3; ///< voxels
 
@@ -246,8 +250,8 @@ private:
 /// re-enter a concave mesh. Midpoint rule over equal steps of at most options.step voxels;
 /// negative σt (artist grids) counts as 0, so 0 ≤ T ≤ 1 always. The segment is clipped to
 /// the medium's bounds first, so empty space costs nothing.
-openvdb::Vec3d transmittance(Medium::Sampler& sampler, const Medium& medium, const openvdb::Vec3d& fromIjk,
-    const openvdb::Vec3d& toIjk, const MarchOptions& options);
+openvdb::Vec3d transmittance(Medium::Sampler& sampler, const Medium& medium, const openvdb::Vec3d& fromIjk, const openvdb::Vec3d& toIjk,
+    const MarchOptions& options);
 
 /// T from @a fromIjk along the index-space direction @a direction (any length > 0) until the
 /// ray leaves the medium's bounds (light arriving from outside, e.g. directional or sky).
@@ -261,8 +265,8 @@ openvdb::Vec3d transmittanceToBoundary(Medium::Sampler& sampler, const Medium& m
 using MarchHandOff = std::function<bool(const openvdb::Vec3d& pointIjk, double signedDistance, openvdb::Vec3f& depth)>;
 
 /// transmittance from @a fromIjk to @a toIjk, handing the rest of the way to @a handOff where it takes it.
-openvdb::Vec3d transmittance(Medium::Sampler& sampler, const Medium& medium, const openvdb::Vec3d& fromIjk,
-    const openvdb::Vec3d& toIjk, const MarchOptions& options, const MarchHandOff& handOff);
+openvdb::Vec3d transmittance(Medium::Sampler& sampler, const Medium& medium, const openvdb::Vec3d& fromIjk, const openvdb::Vec3d& toIjk,
+    const MarchOptions& options, const MarchHandOff& handOff);
 
 /// transmittanceToBoundary, handing the rest of the way to @a handOff where it takes it.
 openvdb::Vec3d transmittanceToBoundary(Medium::Sampler& sampler, const Medium& medium, const openvdb::Vec3d& fromIjk,

@@ -14,15 +14,13 @@ namespace vxf::view {
 /// | request | answer |
 /// |---|---|
 /// | GET /api/info | ViewSession::describe(), and "scene" (the scene renders use, or null) |
-/// | GET /api/points?grid=G&budget=N | points: binary little-endian float32, per point x y z then 1 or 3 values; headers X-Vxf-Count, X-Vxf-Channels, X-Vxf-Cell-Voxels, X-Vxf-Cell-Size, X-Vxf-Min, X-Vxf-Max, X-Vxf-Active |
-/// | GET /api/slice?grid=G&axis=A&index=I | JSON: axis, index, origin, width, height, channels, values (null where inactive) |
-/// | GET /api/mesh?adaptivity=F | binary: uint32 vertex count, uint32 triangle count, float32 positions, uint32 indices |
-/// | GET /api/pipeline?output=PATH | ViewSession::pipeline() |
-/// | POST /api/apply {"op", "params"} | {"report", "steps"} |
-/// | POST /api/undo | {"undone", "steps"} |
-/// | POST /api/export {"path", "mode": whole/diff/smoothed, "grid", "smooth"} | {"written"} |
-/// | POST /api/render {"width", "height"} | ViewSession::render with the options' scene: {"ran", "seconds"} |
-/// | GET /api/image | the last render's PNG |
+/// | GET /api/points?grid=G&budget=N | points: binary little-endian float32, per point x y z then 1 or 3 values; headers X-Vxf-Count,
+/// X-Vxf-Channels, X-Vxf-Cell-Voxels, X-Vxf-Cell-Size, X-Vxf-Min, X-Vxf-Max, X-Vxf-Active | | GET /api/slice?grid=G&axis=A&index=I | JSON:
+/// axis, index, origin, width, height, channels, values (null where inactive) | | GET /api/mesh?adaptivity=F | binary: uint32 vertex count,
+/// uint32 triangle count, float32 positions, uint32 indices | | GET /api/pipeline?output=PATH | ViewSession::pipeline() | | POST /api/apply
+/// {"op", "params"} | {"report", "steps"} | | POST /api/undo | {"undone", "steps"} | | POST /api/export {"path", "mode":
+/// whole/diff/smoothed, "grid", "smooth"} | {"written"} | | POST /api/render {"width", "height"} | ViewSession::render with the options'
+/// scene: {"ran", "seconds"} | | GET /api/image | the last render's PNG |
 ///
 /// Bad requests (unknown grid or operator, malformed JSON, a path outside the served file's
 /// folder) are 400 with {"error": message} and change nothing; unknown paths 404.
@@ -37,9 +35,9 @@ constexpr const char* kTokenHeader = "X-Vxf-Token";
 
 struct ViewServerOptions
 {
-    std::string scene;        ///< a scene file for POST /api/render ("": renders refused)
+    std::string scene; ///< a scene file for POST /api/render ("": renders refused)
     std::string renderFolder; ///< where renders are written ("": a folder under the system's temp dir, removed at the end)
-    std::string token;        ///< the session's secret ("": 128 random bits, as hex)
+    std::string token; ///< the session's secret ("": 128 random bits, as hex)
 };
 
 class ViewServer

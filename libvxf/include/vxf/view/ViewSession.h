@@ -17,13 +17,13 @@ namespace vxf::view {
 /// the cell's active values at the mean of their centres, world space), the smallest that fits.
 struct PointCloud
 {
-    int cellVoxels = 1;            ///< a cell's side in voxels (1: one point per voxel)
-    double cellSize = 0.0;         ///< world size of a point's cell
-    int channels = 1;              ///< 1 (float grids) or 3 (Vec3 grids)
-    std::vector<float> positions;  ///< x, y, z per point
-    std::vector<float> values;     ///< `channels` per point
+    int cellVoxels = 1; ///< a cell's side in voxels (1: one point per voxel)
+    double cellSize = 0.0; ///< world size of a point's cell
+    int channels = 1; ///< 1 (float grids) or 3 (Vec3 grids)
+    std::vector<float> positions; ///< x, y, z per point
+    std::vector<float> values; ///< `channels` per point
     double minValue = 0.0, maxValue = 0.0; ///< over every channel of the points (0, 0 when none)
-    std::uint64_t activeVoxels = 0;        ///< of the whole grid
+    std::uint64_t activeVoxels = 0; ///< of the whole grid
 };
 
 /// An axis-aligned slice through a grid's active bounds: @a width x @a height values (index
@@ -31,7 +31,7 @@ struct PointCloud
 struct Slice
 {
     int axis = 2, index = 0;
-    openvdb::Coord origin;    ///< index of values[0]
+    openvdb::Coord origin; ///< index of values[0]
     int width = 0, height = 0;
     int channels = 1;
     std::vector<float> values; ///< channels per cell
@@ -40,16 +40,15 @@ struct Slice
 /// A triangle mesh of the `surface` level set (OpenVDB's volumeToMesh), world space.
 struct SurfaceMesh
 {
-    std::vector<float> positions;     ///< x, y, z per vertex
+    std::vector<float> positions; ///< x, y, z per vertex
     std::vector<std::uint32_t> triangles;
 };
 
 /// How an export writes the edited grid (the thesis's three exports).
-enum class ExportMode
-{
-    Whole,    ///< the edited voxel set, every grid
-    Diff,     ///< the difference of the edited grid from the original (`vxf op diff`), alone
-    Smoothed  ///< the original set with that difference replayed, its edge blended (`apply_diff --smooth`)
+enum class ExportMode {
+    Whole, ///< the edited voxel set, every grid
+    Diff, ///< the difference of the edited grid from the original (`vxf op diff`), alone
+    Smoothed ///< the original set with that difference replayed, its edge blended (`apply_diff --smooth`)
 };
 
 /// One .vdb open for viewing and editing. Every edit is one operator of the registry (as

@@ -10,7 +10,7 @@ namespace vxf {
 struct VoxelizeOptions
 {
     double voxelSize = 0.0; ///< world units per voxel; 0: derive from @c dim
-    int dim = 0;            ///< voxels along the longest side of the mesh bounds (if voxelSize is 0)
+    int dim = 0; ///< voxels along the longest side of the mesh bounds (if voxelSize is 0)
     float bandWidth = 3.0f; ///< narrow band half width in voxels, each side of the surface (≥ 1)
     /// Voxelize on this lattice (a linear transform, e.g. voxelLattice() of several meshes'
     /// bounds) instead of one derived from the mesh; voxelSize and dim are then ignored.
