@@ -93,7 +93,7 @@ struct Operator
     /// The grids a call reads and writes, from its checked arguments; empty: the common case
     /// (gridUse). Declared with the operator, so that what an edit invalidates (the view re-runs
     /// the scatter stage after an edit of what it reads) is known without a table kept by hand.
-    std::function<GridUse(const Args&)> grids;
+    std::function<GridUse(const Args&)> grids = nullptr;
 };
 
 /// What a call of @a op with @a args reads and writes: op.grids when declared, else the
