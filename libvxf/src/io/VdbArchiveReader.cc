@@ -106,6 +106,13 @@ void checkMetaMap(Lookahead& ahead, const char* what)
                     fmt::format("{}: item '{}' of type {} declares {} bytes where the type has {}", what, name, type, bytes, size));
             }
         }
+        if (type == openvdb::BoolMetadata::staticTypeName() && bytes == 1) {
+            // Read straight into a bool (a grid's is_saved_as_half_float among them): 0 or 1.
+            const auto value = ahead.value<std::uint8_t>(what);
+            if (value > 1)
+                throw openvdb::IoError(fmt::format("{}: item '{}' of type bool holds {}, not 0 or 1", what, name, unsigned(value)));
+            continue;
+        }
         ahead.skip(bytes, what);
     }
 }
