@@ -38,6 +38,14 @@ bool readCgroupValue(const std::string& path, std::uint64_t& value)
 
 } // namespace
 
+std::uint64_t mappedMemory()
+{
+    std::ifstream statm("/proc/self/statm");
+    std::uint64_t pages = 0;
+    if (!(statm >> pages)) return 0;
+    return pages * std::uint64_t(::sysconf(_SC_PAGESIZE));
+}
+
 std::uint64_t availableMemory()
 {
     std::uint64_t available = 0;
@@ -68,10 +76,8 @@ std::uint64_t availableMemory()
     // An address-space limit (`ulimit -v`, a farm slot's h_vmem): what it leaves beyond what the
     // process has mapped already.
     rlimit limit{};
-    std::ifstream statm("/proc/self/statm");
-    std::uint64_t pages = 0;
-    if (::getrlimit(RLIMIT_AS, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY && (statm >> pages)) {
-        const std::uint64_t mapped = pages * std::uint64_t(::sysconf(_SC_PAGESIZE));
+    const std::uint64_t mapped = mappedMemory();
+    if (::getrlimit(RLIMIT_AS, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY && mapped > 0) {
         const std::uint64_t left = std::uint64_t(limit.rlim_cur) > mapped ? std::uint64_t(limit.rlim_cur) - mapped : 1;
         if (available == 0 || left < available) available = left;
     }

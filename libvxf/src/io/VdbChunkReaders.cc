@@ -38,70 +38,73 @@ namespace io {
 
 namespace {
 
-/// The chunk's signed length, read before anything else of the chunk.
-std::int64_t readChunkLength(std::istream& is, const char* codec)
+/// A compressed chunk: its bytes, as long as its length says.
+struct CompressedChunk
 {
+    std::unique_ptr<char[]> bytes;
     std::int64_t length = 0;
-    is.read(reinterpret_cast<char*>(&length), sizeof(length));
-    if (!is.good()) OPENVDB_THROW(RuntimeError, "the stream ends in the length of a " << codec << " chunk");
-    return length;
-}
+};
 
-/// A raw chunk (negative length): exactly the buffer's size, read into it or skipped.
-void readRawChunk(std::istream& is, char* data, size_t numBytes, std::int64_t length, const char* codec)
+/// The chunk's signed length, then: a raw chunk (length ≤ 0) must be exactly the node's buffer,
+/// read into @a data (or skipped when it is null); a compressed one is skipped when @a data is
+/// null, else its length is checked against @a maxLength before its bytes are read and returned
+/// to decode. Returns no bytes when nothing is left to decode.
+CompressedChunk readChunk(std::istream& is, char* data, size_t numBytes, std::uint64_t maxLength, const char* codec)
 {
-    // -length overflows for INT64_MIN; compared as unsigned, -(INT64_MIN) is 2^63, never a buffer's size.
-    const std::uint64_t declared = std::uint64_t(0) - std::uint64_t(length);
-    if (declared != numBytes) {
-        OPENVDB_THROW(
-            RuntimeError, "a " << codec << " chunk declares " << declared << " uncompressed bytes where the node holds " << numBytes);
+    CompressedChunk chunk;
+    is.read(reinterpret_cast<char*>(&chunk.length), sizeof(chunk.length));
+    if (!is.good()) OPENVDB_THROW(RuntimeError, "the stream ends in the length of a " << codec << " chunk");
+    if (chunk.length <= 0) {
+        // -length overflows for INT64_MIN; compared as unsigned, -(INT64_MIN) is 2^63, never a buffer's size.
+        const std::uint64_t declared = std::uint64_t(0) - std::uint64_t(chunk.length);
+        if (declared != numBytes) {
+            OPENVDB_THROW(
+                RuntimeError, "a " << codec << " chunk declares " << declared << " uncompressed bytes where the node holds " << numBytes);
+        }
+        if (data == nullptr) {
+            is.seekg(std::streamoff(numBytes), std::ios_base::cur);
+        } else {
+            is.read(data, std::streamsize(numBytes));
+        }
+        return chunk;
     }
     if (data == nullptr) {
-        is.seekg(std::streamoff(numBytes), std::ios_base::cur);
-    } else {
-        is.read(data, std::streamsize(numBytes));
+        is.seekg(chunk.length, std::ios_base::cur);
+        return chunk;
     }
-}
-
-/// A compressed chunk's bytes, after its length was checked against @a maxLength.
-std::unique_ptr<char[]> readCompressed(std::istream& is, std::int64_t length, std::uint64_t maxLength, size_t numBytes, const char* codec)
-{
-    if (std::uint64_t(length) > maxLength) {
+    if (std::uint64_t(chunk.length) > maxLength) {
         OPENVDB_THROW(RuntimeError,
-            "a " << codec << " chunk declares " << length << " compressed bytes for a node of " << numBytes << " (at most " << maxLength
-                 << ")");
+            "a " << codec << " chunk declares " << chunk.length << " compressed bytes for a node of " << numBytes << " (at most "
+                 << maxLength << ")");
     }
-    std::unique_ptr<char[]> bytes(new char[size_t(length)]);
-    is.read(bytes.get(), std::streamsize(length));
-    return bytes;
+    chunk.bytes.reset(new char[size_t(chunk.length)]);
+    is.read(chunk.bytes.get(), std::streamsize(chunk.length));
+    return chunk;
 }
 
 } // namespace
 
 void bloscFromStream(std::istream& is, char* data, size_t numBytes)
 {
-    const std::int64_t length = readChunkLength(is, "Blosc");
-    if (length <= 0) return readRawChunk(is, data, numBytes, length, "Blosc");
-    if (data == nullptr) {
-        is.seekg(length, std::ios_base::cur);
-        return;
-    }
     // Blosc never grows data by more than its header (BLOSC_MAX_OVERHEAD).
-    const auto compressed = readCompressed(is, length, std::uint64_t(numBytes) + BLOSC_MAX_OVERHEAD, numBytes, "Blosc");
+    const CompressedChunk chunk = readChunk(is, data, numBytes, std::uint64_t(numBytes) + BLOSC_MAX_OVERHEAD, "Blosc");
+    if (!chunk.bytes) return;
+    const char* compressed = chunk.bytes.get();
+    const std::int64_t length = chunk.length;
     // Blosc's header states both sizes, and its decompressor believes them: the chunk must hold
     // what the header says it holds, and decompress to exactly the node's buffer.
     size_t uncompressed = 0;
-    if (length < BLOSC_MIN_HEADER_LENGTH || blosc_cbuffer_validate(compressed.get(), size_t(length), &uncompressed) != 0) {
+    if (length < BLOSC_MIN_HEADER_LENGTH || blosc_cbuffer_validate(compressed, size_t(length), &uncompressed) != 0) {
         OPENVDB_THROW(RuntimeError, "a Blosc chunk of " << length << " bytes is not valid Blosc data");
     }
     size_t headerUncompressed = 0, headerCompressed = 0, blockSize = 0;
-    blosc_cbuffer_sizes(compressed.get(), &headerUncompressed, &headerCompressed, &blockSize);
+    blosc_cbuffer_sizes(compressed, &headerUncompressed, &headerCompressed, &blockSize);
     if (uncompressed != numBytes || headerCompressed != size_t(length)) {
         OPENVDB_THROW(RuntimeError,
             "a Blosc chunk holds " << headerCompressed << " bytes decompressing to " << uncompressed << " where its length is " << length
                                    << " and the node holds " << numBytes);
     }
-    const int decompressed = blosc_decompress_ctx(compressed.get(), data, numBytes, /*numinternalthreads=*/1);
+    const int decompressed = blosc_decompress_ctx(compressed, data, numBytes, /*numinternalthreads=*/1);
     if (decompressed < 0 || size_t(decompressed) != numBytes) {
         OPENVDB_THROW(RuntimeError, "a Blosc chunk decompressed to " << decompressed << " bytes where the node holds " << numBytes);
     }
@@ -109,17 +112,13 @@ void bloscFromStream(std::istream& is, char* data, size_t numBytes)
 
 void unzipFromStream(std::istream& is, char* data, size_t numBytes)
 {
-    const std::int64_t length = readChunkLength(is, "zip");
-    if (length <= 0) return readRawChunk(is, data, numBytes, length, "zip");
-    if (data == nullptr) {
-        is.seekg(length, std::ios_base::cur);
-        return;
-    }
     // zlib's worst case for the node's bytes bounds what a writer could have produced.
-    const auto compressed = readCompressed(is, length, compressBound(uLong(numBytes)), numBytes, "zip");
+    const CompressedChunk chunk = readChunk(is, data, numBytes, compressBound(uLong(numBytes)), "zip");
+    if (!chunk.bytes) return;
+    const char* compressed = chunk.bytes.get();
+    const std::int64_t length = chunk.length;
     uLongf unzipped = uLongf(numBytes);
-    const int status =
-        uncompress(reinterpret_cast<Bytef*>(data), &unzipped, reinterpret_cast<const Bytef*>(compressed.get()), uLong(length));
+    const int status = uncompress(reinterpret_cast<Bytef*>(data), &unzipped, reinterpret_cast<const Bytef*>(compressed), uLong(length));
     if (status != Z_OK || unzipped != numBytes) {
         OPENVDB_THROW(RuntimeError,
             "a zip chunk decompressed to " << unzipped << " bytes where the node holds " << numBytes << (status != Z_OK ? " (zlib: " : "")

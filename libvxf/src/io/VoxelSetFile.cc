@@ -1,6 +1,7 @@
 #include <vxf/io/VoxelSetFile.h>
 
 #include <vxf/core/GridRoles.h>
+#include <vxf/core/MemoryBudget.h>
 #include <vxf/io/AtomicFile.h>
 #include <vxf/io/GridChecksum.h>
 #include <vxf/io/InputFile.h>
@@ -20,7 +21,6 @@
 #include <vector>
 
 #include <sys/resource.h>
-#include <unistd.h>
 
 namespace vxf {
 
@@ -51,10 +51,8 @@ public:
     explicit ReadBudget(std::uintmax_t fileBytes)
     {
         if (::getrlimit(RLIMIT_AS, &mPrevious) != 0) return;
-        std::ifstream statm("/proc/self/statm");
-        std::uintmax_t pages = 0;
-        if (!(statm >> pages) || pages == 0) return;
-        const std::uintmax_t mapped = pages * std::uintmax_t(::sysconf(_SC_PAGESIZE));
+        const std::uintmax_t mapped = mappedMemory();
+        if (mapped == 0) return;
         const std::uintmax_t budget = fileBytes > (UINTMAX_MAX - kReadBudgetBase) / kReadBudgetRatio
             ? UINTMAX_MAX / 2
             : kReadBudgetBase + kReadBudgetRatio * fileBytes;

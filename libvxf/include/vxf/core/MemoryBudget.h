@@ -11,6 +11,9 @@ namespace vxf {
 /// (RLIMIT_AS, `ulimit -v`, less what it has mapped) leaves less; 0 if none can be read.
 std::uint64_t availableMemory();
 
+/// The bytes of address space the process has mapped (/proc/self/statm's size); 0 if unknown.
+std::uint64_t mappedMemory();
+
 /// "8G", "512M", "1.5T", "64K" (binary units: G = 2^30 bytes; a trailing "B" or "iB" is
 /// accepted) or a plain number of bytes. Throws vxf::UsageError naming @a text.
 std::uint64_t parseMemorySize(const std::string& text);
