@@ -1,10 +1,13 @@
-// `vxf light IN.vdb --scene S.json -o OUT.vdb [--step H] [--march]`
+// `vxf light IN.vdb --scene S.json -o OUT.vdb [--step H] [--cutoff C] [--march] [--half] [-q]`: --scene and the options
+// after it are the light operator's parameters (pipeline/Operators.cc), declared there once.
 #include "CliSupport.h"
 #include "Commands.h"
+#include "OperatorOptions.h"
 
 #include <vxf/core/GridStats.h>
 #include <vxf/light/DirectLight.h>
 #include <vxf/pipeline/LightScene.h>
+#include <vxf/pipeline/Operators.h>
 #include <vxf/pipeline/SceneMedium.h>
 
 #include <fmt/format.h>
@@ -26,18 +29,8 @@ public:
             "Light a voxel set: `direct` (fluence from the scene's lights through the medium, Beer-Lambert) and "
             "`scatter_source` (sigma_s direct / 4 pi + volume-light emission).");
         mApp->add_option("input", mInput, "Voxel set with `density` (from vxf voxelize)")->required();
-        mApp->add_option("--scene", mScene, "Scene file (schemas/scene.schema.json): material and lights")->required();
         mApp->add_option("-o,--output", mOutput, "Output .vdb (all input grids + direct + scatter_source)")->required()->check(OutputFile);
-        mStep = mApp->add_option(
-                        "--step", mOptions.march.step, "March step in voxels (default: the scene's scatter.step, 1, as vxf run lights it)")
-                    ->check(CLI::Range(0.01, 64.0));
-        mApp->add_option("--cutoff", mOptions.march.cutoff, "Stop marching below this transmittance (default 1e-4)")
-            ->check(CLI::Range(0.0, 0.5));
-        mApp->add_flag("--march", mMarch,
-            "Every light by a march per voxel and sample (the reference; slow). By default directional and environment lights "
-            "take their transmittance from one optical-depth sweep over the medium per direction (the surface's rim is marched "
-            "only along directions that graze it); point and spot lights from one sweep around the light, the voxels within "
-            "3 of the surface marched; area lights are marched either way");
+        mParams = std::make_unique<OperatorOptions>(*mApp, findOperator("light"), true);
         mApp->add_flag("--half", mWrite.half, "Store floats as 16-bit halves");
         mApp->add_flag("-q,--quiet", mQuiet, "No summary");
     }
@@ -46,13 +39,14 @@ public:
     {
         TerminalProgress progress;
         const auto start = std::chrono::steady_clock::now();
-        mOptions.sweep = !mMarch;
+        const ops::Args args = mParams->args();
+        mScene = args.text("scene");
         const Scene scene = loadScene(mScene);
-        if (mStep->count() == 0) mOptions.march.step = scene.settings.step;
+        const DirectLightOptions options = lightOptions(args, scene.settings);
         VoxelSet set = placedInput(scene, &progress);
-        const DirectLightReport report = lightScene(set, scene, mOptions, &progress);
-        nlohmann::json params = {{"command", "light"}, {"input", mInput}, {"scene", mScene}, {"step", mOptions.march.step},
-            {"cutoff", mOptions.march.cutoff}, {"sweep", mOptions.sweep}};
+        const DirectLightReport report = lightScene(set, scene, options, &progress);
+        nlohmann::json params = args.json();
+        params.update({{"command", "light"}, {"input", mInput}, {"step", options.march.step}});
         set.setProvenance("light", params.dump());
         writeVoxelSet(mOutput, set, mWrite);
         if (mQuiet) return;
@@ -99,11 +93,9 @@ private:
     }
 
     std::string mInput, mScene, mOutput;
-    DirectLightOptions mOptions;
+    std::unique_ptr<OperatorOptions> mParams; ///< the light operator's parameters (pipeline/Operators.cc)
     VoxelSetWriteOptions mWrite;
-    CLI::Option* mStep = nullptr;
     bool mQuiet = false;
-    bool mMarch = false;
 };
 
 } // namespace

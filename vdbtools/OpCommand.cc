@@ -2,6 +2,7 @@
 // operator registry; `vxf op --markdown` and `vxf op --schema` print the generated documents.
 #include "CliSupport.h"
 #include "Commands.h"
+#include "OperatorOptions.h"
 
 #include <vxf/io/VoxelSetFile.h>
 #include <vxf/pipeline/Operators.h>
@@ -38,18 +39,7 @@ public:
             sub->add_option("-o,--output", call.output, "Output .vdb (may be the input)")->required()->check(OutputFile);
             sub->add_option("--record", call.record, "Append this command as a node to a pipeline graph (vxf graph)");
             sub->add_flag("--half", call.write.half, "Store floats as 16-bit halves");
-            for (const auto& p : op.params) {
-                const std::string def = p.defaultValue.is_null() ? (p.summary.rfind("(optional)", 0) == 0 ? "" : " [required]")
-                                                                 : " [default " + p.defaultValue.dump() + "]";
-                const std::string help = fmt::format("{} ({}){}", p.summary, ops::describeType(p), def);
-                if (p.type == ops::ParamType::Boolean) {
-                    sub->add_flag_function(
-                        "--" + p.name, [&call, name = p.name](std::int64_t) { call.values[name] = "true"; }, help);
-                } else {
-                    sub->add_option_function<std::string>(
-                        "--" + p.name, [&call, name = p.name](const std::string& v) { call.values[name] = v; }, help);
-                }
-            }
+            call.params = std::make_unique<OperatorOptions>(*sub, op, false);
         }
     }
 
@@ -74,7 +64,7 @@ private:
     {
         CLI::App* app = nullptr;
         std::string input, output, record;
-        std::map<std::string, std::string> values;
+        std::unique_ptr<OperatorOptions> params; ///< the operator's parameters as options
         VoxelSetWriteOptions write;
     };
 
@@ -92,12 +82,8 @@ private:
                                          "read its own output)",
                 op.name));
         }
-        nlohmann::json params = nlohmann::json::object();
-        for (const auto& [name, text] : call.values) {
-            const auto p = std::find_if(op.params.begin(), op.params.end(), [&](const ops::Param& q) { return q.name == name; });
-            params[name] = ops::parseParamText(op, *p, text);
-        }
-        const ops::Args args = ops::checkArgs(op, params);
+        nlohmann::json params = call.params->given();
+        const ops::Args args = call.params->args();
         TerminalProgress progress;
         VoxelSet set = readVoxelSet(call.input);
         ops::OpContext context{set, args, &progress};

@@ -1,9 +1,12 @@
-// `vxf voxelize MESH -o OUT.vdb (--voxel-size S | --dim N) [--band W]`
+// `vxf voxelize MESH -o OUT.vdb [--voxel-size S | --dim N] [--band W]`: the mesh, --voxel-size, --dim and --band are
+// the voxelize operator's parameters (pipeline/Operators.cc), declared there once.
 #include "CliSupport.h"
 #include "Commands.h"
+#include "OperatorOptions.h"
 
 #include <vxf/core/GridStats.h>
 #include <vxf/core/ProceduralMesh.h>
+#include <vxf/pipeline/Operators.h>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -105,17 +108,9 @@ public:
     explicit VoxelizeCommand(CLI::App& parent)
     {
         mApp = parent.add_subcommand("voxelize", "Voxelize a mesh into `surface` (level set) and `density` (fog volume).");
-        mApp->add_option("mesh", mRequest.mesh,
-                fmt::format("Mesh file (.obj .ply .off .stl) or a built-in mesh: {}", fmt::join(builtinMeshNames(), ", ")))
-            ->required();
+        mParams =
+            std::make_unique<OperatorOptions>(*mApp, findOperator("voxelize"), true, std::map<std::string, std::string>{{"mesh", "mesh"}});
         mApp->add_option("-o,--output", mRequest.output, "Output .vdb file")->required()->check(OutputFile);
-        auto* size = mApp->add_option("--voxel-size", mRequest.voxelize.voxelSize, "Voxel size in world units")->check(AboveZero);
-        auto* dim =
-            mApp->add_option("--dim", mRequest.voxelize.dim, "Voxels along the longest side of the mesh")->check(CLI::Range(1, 1 << 20));
-        size->excludes(dim);
-        dim->excludes(size);
-        mApp->add_option("--band", mRequest.voxelize.bandWidth, "Narrow band half width in voxels, each side (default 3)")
-            ->check(CLI::Range(1.0f, 1000.0f));
         mApp->add_flag("--half", mRequest.write.half, "Store floats as 16-bit halves");
         mApp->add_flag(
             "--no-fill-holes", [this](std::int64_t) { mRequest.meshRead.fillHoles = false; },
@@ -128,14 +123,16 @@ public:
 
     void run() override
     {
-        if (mRequest.voxelize.voxelSize == 0.0 && mRequest.voxelize.dim == 0) {
-            throw UsageError("give --voxel-size or --dim");
-        }
+        if (mParams->has("voxel_size") && mParams->has("dim")) throw UsageError("give --voxel-size or --dim, not both");
+        const ops::Args args = mParams->args();
+        mRequest.mesh = args.text("mesh");
+        mRequest.voxelize = voxelizeOptions(args);
         voxelizeToFile(mRequest);
     }
 
 private:
     VoxelizeRequest mRequest;
+    std::unique_ptr<OperatorOptions> mParams; ///< the voxelize operator's parameters (pipeline/Operators.cc)
 };
 
 } // namespace

@@ -1,7 +1,7 @@
 #include <vxf/pipeline/SceneFile.h>
 
 #include <vxf/io/InputFile.h>
-#include <vxf/transport/Phase.h>
+#include <vxf/scatter/ScatterPass.h>
 
 #include <vxf/core/Error.h>
 #include <vxf/io/JsonDocument.h>
@@ -199,6 +199,53 @@ public:
     const std::string mPath;
 };
 
+/// The scene's settings (voxelize, scatter, render, outputs) over the defaults; a medium of an
+/// anisotropic phase (@a phaseG ≠ 0) changes two of them, as schemas/scene.schema.json says.
+SceneSettings readSettings(const json& document, const SceneReader& reader, double phaseG)
+{
+    SceneSettings s;
+    const bool anisotropic = phaseG != 0.0;
+    // An anisotropic phase shows in single scattering marched to the lights; the direct grid's is isotropic.
+    s.directFromLights = anisotropic;
+    // A forward phase's anisotropy only the accelerated sweeps carry (Phase.h, Scatter.h).
+    if (anisotropic) s.kernel = defaultScatterKernel(phaseG);
+    if (document.contains("voxelize")) {
+        const json& v = document["voxelize"];
+        s.dim = v.value("dim", s.dim);
+        s.voxelSize = v.value("voxel_size", 0.0);
+        s.band = v.value("band", s.band);
+    }
+    if (document.contains("scatter")) {
+        const json& v = document["scatter"];
+        s.passes = v.value("passes", s.passes);
+        s.directions = v.value("directions", s.directions);
+        s.step = v.value("step", s.step);
+        s.cutoff = v.value("cutoff", s.cutoff);
+        s.tolerance = v.value("tolerance", s.tolerance);
+        s.extrapolate = v.value("extrapolate", s.extrapolate);
+        s.scatterBand = v.value("band", s.scatterBand);
+        s.finePasses = v.value("fine_passes", s.finePasses);
+        s.coarseFactor = v.value("coarse_factor", s.coarseFactor);
+        s.kernel = v.value("kernel", s.kernel);
+        s.accelerate = v.value("accelerate", s.accelerate);
+    }
+    if (document.contains("render")) {
+        const json& v = document["render"];
+        s.width = v.value("width", s.width);
+        s.height = v.value("height", s.height);
+        s.samples = v.value("samples", s.samples);
+        s.maxSamples = v.value("max_samples", s.maxSamples);
+        s.noiseLevel = v.value("noise_level", s.noiseLevel);
+        s.gather = v.value("mode", std::string("view")) == "gather";
+        s.gatherDirections = v.value("gather_directions", s.gatherDirections);
+        s.directFromLights = v.value("direct", std::string(anisotropic ? "lights" : "grid")) == "lights";
+        s.surface = v.value("surface", s.surface);
+        if (v.contains("background")) s.background = reader.rgb(v["background"]);
+    }
+    if (document.contains("outputs")) s.outputs = document["outputs"].get<std::vector<std::string>>();
+    return s;
+}
+
 } // namespace
 
 Scene parseScene(const std::string& text, const std::string& path)
@@ -282,47 +329,7 @@ Scene parseScene(const std::string& text, const std::string& path)
                     firstMedium->name, firstMedium->material->phaseG));
         }
     }
-    const bool anisotropic = firstMedium && firstMedium->material->phaseG != 0.0;
-
-    SceneSettings& s = scene.settings;
-    // An anisotropic phase shows in single scattering marched to the lights; the direct grid's is isotropic.
-    s.directFromLights = anisotropic;
-    // A forward phase's anisotropy only the accelerated sweeps carry (Phase.h, Scatter.h).
-    if (anisotropic && transportScaling(firstMedium->material->phaseG).restG() != 0.0) s.kernel = "sweep";
-    if (document.contains("voxelize")) {
-        const json& v = document["voxelize"];
-        s.dim = v.value("dim", s.dim);
-        s.voxelSize = v.value("voxel_size", 0.0);
-        s.band = v.value("band", s.band);
-    }
-    if (document.contains("scatter")) {
-        const json& v = document["scatter"];
-        s.passes = v.value("passes", s.passes);
-        s.directions = v.value("directions", s.directions);
-        s.step = v.value("step", s.step);
-        s.cutoff = v.value("cutoff", s.cutoff);
-        s.tolerance = v.value("tolerance", s.tolerance);
-        s.extrapolate = v.value("extrapolate", s.extrapolate);
-        s.scatterBand = v.value("band", s.scatterBand);
-        s.finePasses = v.value("fine_passes", s.finePasses);
-        s.coarseFactor = v.value("coarse_factor", s.coarseFactor);
-        s.kernel = v.value("kernel", s.kernel);
-        s.accelerate = v.value("accelerate", s.accelerate);
-    }
-    if (document.contains("render")) {
-        const json& v = document["render"];
-        s.width = v.value("width", s.width);
-        s.height = v.value("height", s.height);
-        s.samples = v.value("samples", s.samples);
-        s.maxSamples = v.value("max_samples", s.maxSamples);
-        s.noiseLevel = v.value("noise_level", s.noiseLevel);
-        s.gather = v.value("mode", std::string("view")) == "gather";
-        s.gatherDirections = v.value("gather_directions", s.gatherDirections);
-        s.directFromLights = v.value("direct", std::string(anisotropic ? "lights" : "grid")) == "lights";
-        s.surface = v.value("surface", s.surface);
-        if (v.contains("background")) s.background = reader.rgb(v["background"]);
-    }
-    if (document.contains("outputs")) s.outputs = document["outputs"].get<std::vector<std::string>>();
+    scene.settings = readSettings(document, reader, firstMedium ? firstMedium->material->phaseG : 0.0);
     return scene;
 }
 

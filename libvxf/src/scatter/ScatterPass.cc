@@ -4,6 +4,7 @@
 #include <vxf/core/Hash.h>
 #include <vxf/core/RandomRotation.h>
 #include <vxf/core/SphericalFibonacci.h>
+#include <vxf/transport/Phase.h>
 #include <vxf/transport/Transmittance.h>
 #include <vxf/scatter/SourceField.h>
 #include <vxf/scatter/SweepPass.h>
@@ -60,7 +61,111 @@ openvdb::Vec3d parabolaMiddle(const openvdb::Vec3d& jBefore, const openvdb::Vec3
 /// weight on J before grows as b/a (a step clipped short by the surface would amplify J's noise).
 constexpr double kJoinedFraction = 0.5;
 
+/// The thesis's gather at one voxel: φ(x) = Σ over the direction set of the radiance marched
+/// in from the medium's bounds, J read from the continued field or fraction-weighted from the grid.
+struct VoxelGather
+{
+    const Medium& medium;
+    const ScatterPassOptions& options;
+    const std::vector<openvdb::Vec3d> directions = sphericalFibonacci(options.directions);
+    const double weight = 4.0 * M_PI / double(directions.size());
+    const double dx = medium.voxelSize();
+    const double h = std::max(options.step, 1e-3);
+    const double tauCutoff = -std::log(std::max(options.cutoff, std::numeric_limits<double>::min()));
+    const bool empty = medium.activeBounds().empty();
+    const openvdb::BBoxd bounds = marchBounds(medium);
+    // J quadratic along each step where the medium ends at a surface; without one (coarse
+    // lattices, fixtures) its edge is the trilinear density ramp, over which σt, taken at the
+    // step's midpoint, varies as much as J: J at the ends then gives a boundary voxel too much
+    // of its own light (a 4x coarser bunny lattice leaked 1.3% per pass instead of 3%, and its
+    // series no longer matched the fine one's), so J is taken at the midpoint there.
+    const bool quadratic = medium.surface() != nullptr;
+
+    openvdb::Vec3f operator()(Medium::Sampler& sampler, const std::optional<SourceField::Sampler>& field,
+        const GridLookup<openvdb::Vec3SGrid>& grid, const openvdb::Coord& c) const
+    {
+        openvdb::Vec3d x = c.asVec3d(), normal;
+        openvdb::Mat3d rotation = openvdb::Mat3d::identity();
+        if (sampler.skinPoint(c, x, normal)) {
+            rotation = surfaceRotation(c, normal, options.rotatePerVoxel);
+        } else if (options.rotatePerVoxel) {
+            rotation = voxelRotation(c);
+        }
+        openvdb::Vec3d phi(0.0);
+        for (const openvdb::Vec3d& d0 : directions) phi += radianceAlong(sampler, field, grid, x, rotation * d0);
+        phi *= weight;
+        for (int ch = 0; ch < 3; ++ch) {
+            if (!std::isfinite(phi[ch])) phi[ch] = 0.0; // never let NaN/Inf into a grid
+        }
+        return openvdb::Vec3f(phi);
+    }
+
+    /// The radiance arriving at @a x from direction @a d (the march from the medium's bounds).
+    openvdb::Vec3d radianceAlong(Medium::Sampler& sampler, const std::optional<SourceField::Sampler>& field,
+        const GridLookup<openvdb::Vec3SGrid>& grid, const openvdb::Vec3d& x, const openvdb::Vec3d& d) const
+    {
+        double tEntry = 0.0, tExit = std::numeric_limits<double>::max();
+        if (empty || !clipRay(bounds, x, d, tEntry, tExit)) return openvdb::Vec3d(0.0);
+        openvdb::Vec3d radiance(0.0), T(1.0), tau(0.0);
+        const int steps = std::max(1, int(std::ceil(tExit / h)));
+        const double hStep = tExit / steps;
+        InsideSteps inside(sampler, x, d, 0.0, hStep);
+        InsideStep step;
+        openvdb::Vec3d jStart(0.0), jEnd(0.0); // J at the step's ends
+        openvdb::Vec3d jBefore(0.0); // J at the previous step's start
+        double lengthBefore = 0.0; // the previous step's length, when this one joins it
+        const auto sourceAt = [&](const openvdb::Vec3d& p, double interior) {
+            return field ? field->sample(p) : openvdb::Vec3d(grid.sampleTrilinear(p)) * interior;
+        };
+        for (int i = 0; i < steps; ++i) {
+            // Only the part of each step inside the surface holds medium (sharp boundary).
+            if (!inside.next(step)) {
+                lengthBefore = 0.0;
+                continue;
+            }
+            openvdb::Vec3d jMiddle;
+            if (quadratic) {
+                const auto interiorAt = [&](const openvdb::Vec3d& p) { return field ? 1.0 : sampler.interiorScale(p, step.distanceBound); };
+                if (!step.joined) lengthBefore = 0.0;
+                jStart = step.joined ? jEnd : sourceAt(step.start, interiorAt(step.start));
+                jEnd = sourceAt(step.end, interiorAt(step.end));
+                if (field && lengthBefore >= kJoinedFraction * step.length) {
+                    jMiddle = parabolaMiddle(jBefore, jStart, jEnd, lengthBefore, step.length);
+                } else {
+                    jMiddle = sourceAt(step.midpoint, step.interior);
+                }
+                jBefore = jStart;
+                lengthBefore = step.length;
+            } else {
+                jStart = jEnd = jMiddle = sourceAt(step.midpoint, step.interior);
+            }
+            const double hWorld = step.length * dx;
+            const openvdb::Vec3d sigmaT = sampler.sigmaT(step.midpoint) * step.interior;
+            // ΔL = T·∫ J(s) e^{−σt s} ds (J quadratic along the step); T ·= e^{−σt h}.
+            const std::array<EmissionWeights, 3> w = emissionWeights(sigmaT, hWorld);
+            for (int ch = 0; ch < 3; ++ch) {
+                radiance[ch] += T[ch] * emissionIntegral(w[ch], jStart[ch], jMiddle[ch], jEnd[ch]);
+                T[ch] *= w[ch].transmittance;
+                tau[ch] += std::max(0.0, sigmaT[ch]) * hWorld;
+            }
+            if (std::min({tau[0], tau[1], tau[2]}) > tauCutoff) {
+                // What lies beyond: J held at the step's end over an unbounded medium, T·J/σt,
+                // unless the step ended at the surface or the march's end (nothing beyond).
+                if (i + 1 < steps && step.length > hStep * (1.0 - 1e-9)) {
+                    for (int ch = 0; ch < 3; ++ch) {
+                        if (sigmaT[ch] > 0.0) radiance[ch] += T[ch] * jEnd[ch] / sigmaT[ch];
+                    }
+                }
+                break;
+            }
+        }
+        return radiance;
+    }
+};
+
 } // namespace
+
+std::string defaultScatterKernel(double phaseG) { return transportScaling(phaseG).restG() != 0.0 ? "sweep" : "gather"; }
 
 ScatterKernel scatterKernelNamed(const std::string& name)
 {
@@ -80,98 +185,7 @@ openvdb::Vec3SGrid::Ptr scatterPass(
     fluence->tree().topologyUnion(source.tree());
     if (options.directions < 1) return fluence;
 
-    const std::vector<openvdb::Vec3d> directions = sphericalFibonacci(options.directions);
-    const double weight = 4.0 * M_PI / double(directions.size());
-    const double dx = medium.voxelSize();
-    const double h = std::max(options.step, 1e-3);
-    const double tauCutoff = -std::log(std::max(options.cutoff, std::numeric_limits<double>::min()));
-    const bool empty = medium.activeBounds().empty();
-    const openvdb::BBoxd bounds = marchBounds(medium);
-    // J quadratic along each step where the medium ends at a surface; without one (coarse
-    // lattices, fixtures) its edge is the trilinear density ramp, over which σt, taken at the
-    // step's midpoint, varies as much as J: J at the ends then gives a boundary voxel too much
-    // of its own light (a 4x coarser bunny lattice leaked 1.3% per pass instead of 3%, and its
-    // series no longer matched the fine one's), so J is taken at the midpoint there.
-    const bool quadratic = medium.surface() != nullptr;
-
-    // φ(x) at one voxel, J read from the continued field or fraction-weighted from the grid.
-    const auto gather = [&](Medium::Sampler& sampler, const std::optional<SourceField::Sampler>& field,
-                            const GridLookup<openvdb::Vec3SGrid>& grid, const openvdb::Coord& c) {
-        openvdb::Vec3d x = c.asVec3d(), normal;
-        openvdb::Mat3d rotation = openvdb::Mat3d::identity();
-        if (sampler.skinPoint(c, x, normal)) {
-            rotation = surfaceRotation(c, normal, options.rotatePerVoxel);
-        } else if (options.rotatePerVoxel) {
-            rotation = voxelRotation(c);
-        }
-        openvdb::Vec3d phi(0.0);
-        for (const openvdb::Vec3d& d0 : directions) {
-            const openvdb::Vec3d d = rotation * d0;
-            double tEntry = 0.0, tExit = std::numeric_limits<double>::max();
-            if (empty || !clipRay(bounds, x, d, tEntry, tExit)) continue;
-            openvdb::Vec3d radiance(0.0), T(1.0), tau(0.0);
-            const int steps = std::max(1, int(std::ceil(tExit / h)));
-            const double hStep = tExit / steps;
-            InsideSteps inside(sampler, x, d, 0.0, hStep);
-            InsideStep step;
-            openvdb::Vec3d jStart(0.0), jEnd(0.0); // J at the step's ends
-            openvdb::Vec3d jBefore(0.0); // J at the previous step's start
-            double lengthBefore = 0.0; // the previous step's length, when this one joins it
-            const auto sourceAt = [&](const openvdb::Vec3d& p, double interior) {
-                return field ? field->sample(p) : openvdb::Vec3d(grid.sampleTrilinear(p)) * interior;
-            };
-            for (int i = 0; i < steps; ++i) {
-                // Only the part of each step inside the surface holds medium (sharp boundary).
-                if (!inside.next(step)) {
-                    lengthBefore = 0.0;
-                    continue;
-                }
-                openvdb::Vec3d jMiddle;
-                if (quadratic) {
-                    const auto interiorAt = [&](const openvdb::Vec3d& p) {
-                        return field ? 1.0 : sampler.interiorScale(p, step.distanceBound);
-                    };
-                    if (!step.joined) lengthBefore = 0.0;
-                    jStart = step.joined ? jEnd : sourceAt(step.start, interiorAt(step.start));
-                    jEnd = sourceAt(step.end, interiorAt(step.end));
-                    if (field && lengthBefore >= kJoinedFraction * step.length) {
-                        jMiddle = parabolaMiddle(jBefore, jStart, jEnd, lengthBefore, step.length);
-                    } else {
-                        jMiddle = sourceAt(step.midpoint, step.interior);
-                    }
-                    jBefore = jStart;
-                    lengthBefore = step.length;
-                } else {
-                    jStart = jEnd = jMiddle = sourceAt(step.midpoint, step.interior);
-                }
-                const double hWorld = step.length * dx;
-                const openvdb::Vec3d sigmaT = sampler.sigmaT(step.midpoint) * step.interior;
-                // ΔL = T·∫ J(s) e^{−σt s} ds (J quadratic along the step); T ·= e^{−σt h}.
-                const std::array<EmissionWeights, 3> w = emissionWeights(sigmaT, hWorld);
-                for (int ch = 0; ch < 3; ++ch) {
-                    radiance[ch] += T[ch] * emissionIntegral(w[ch], jStart[ch], jMiddle[ch], jEnd[ch]);
-                    T[ch] *= w[ch].transmittance;
-                    tau[ch] += std::max(0.0, sigmaT[ch]) * hWorld;
-                }
-                if (std::min({tau[0], tau[1], tau[2]}) > tauCutoff) {
-                    // What lies beyond: J held at the step's end over an unbounded medium, T·J/σt,
-                    // unless the step ended at the surface or the march's end (nothing beyond).
-                    if (i + 1 < steps && step.length > hStep * (1.0 - 1e-9)) {
-                        for (int ch = 0; ch < 3; ++ch) {
-                            if (sigmaT[ch] > 0.0) radiance[ch] += T[ch] * jEnd[ch] / sigmaT[ch];
-                        }
-                    }
-                    break;
-                }
-            }
-            phi += radiance;
-        }
-        phi *= weight;
-        for (int ch = 0; ch < 3; ++ch) {
-            if (!std::isfinite(phi[ch])) phi[ch] = 0.0; // never let NaN/Inf into a grid
-        }
-        return openvdb::Vec3f(phi);
-    };
+    const VoxelGather gather{medium, options};
 
     std::optional<SourceField> sourceField;
     std::shared_ptr<const DenseCopy<openvdb::Vec3SGrid>> sourceDense;

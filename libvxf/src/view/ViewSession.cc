@@ -433,10 +433,10 @@ ViewSession::Rendered ViewSession::render(const std::string& scenePath, int widt
             const nlohmann::json recorded = nlohmann::json::parse(mOriginal.paramsJson(), nullptr, false);
             if (mOriginal.stage() == "scatter" && recorded.is_object()) {
                 for (const char* key : {"passes", "directions", "step", "cutoff", "tolerance", "band", "extrapolate", "fine_passes",
-                         "coarse_factor", "kernel"}) {
+                         "coarse_factor", "kernel", "no_accelerate", "fixed_directions"}) {
                     if (recorded.contains(key)) params[key] = recorded[key];
                 }
-                if (recorded.value("accelerate", true) == false) params["no_accelerate"] = true;
+                if (recorded.value("accelerate", true) == false) params["no_accelerate"] = true; // written before 2026-12
             }
             if (params.empty()) params = {{"kernel", "sweep"}};
             const VoxelSet edited = replay(std::vector<Step>(mSteps.begin(), mSteps.begin() + std::ptrdiff_t(rescatterAfter)));

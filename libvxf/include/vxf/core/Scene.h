@@ -2,6 +2,8 @@
 // (the scene file's reader is vxf/pipeline/SceneFile.h; its schema schemas/scene.schema.json).
 #pragma once
 
+#include <vxf/core/StageDefaults.h>
+
 #include <openvdb/Types.h>
 
 #include <optional>
@@ -99,20 +101,20 @@ struct Camera
 
 struct SceneSettings
 {
-    int dim = 128;
+    int dim = defaults::kDim;
     double voxelSize = 0.0; ///< when > 0 it wins over dim
-    double band = 3.0;
-    int passes = 16, directions = 64;
-    double step = 1.0, tolerance = 1e-3;
-    double cutoff = 1e-3; ///< scatter marches stop below this transmittance (ScatterPassOptions::cutoff)
+    double band = defaults::kBand;
+    int passes = defaults::kPasses, directions = defaults::kDirections;
+    double step = defaults::kStep, tolerance = defaults::kTolerance;
+    double cutoff = defaults::kScatterCutoff; ///< scatter marches stop below this transmittance (ScatterPassOptions::cutoff)
     bool extrapolate = false;
     double scatterBand = 0.0; ///< 0: full resolution everywhere
-    int finePasses = 0, coarseFactor = 4; ///< passes after finePasses on a coarser lattice (0: none)
+    int finePasses = 0, coarseFactor = defaults::kCoarseFactor; ///< passes after finePasses on a coarser lattice (0: none)
     std::string kernel = "gather"; ///< the scatter kernel by name (scatterKernelNamed)
     bool accelerate = true; ///< diffusion-accelerated sweeps or gathers (ScatterOptions::accelerate)
-    int width = 640, height = 360, samples = 4, gatherDirections = 64;
+    int width = defaults::kWidth, height = defaults::kHeight, samples = defaults::kSamples, gatherDirections = defaults::kGatherDirections;
     int maxSamples = 0; ///< adaptive sampling up to this many rays per pixel (≤ samples: off)
-    double noiseLevel = 0.02; ///< refine pixels whose mean luminance has a larger relative standard error
+    double noiseLevel = defaults::kNoiseLevel; ///< refine pixels whose mean luminance has a larger relative standard error
     bool gather = false, surface = true;
     bool directFromLights = false; ///< render "direct": "lights" (single scattering marched per step)
     openvdb::Vec3d background{0.0};

@@ -36,7 +36,7 @@ struct Param
     std::string summary;
     nlohmann::json defaultValue; ///< null: required
     double min = -std::numeric_limits<double>::infinity(), max = std::numeric_limits<double>::infinity();
-    std::vector<std::string> choices;
+    std::vector<std::string> choices; ///< a Choice's names; an Integer's allowed values, when only some are
     /// "PARAM=VALUE" when the parameter means something only then (e.g. "kind=radial");
     /// giving it otherwise is an error ("unused parameter"). Empty: always used.
     std::string when;
@@ -110,15 +110,20 @@ const std::vector<Operator>& artistOperators();
 /// The operator of @a operators named @a name; vxf::UsageError listing the names otherwise.
 const Operator& findOperatorIn(const std::vector<Operator>& operators, const std::string& name);
 
+/// How an error message names a parameter: "OP: parameter 'NAME'" (paramLabel) in a graph or a
+/// checked JSON; a command line names its option ("--cutoff"), the command being named before.
+using ParamLabel = std::function<std::string(const Operator&, const Param&)>;
+std::string paramLabel(const Operator& op, const Param& param);
+
 /// Check @a values (a JSON object) against @a op: unknown parameters, parameters unused in the
 /// chosen mode (Param::when), wrong types, values out of range or not among the choices, and
-/// missing required ones are vxf::UsageError naming the operator and the parameter. Defaults
-/// fill what is not given.
-Args checkArgs(const Operator& op, const nlohmann::json& values);
+/// missing required ones are vxf::UsageError naming the operator and the parameter (@a label).
+/// Defaults fill what is not given.
+Args checkArgs(const Operator& op, const nlohmann::json& values, const ParamLabel& label = paramLabel);
 
 /// Parse command-line text for @a param into JSON of its type (numbers, "r,g,b", "a,b,c;d,e,f",
-/// true/false); vxf::UsageError naming the operator and parameter when it does not parse.
-nlohmann::json parseParamText(const Operator& op, const Param& param, const std::string& text);
+/// true/false); vxf::UsageError naming the parameter (@a label) when it does not parse.
+nlohmann::json parseParamText(const Operator& op, const Param& param, const std::string& text, const ParamLabel& label = paramLabel);
 
 /// Human-readable type of a parameter ("number in [0, 1]", "one of box|distance", …).
 std::string describeType(const Param& param);
@@ -142,6 +147,13 @@ inline Param number(std::string name, std::string summary, json def, double lo =
 inline Param integer(std::string name, std::string summary, json def, double lo, double hi)
 {
     return {std::move(name), ParamType::Integer, std::move(summary), std::move(def), lo, hi, {}, {}};
+}
+/// An integer that must be one of @a values (e.g. a coarsening factor of 2, 4 or 8).
+inline Param integerOf(std::string name, std::string summary, json def, const std::vector<int>& values)
+{
+    Param p{std::move(name), ParamType::Integer, std::move(summary), std::move(def), -INFINITY, INFINITY, {}, {}};
+    for (int v : values) p.choices.push_back(std::to_string(v));
+    return p;
 }
 inline Param flag(std::string name, std::string summary)
 {

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <vxf/core/Interrupter.h>
+#include <vxf/core/StageDefaults.h>
 #include <vxf/core/RayScene.h>
 #include <vxf/transport/Medium.h>
 #include <vxf/core/RenderedImage.h>
@@ -14,8 +15,8 @@ namespace vxf {
 
 struct RenderOptions
 {
-    int width = 640, height = 360;
-    int samples = 4; ///< camera rays per pixel (stratified, deterministic jitter)
+    int width = defaults::kWidth, height = defaults::kHeight;
+    int samples = defaults::kSamples; ///< camera rays per pixel (stratified, deterministic jitter)
     /// Adaptive sampling: a pixel whose first `samples` rays disagree (some hit and some miss,
     /// they hit different objects, or the standard error of their mean luminance is above
     /// noiseLevel of the mean), or met something else than a neighbour's first rays (a
@@ -23,9 +24,9 @@ struct RenderOptions
     /// all. Silhouettes and a noisy light get the rays; smooth interiors keep `samples`.
     /// ≤ samples: off.
     int maxSamples = 0;
-    double noiseLevel = 0.02;
+    double noiseLevel = defaults::kNoiseLevel;
     bool gather = false; ///< false: "view" mode (physical); true: the thesis's final gather
-    int gatherDirections = 64; ///< cosine-weighted directions per hit in gather mode
+    int gatherDirections = defaults::kGatherDirections; ///< cosine-weighted directions per hit in gather mode
     bool surface = true; ///< add the surface term of objects whose surface reflects
     /// Single scattering marched to the lights at every step of a camera ray (shadow rays
     /// through the medium and occluders), instead of interpolated from the `direct` grid:
@@ -34,8 +35,8 @@ struct RenderOptions
     /// chosen at random and weighted by their count); ignores edits of `direct`.
     bool directFromLights = false;
     openvdb::Vec3d background{0.0};
-    double step = 1.0; ///< march step, voxels
-    double cutoff = 1e-4; ///< stop marching below this transmittance
+    double step = defaults::kStep; ///< march step, voxels
+    double cutoff = defaults::kRenderCutoff; ///< stop marching below this transmittance
 };
 
 /// "P% of the pixels refined to M samples", or empty when adaptive sampling refined none.

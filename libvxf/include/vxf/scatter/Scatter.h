@@ -15,11 +15,11 @@ namespace vxf {
 
 struct ScatterOptions
 {
-    int passes = 16; ///< at most this many passes (0: none, `scatter` zero: single scattering alone)
+    int passes = defaults::kPasses; ///< at most this many passes (0: none, `scatter` zero: single scattering alone)
     /// Stop when the rest of the series, φ_K·r/(1−r) with r the last pass's energy ratio (per
     /// channel), is known to within this fraction of the sum so far, and add it (0: never).
     /// Near albedo 1 the passes settle into the slowest mode long before the rest is small.
-    double tolerance = 1e-3;
+    double tolerance = defaults::kTolerance;
     bool keepPasses = false; ///< keep each pass as `scatter_pass_K`
     int fromPass = 0; ///< continue from `scatter_pass_K` (0: from `scatter_source`)
     /// After the last pass, add the geometric tail of the series: φ_K·r/(1−r) with
@@ -32,7 +32,7 @@ struct ScatterOptions
     /// coarseFactor⁴ less.
     /// 0: every pass at full resolution.
     int finePasses = 0;
-    int coarseFactor = 4; ///< 2, 4 or 8
+    int coarseFactor = defaults::kCoarseFactor; ///< 2, 4 or 8
     /// After the coarse passes, the cycles that correct their bias (see scatter()).
     /// Off only to measure what it buys.
     bool coarseCorrection = true;

@@ -19,7 +19,7 @@ struct SweepSolveOptions
     /// Diffusion synthetic acceleration after each sweep. Off: plain source iteration, each
     /// sweep one more scattering order (slow near albedo 1).
     bool accelerate = true;
-    int directions = 64; ///< per sweep (ScatterPassOptions::directions)
+    int directions = defaults::kDirections; ///< per sweep (ScatterPassOptions::directions)
     std::uint64_t rotationSeed = 1; ///< one rotation of the direction set for the whole solve
     /// The diffusion correction's cells: blocks of 1, 2 or 4 voxels a side; 0: the largest whose
     /// mean optical thickness is at most 1 (coarse-mesh DSA, see DiffusionCorrection).

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <vxf/core/Interrupter.h>
+#include <vxf/core/StageDefaults.h>
 #include <vxf/core/TriangleMesh.h>
 #include <vxf/core/VoxelSet.h>
 
@@ -11,7 +12,7 @@ struct VoxelizeOptions
 {
     double voxelSize = 0.0; ///< world units per voxel; 0: derive from @c dim
     int dim = 0; ///< voxels along the longest side of the mesh bounds (if voxelSize is 0)
-    float bandWidth = 3.0f; ///< narrow band half width in voxels, each side of the surface (≥ 1)
+    float bandWidth = float(defaults::kBand); ///< narrow band half width in voxels, each side of the surface (≥ 1)
     /// Voxelize on this lattice (a linear transform, e.g. voxelLattice() of several meshes'
     /// bounds) instead of one derived from the mesh; voxelSize and dim are then ignored.
     openvdb::math::Transform::ConstPtr lattice;
