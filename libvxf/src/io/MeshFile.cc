@@ -244,34 +244,26 @@ const std::vector<std::string>& meshFileExtensions()
     return extensions;
 }
 
-TriangleMesh readMesh(const std::string& path, const MeshReadOptions& options, MeshReport* reportOut, Interrupter* interrupter)
-{
-    MeshReport report;
-    const std::string ext = lowerExtension(path);
-    const auto& known = meshFileExtensions();
-    if (std::find(known.begin(), known.end(), ext) == known.end()) {
-        throw Error(fmt::format("{}: unsupported mesh format '{}' (expected one of .obj .ply .off .stl)", path, ext));
-    }
-    requireRegularFile(path);
-    if (!std::ifstream(path).good()) throw Error(fmt::format("{}: cannot open mesh file", path));
+namespace {
 
-    StepTimer timer(report);
-    std::vector<Point> points;
-    std::vector<std::vector<std::size_t>> polygons;
-    {
-        InterruptStep step(interrupter, "reading mesh");
-        if (ext == ".ply") checkPlyHeader(path);
-        if (ext == ".off") checkOffCounts(path);
-        bool ok = false;
-        try {
-            ok = CGAL::IO::read_polygon_soup(path, points, polygons, CGAL::parameters::verbose(false));
-        } catch (const std::exception& e) {
-            throw Error(fmt::format("{}: cannot parse mesh: {}", path, e.what()));
-        }
-        if (!ok) throw Error(fmt::format("{}: cannot parse mesh (not a valid {} file)", path, ext));
+/// Read @a path's polygon soup (CGAL), its counts checked first where the format has them.
+void readPolygonSoup(
+    const std::string& path, const std::string& ext, std::vector<Point>& points, std::vector<std::vector<std::size_t>>& polygons)
+{
+    if (ext == ".ply") checkPlyHeader(path);
+    if (ext == ".off") checkOffCounts(path);
+    bool ok = false;
+    try {
+        ok = CGAL::IO::read_polygon_soup(path, points, polygons, CGAL::parameters::verbose(false));
+    } catch (const std::exception& e) {
+        throw Error(fmt::format("{}: cannot parse mesh: {}", path, e.what()));
     }
-    report.inputPoints = points.size();
-    report.inputPolygons = polygons.size();
+    if (!ok) throw Error(fmt::format("{}: cannot parse mesh (not a valid {} file)", path, ext));
+}
+
+/// Every vertex finite and within ±kMaxMeshCoordinate, every face's indices within the vertices.
+void checkSoup(const std::string& path, const std::vector<Point>& points, const std::vector<std::vector<std::size_t>>& polygons)
+{
     for (std::size_t i = 0; i < points.size(); ++i) {
         const auto& p = points[i];
         const bool finite = std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z());
@@ -288,10 +280,14 @@ TriangleMesh readMesh(const std::string& path, const MeshReadOptions& options, M
             }
         }
     }
-    checkInterrupt(interrupter);
-    timer.lap("read");
+}
 
-    // Polygons whose points all lie on one line have no area (exact predicate).
+/// Repair a soup that is not already clean (duplicate points merged, degenerate and duplicate
+/// polygons and unused points dropped), noting it in @a report; whether it is then an oriented
+/// manifold, its border edges in @a borderEdges.
+bool repairSoup(const std::string& path, std::vector<Point>& points, std::vector<std::vector<std::size_t>>& polygons, MeshReport& report,
+    std::size_t& borderEdges)
+{
     const auto degenerate = [&](const std::vector<std::size_t>& polygon) {
         for (std::size_t i = 2; i < polygon.size(); ++i) {
             if (!CGAL::collinear(points[polygon[0]], points[polygon[1]], points[polygon[i]])) return false;
@@ -300,35 +296,136 @@ TriangleMesh readMesh(const std::string& path, const MeshReadOptions& options, M
     };
     // A soup that is already clean — triangles with distinct corners and area, every point
     // used, an oriented closed manifold — needs no repair (the common case; saves a sort).
-    std::size_t soupBorderEdges = 0;
     bool manifold = false;
-    {
-        std::vector<bool> used(points.size(), false);
-        bool clean = true;
-        for (const auto& p : polygons) {
-            clean = clean && p.size() == 3 && p[0] != p[1] && p[1] != p[2] && p[0] != p[2];
-            if (!clean) break;
-            used[p[0]] = used[p[1]] = used[p[2]] = true;
-        }
-        clean = clean && std::all_of(used.begin(), used.end(), [](bool u) { return u; }) &&
-            std::none_of(polygons.begin(), polygons.end(), degenerate);
-        manifold = clean && isOrientedManifoldSoup(points.size(), polygons, soupBorderEdges);
-        if (!manifold || soupBorderEdges > 0) {
-            // Repair: merge duplicate points, drop degenerate and duplicate polygons and unused points.
-            PMP::repair_polygon_soup(points, polygons);
-            polygons.erase(std::remove_if(polygons.begin(), polygons.end(), degenerate), polygons.end());
-            report.mergedPoints = report.inputPoints - std::min(report.inputPoints, points.size());
-            report.removedPolygons = report.inputPolygons - std::min(report.inputPolygons, polygons.size());
-            if (polygons.empty()) {
-                throw Error(fmt::format("{}: the mesh has no usable faces ({} read, all degenerate)", path, report.inputPolygons));
-            }
-            if (report.removedPolygons > 0) {
-                report.warnings.push_back(
-                    fmt::format("removed {} degenerate or duplicate faces; voxelization ignores them", report.removedPolygons));
-            }
-            manifold = isOrientedManifoldSoup(points.size(), polygons, soupBorderEdges);
-        }
+    std::vector<bool> used(points.size(), false);
+    bool clean = true;
+    for (const auto& p : polygons) {
+        clean = clean && p.size() == 3 && p[0] != p[1] && p[1] != p[2] && p[0] != p[2];
+        if (!clean) break;
+        used[p[0]] = used[p[1]] = used[p[2]] = true;
     }
+    clean = clean && std::all_of(used.begin(), used.end(), [](bool u) { return u; }) &&
+        std::none_of(polygons.begin(), polygons.end(), degenerate);
+    manifold = clean && isOrientedManifoldSoup(points.size(), polygons, borderEdges);
+    if (!manifold || borderEdges > 0) {
+        // Repair: merge duplicate points, drop degenerate and duplicate polygons and unused points.
+        PMP::repair_polygon_soup(points, polygons);
+        polygons.erase(std::remove_if(polygons.begin(), polygons.end(), degenerate), polygons.end());
+        report.mergedPoints = report.inputPoints - std::min(report.inputPoints, points.size());
+        report.removedPolygons = report.inputPolygons - std::min(report.inputPolygons, polygons.size());
+        if (polygons.empty()) {
+            throw Error(fmt::format("{}: the mesh has no usable faces ({} read, all degenerate)", path, report.inputPolygons));
+        }
+        if (report.removedPolygons > 0) {
+            report.warnings.push_back(
+                fmt::format("removed {} degenerate or duplicate faces; voxelization ignores them", report.removedPolygons));
+        }
+        manifold = isOrientedManifoldSoup(points.size(), polygons, borderEdges);
+    }
+    return manifold;
+}
+
+/// Count the border edges and holes; fill the holes (options.fillHoles) or say they are left open.
+void closeHoles(Mesh& mesh, const MeshReadOptions& options, MeshReport& report, Interrupter* interrupter)
+{
+    for (auto h : mesh.halfedges()) {
+        if (mesh.is_border(h)) ++report.borderEdges;
+    }
+    if (report.borderEdges == 0) return;
+    std::vector<Mesh::Halfedge_index> loops;
+    PMP::extract_boundary_cycles(mesh, std::back_inserter(loops));
+    report.holes = loops.size();
+    if (options.fillHoles) {
+        InterruptStep step(interrupter, "filling holes");
+        for (auto h : loops) {
+            std::vector<Mesh::Face_index> patch;
+            PMP::triangulate_hole(mesh, h, std::back_inserter(patch));
+            if (!patch.empty()) ++report.holesFilled;
+            checkInterrupt(interrupter);
+        }
+        report.warnings.push_back(fmt::format("the mesh is open: {} holes ({} border edges); filled {} of them with flat "
+                                              "triangulations before voxelizing{}",
+            report.holes, report.borderEdges, report.holesFilled,
+            report.holesFilled < report.holes ? "; the interior may leak through the rest and is then left empty" : ""));
+    } else {
+        report.warnings.push_back(fmt::format("the mesh is open: {} holes ({} border edges), left open as asked; the interior "
+                                              "is what no path from outside reaches, so it leaks through holes wider than the band",
+            report.holes, report.borderEdges));
+    }
+}
+
+/// Turn a closed mesh's faces outward.
+void orientOutward(Mesh& mesh, MeshReport& report)
+{
+    // CGAL's orientation tests assume faces that are not flat around the extreme vertex; where
+    // they are (a self-intersecting or degenerate mesh) its checked builds stop on a failed
+    // assertion (found by fuzzing, tests/regress/fuzz/mesh). The orientation is then left as
+    // the file gives it: the voxelization decides inside by flood fill, not by orientation.
+    try {
+        if (!report.selfIntersecting && report.splitPoints == 0) {
+            PMP::orient_to_bound_a_volume(mesh);
+        } else if (!PMP::is_outward_oriented(mesh)) {
+            PMP::reverse_face_orientations(mesh);
+        }
+        report.outwardOriented = true;
+    } catch (const CGAL::Failure_exception&) {
+        report.warnings.push_back("the mesh's orientation could not be determined (flat faces around its extreme "
+                                  "vertex); its faces are left as the file orients them");
+    }
+}
+
+/// The mesh's points and triangles.
+TriangleMesh exportTriangles(const Mesh& mesh)
+{
+    TriangleMesh result;
+    result.points.reserve(mesh.number_of_vertices());
+    std::vector<openvdb::Index> remap(mesh.num_vertices(), 0);
+    for (auto v : mesh.vertices()) {
+        const Point& p = mesh.point(v);
+        remap[v.idx()] = openvdb::Index(result.points.size());
+        result.points.emplace_back(p.x(), p.y(), p.z());
+    }
+    result.triangles.reserve(mesh.number_of_faces());
+    for (auto f : mesh.faces()) {
+        openvdb::Vec3I tri;
+        int corner = 0;
+        for (auto v : CGAL::vertices_around_face(mesh.halfedge(f), mesh)) {
+            if (corner < 3) tri[corner] = remap[v.idx()];
+            ++corner;
+        }
+        if (corner == 3) result.triangles.push_back(tri);
+    }
+    return result;
+}
+
+} // namespace
+
+TriangleMesh readMesh(const std::string& path, const MeshReadOptions& options, MeshReport* reportOut, Interrupter* interrupter)
+{
+    MeshReport report;
+    const std::string ext = lowerExtension(path);
+    const auto& known = meshFileExtensions();
+    if (std::find(known.begin(), known.end(), ext) == known.end()) {
+        throw Error(fmt::format("{}: unsupported mesh format '{}' (expected one of .obj .ply .off .stl)", path, ext));
+    }
+    requireRegularFile(path);
+    if (!std::ifstream(path).good()) throw Error(fmt::format("{}: cannot open mesh file", path));
+
+    StepTimer timer(report);
+    std::vector<Point> points;
+    std::vector<std::vector<std::size_t>> polygons;
+    {
+        InterruptStep step(interrupter, "reading mesh");
+        readPolygonSoup(path, ext, points, polygons);
+    }
+    report.inputPoints = points.size();
+    report.inputPolygons = polygons.size();
+    checkSoup(path, points, polygons);
+    checkInterrupt(interrupter);
+    timer.lap("read");
+
+    std::size_t soupBorderEdges = 0;
+    const bool manifold = repairSoup(path, points, polygons, report, soupBorderEdges);
     timer.lap("check and repair");
 
     // Fast path, the common case: a closed, oriented, manifold triangle soup needs no
@@ -373,31 +470,7 @@ TriangleMesh readMesh(const std::string& path, const MeshReadOptions& options, M
     PMP::triangulate_faces(mesh);
     timer.lap("build and triangulate");
 
-    for (auto h : mesh.halfedges()) {
-        if (mesh.is_border(h)) ++report.borderEdges;
-    }
-    if (report.borderEdges > 0) {
-        std::vector<Mesh::Halfedge_index> loops;
-        PMP::extract_boundary_cycles(mesh, std::back_inserter(loops));
-        report.holes = loops.size();
-        if (options.fillHoles) {
-            InterruptStep step(interrupter, "filling holes");
-            for (auto h : loops) {
-                std::vector<Mesh::Face_index> patch;
-                PMP::triangulate_hole(mesh, h, std::back_inserter(patch));
-                if (!patch.empty()) ++report.holesFilled;
-                checkInterrupt(interrupter);
-            }
-            report.warnings.push_back(fmt::format("the mesh is open: {} holes ({} border edges); filled {} of them with flat "
-                                                  "triangulations before voxelizing{}",
-                report.holes, report.borderEdges, report.holesFilled,
-                report.holesFilled < report.holes ? "; the interior may leak through the rest and is then left empty" : ""));
-        } else {
-            report.warnings.push_back(fmt::format("the mesh is open: {} holes ({} border edges), left open as asked; the interior "
-                                                  "is what no path from outside reaches, so it leaks through holes wider than the band",
-                report.holes, report.borderEdges));
-        }
-    }
+    closeHoles(mesh, options, report, interrupter);
 
     timer.lap("holes");
 
@@ -408,42 +481,9 @@ TriangleMesh readMesh(const std::string& path, const MeshReadOptions& options, M
 
     timer.lap("self-intersections");
 
-    if (CGAL::is_closed(mesh)) {
-        // CGAL's orientation tests assume faces that are not flat around the extreme vertex; where
-        // they are (a self-intersecting or degenerate mesh) its checked builds stop on a failed
-        // assertion (found by fuzzing, tests/regress/fuzz/mesh). The orientation is then left as
-        // the file gives it: the voxelization decides inside by flood fill, not by orientation.
-        try {
-            if (!report.selfIntersecting && report.splitPoints == 0) {
-                PMP::orient_to_bound_a_volume(mesh);
-            } else if (!PMP::is_outward_oriented(mesh)) {
-                PMP::reverse_face_orientations(mesh);
-            }
-            report.outwardOriented = true;
-        } catch (const CGAL::Failure_exception&) {
-            report.warnings.push_back("the mesh's orientation could not be determined (flat faces around its extreme "
-                                      "vertex); its faces are left as the file orients them");
-        }
-    }
+    if (CGAL::is_closed(mesh)) orientOutward(mesh, report);
 
-    TriangleMesh result;
-    result.points.reserve(mesh.number_of_vertices());
-    std::vector<openvdb::Index> remap(mesh.num_vertices(), 0);
-    for (auto v : mesh.vertices()) {
-        const Point& p = mesh.point(v);
-        remap[v.idx()] = openvdb::Index(result.points.size());
-        result.points.emplace_back(p.x(), p.y(), p.z());
-    }
-    result.triangles.reserve(mesh.number_of_faces());
-    for (auto f : mesh.faces()) {
-        openvdb::Vec3I tri;
-        int corner = 0;
-        for (auto v : CGAL::vertices_around_face(mesh.halfedge(f), mesh)) {
-            if (corner < 3) tri[corner] = remap[v.idx()];
-            ++corner;
-        }
-        if (corner == 3) result.triangles.push_back(tri);
-    }
+    TriangleMesh result = exportTriangles(mesh);
     report.triangles = result.triangles.size();
     timer.lap("orient outward and export");
     if (reportOut) *reportOut = std::move(report);

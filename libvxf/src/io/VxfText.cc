@@ -198,22 +198,9 @@ struct ColumnWriter
     std::unique_ptr<openvdb::Vec3SGrid::Accessor> vecAcc;
 };
 
-} // namespace
-
-VoxelSet readVxfText(const std::string& path, Interrupter* interrupter)
+/// What a text VXF's header says, and on which lines.
+struct TextHeader
 {
-    InterruptStep step(interrupter, "reading text VXF");
-    requireRegularFile(path);
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw Error(fmt::format("{}: cannot open", path));
-    std::error_code ec;
-    const auto fileSize = std::filesystem::file_size(path, ec);
-
-    TextReader reader(path);
-    std::string line;
-    std::vector<Token> tokens;
-
-    // Header: keyword lines until the first voxel line.
     std::optional<openvdb::Vec3i> size;
     double voxelSize = 0.0;
     std::optional<openvdb::Vec3d> minCorner, maxCorner;
@@ -221,146 +208,145 @@ VoxelSet readVxfText(const std::string& path, Interrupter* interrupter)
     std::optional<std::uint64_t> declaredCount;
     std::vector<GridColumn> columns;
     bool sawVersion = false;
-    bool haveVoxelLine = false;
-    bool lastLineTerminated = true;
+};
 
-    const auto readLine = [&]() -> bool {
-        if (!std::getline(in, line)) return false;
-        ++reader.mLine;
-        lastLineTerminated = !in.eof();
-        return true;
-    };
-
-    while (readLine()) {
-        tokenize(line, tokens);
-        if (tokens.empty()) continue;
-        const std::string_view keyword = tokens[0].text;
-        const char first = keyword[0];
-        if (std::isdigit(static_cast<unsigned char>(first)) || first == '-' || first == '+') {
-            haveVoxelLine = true;
-            break;
-        }
-        const auto expectArgs = [&](std::size_t n, const char* form) {
-            if (tokens.size() != n + 1) {
-                reader.fail(tokens.size() > n + 1 ? tokens[n + 1].column : line.size() + 1,
-                    fmt::format("'{}' takes {} values: {}", keyword, n, form));
-            }
-        };
-        if (keyword == "vxf") {
-            if (sawVersion) reader.fail(tokens[0].column, "'vxf' given twice");
-            expectArgs(1, "vxf 1");
-            if (reader.parseInt<int>(tokens[1], "the format version") != 1) {
-                reader.fail(tokens[1].column, "unsupported text VXF version (this reader knows 1)");
-            }
-            sawVersion = true;
-        } else if (keyword == "size") {
-            if (size) reader.fail(tokens[0].column, fmt::format("'size' given twice (first on line {})", sizeLine));
-            expectArgs(4, "size W D H voxelsize");
-            openvdb::Vec3i s;
-            const char* axes[] = {"W (voxels along x)", "D (voxels along y)", "H (voxels along z)"};
-            for (int a = 0; a < 3; ++a) {
-                const auto v = reader.parseInt<std::int64_t>(tokens[1 + a], axes[a]);
-                if (v < 0 || v > (std::int64_t(1) << 30)) {
-                    reader.fail(tokens[1 + a].column, fmt::format("{} must be in [0, 2^30], found {}", axes[a], v));
-                }
-                s[a] = int(v);
-            }
-            voxelSize = reader.parseReal<double>(tokens[4], "voxelsize");
-            if (!(voxelSize > 0.0)) reader.fail(tokens[4].column, "voxelsize must be positive");
-            size = s;
-            sizeLine = reader.mLine;
-        } else if (keyword == "min" || keyword == "max") {
-            auto& corner = keyword == "min" ? minCorner : maxCorner;
-            auto& where = keyword == "min" ? minLine : maxLine;
-            if (corner) reader.fail(tokens[0].column, fmt::format("'{}' given twice (first on line {})", keyword, where));
-            expectArgs(3, keyword == "min" ? "min x y z" : "max x y z");
-            openvdb::Vec3d v;
-            for (int a = 0; a < 3; ++a) {
-                v[a] = reader.parseReal<double>(tokens[1 + a], fmt::format("{} {}", keyword, "xyz"[a]));
-            }
-            corner = v;
-            where = reader.mLine;
-        } else if (keyword == "count") {
-            if (declaredCount) reader.fail(tokens[0].column, "'count' given twice");
-            expectArgs(1, "count N");
-            declaredCount = reader.parseInt<std::uint64_t>(tokens[1], "count");
-            countLine = reader.mLine;
-        } else if (keyword == "grid") {
-            if (tokens.size() < 3) {
-                reader.fail(tokens.size() == 2 ? line.size() + 1 : tokens[0].column,
-                    "'grid' needs a name and a type: grid NAME bool|float|vec3 [class=level_set|fog_volume] [background=V]");
-            }
-            GridColumn column;
-            column.name = std::string(tokens[1].text);
-            bool nameOk = isNameStart(column.name[0]);
-            for (char c : column.name) nameOk = nameOk && isNameChar(c);
-            if (!nameOk) reader.fail(tokens[1].column, fmt::format("'{}' is not a valid grid name", column.name));
-            if (column.name == "active") reader.fail(tokens[1].column, "'active' is the flag column, not a grid name");
-            for (const auto& other : columns) {
-                if (other.name == column.name) reader.fail(tokens[1].column, fmt::format("grid '{}' declared twice", column.name));
-            }
-            const std::string_view type = tokens[2].text;
-            if (type == "bool")
-                column.type = ColumnType::Bool;
-            else if (type == "float")
-                column.type = ColumnType::Float;
-            else if (type == "vec3")
-                column.type = ColumnType::Vec3;
+/// A `grid NAME TYPE [class=…] [background=…]` header line, checked against the grids declared before.
+GridColumn parseGridLine(
+    const TextReader& reader, const std::vector<Token>& tokens, const std::string& line, const std::vector<GridColumn>& columns)
+{
+    if (tokens.size() < 3) {
+        reader.fail(tokens.size() == 2 ? line.size() + 1 : tokens[0].column,
+            "'grid' needs a name and a type: grid NAME bool|float|vec3 [class=level_set|fog_volume] [background=V]");
+    }
+    GridColumn column;
+    column.name = std::string(tokens[1].text);
+    bool nameOk = isNameStart(column.name[0]);
+    for (char c : column.name) nameOk = nameOk && isNameChar(c);
+    if (!nameOk) reader.fail(tokens[1].column, fmt::format("'{}' is not a valid grid name", column.name));
+    if (column.name == "active") reader.fail(tokens[1].column, "'active' is the flag column, not a grid name");
+    for (const auto& other : columns) {
+        if (other.name == column.name) reader.fail(tokens[1].column, fmt::format("grid '{}' declared twice", column.name));
+    }
+    const std::string_view type = tokens[2].text;
+    if (type == "bool")
+        column.type = ColumnType::Bool;
+    else if (type == "float")
+        column.type = ColumnType::Float;
+    else if (type == "vec3")
+        column.type = ColumnType::Vec3;
+    else
+        reader.fail(tokens[2].column, fmt::format("unknown grid type '{}' (expected bool, float or vec3)", type));
+    for (std::size_t t = 3; t < tokens.size(); ++t) {
+        const std::string_view option = tokens[t].text;
+        const auto eq = option.find('=');
+        const std::string_view key = option.substr(0, eq);
+        const std::string_view value = eq == std::string_view::npos ? std::string_view() : option.substr(eq + 1);
+        if (key == "class" && eq != std::string_view::npos) {
+            if (value == "level_set")
+                column.gridClass = openvdb::GRID_LEVEL_SET;
+            else if (value == "fog_volume")
+                column.gridClass = openvdb::GRID_FOG_VOLUME;
+            else if (value == "unknown")
+                column.gridClass = openvdb::GRID_UNKNOWN;
             else
-                reader.fail(tokens[2].column, fmt::format("unknown grid type '{}' (expected bool, float or vec3)", type));
-            for (std::size_t t = 3; t < tokens.size(); ++t) {
-                const std::string_view option = tokens[t].text;
-                const auto eq = option.find('=');
-                const std::string_view key = option.substr(0, eq);
-                const std::string_view value = eq == std::string_view::npos ? std::string_view() : option.substr(eq + 1);
-                if (key == "class" && eq != std::string_view::npos) {
-                    if (value == "level_set")
-                        column.gridClass = openvdb::GRID_LEVEL_SET;
-                    else if (value == "fog_volume")
-                        column.gridClass = openvdb::GRID_FOG_VOLUME;
-                    else if (value == "unknown")
-                        column.gridClass = openvdb::GRID_UNKNOWN;
-                    else
-                        reader.fail(tokens[t].column + 6,
-                            fmt::format("unknown grid class '{}' (expected level_set, fog_volume or unknown)", value));
-                    if (column.gridClass == openvdb::GRID_LEVEL_SET && column.type != ColumnType::Float) {
-                        reader.fail(tokens[t].column, "class=level_set needs a float grid");
-                    }
-                } else if (key == "background" && eq != std::string_view::npos) {
-                    std::vector<Token> parts;
-                    std::size_t start = 0;
-                    while (true) {
-                        const auto comma = value.find(',', start);
-                        parts.push_back({value.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start),
-                            tokens[t].column + 11 + start});
-                        if (comma == std::string_view::npos) break;
-                        start = comma + 1;
-                    }
-                    if (parts.size() != std::size_t(columnWidth(column.type))) {
-                        reader.fail(tokens[t].column,
-                            fmt::format("background of a {} grid takes {} value(s), found {}", columnTypeName(column.type),
-                                columnWidth(column.type), parts.size()));
-                    }
-                    for (std::size_t p = 0; p < parts.size(); ++p) {
-                        column.background[int(p)] = reader.parseReal<float>(parts[p], "background");
-                    }
-                    if (column.type != ColumnType::Vec3) column.background = openvdb::Vec3f(column.background[0]);
-                    if (column.type == ColumnType::Bool && column.background[0] != 0.0f && column.background[0] != 1.0f) {
-                        reader.fail(tokens[t].column, "background of a bool grid must be 0 or 1");
-                    }
-                } else {
-                    reader.fail(tokens[t].column, fmt::format("unknown grid option '{}' (expected class=… or background=…)", option));
-                }
+                reader.fail(
+                    tokens[t].column + 6, fmt::format("unknown grid class '{}' (expected level_set, fog_volume or unknown)", value));
+            if (column.gridClass == openvdb::GRID_LEVEL_SET && column.type != ColumnType::Float) {
+                reader.fail(tokens[t].column, "class=level_set needs a float grid");
             }
-            columns.push_back(column);
+        } else if (key == "background" && eq != std::string_view::npos) {
+            std::vector<Token> parts;
+            std::size_t start = 0;
+            while (true) {
+                const auto comma = value.find(',', start);
+                parts.push_back({value.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start),
+                    tokens[t].column + 11 + start});
+                if (comma == std::string_view::npos) break;
+                start = comma + 1;
+            }
+            if (parts.size() != std::size_t(columnWidth(column.type))) {
+                reader.fail(tokens[t].column,
+                    fmt::format("background of a {} grid takes {} value(s), found {}", columnTypeName(column.type),
+                        columnWidth(column.type), parts.size()));
+            }
+            for (std::size_t p = 0; p < parts.size(); ++p) {
+                column.background[int(p)] = reader.parseReal<float>(parts[p], "background");
+            }
+            if (column.type != ColumnType::Vec3) column.background = openvdb::Vec3f(column.background[0]);
+            if (column.type == ColumnType::Bool && column.background[0] != 0.0f && column.background[0] != 1.0f) {
+                reader.fail(tokens[t].column, "background of a bool grid must be 0 or 1");
+            }
         } else {
-            reader.fail(tokens[0].column,
-                fmt::format(
-                    "unknown header line '{}' (expected size, min, max, grid, count or vxf, or a voxel line 'i j k active …')", keyword));
+            reader.fail(tokens[t].column, fmt::format("unknown grid option '{}' (expected class=… or background=…)", option));
         }
     }
+    return column;
+}
 
-    // The header must be complete before the first voxel (or the end of the file).
+/// One header line (@a tokens of @a line; its keyword is not a voxel index) into @a header.
+void parseHeaderLine(TextHeader& header, const TextReader& reader, const std::vector<Token>& tokens, const std::string& line)
+{
+    const std::string_view keyword = tokens[0].text;
+    auto& [size, voxelSize, minCorner, maxCorner, sizeLine, minLine, maxLine, countLine, declaredCount, columns, sawVersion] = header;
+    const auto expectArgs = [&](std::size_t n, const char* form) {
+        if (tokens.size() != n + 1) {
+            reader.fail(
+                tokens.size() > n + 1 ? tokens[n + 1].column : line.size() + 1, fmt::format("'{}' takes {} values: {}", keyword, n, form));
+        }
+    };
+    if (keyword == "vxf") {
+        if (sawVersion) reader.fail(tokens[0].column, "'vxf' given twice");
+        expectArgs(1, "vxf 1");
+        if (reader.parseInt<int>(tokens[1], "the format version") != 1) {
+            reader.fail(tokens[1].column, "unsupported text VXF version (this reader knows 1)");
+        }
+        sawVersion = true;
+    } else if (keyword == "size") {
+        if (size) reader.fail(tokens[0].column, fmt::format("'size' given twice (first on line {})", sizeLine));
+        expectArgs(4, "size W D H voxelsize");
+        openvdb::Vec3i s;
+        const char* axes[] = {"W (voxels along x)", "D (voxels along y)", "H (voxels along z)"};
+        for (int a = 0; a < 3; ++a) {
+            const auto v = reader.parseInt<std::int64_t>(tokens[1 + a], axes[a]);
+            if (v < 0 || v > (std::int64_t(1) << 30)) {
+                reader.fail(tokens[1 + a].column, fmt::format("{} must be in [0, 2^30], found {}", axes[a], v));
+            }
+            s[a] = int(v);
+        }
+        voxelSize = reader.parseReal<double>(tokens[4], "voxelsize");
+        if (!(voxelSize > 0.0)) reader.fail(tokens[4].column, "voxelsize must be positive");
+        size = s;
+        sizeLine = reader.mLine;
+    } else if (keyword == "min" || keyword == "max") {
+        auto& corner = keyword == "min" ? minCorner : maxCorner;
+        auto& where = keyword == "min" ? minLine : maxLine;
+        if (corner) reader.fail(tokens[0].column, fmt::format("'{}' given twice (first on line {})", keyword, where));
+        expectArgs(3, keyword == "min" ? "min x y z" : "max x y z");
+        openvdb::Vec3d v;
+        for (int a = 0; a < 3; ++a) {
+            v[a] = reader.parseReal<double>(tokens[1 + a], fmt::format("{} {}", keyword, "xyz"[a]));
+        }
+        corner = v;
+        where = reader.mLine;
+    } else if (keyword == "count") {
+        if (declaredCount) reader.fail(tokens[0].column, "'count' given twice");
+        expectArgs(1, "count N");
+        declaredCount = reader.parseInt<std::uint64_t>(tokens[1], "count");
+        countLine = reader.mLine;
+    } else if (keyword == "grid") {
+        columns.push_back(parseGridLine(reader, tokens, line, columns));
+    } else {
+        reader.fail(tokens[0].column,
+            fmt::format(
+                "unknown header line '{}' (expected size, min, max, grid, count or vxf, or a voxel line 'i j k active …')", keyword));
+    }
+}
+
+/// The header must be complete before the first voxel (or the end of the file), and agree with itself.
+void checkHeader(TextHeader& header, const TextReader& reader, bool haveVoxelLine)
+{
+    auto& [size, voxelSize, minCorner, maxCorner, sizeLine, minLine, maxLine, countLine, declaredCount, columns, sawVersion] = header;
+    const std::string& path = reader.path();
     const auto requireHeader = [&](bool present, const char* form) {
         if (!present) {
             reader.fail(haveVoxelLine ? 1 : 0,
@@ -382,13 +368,15 @@ VoxelSet readVxfText(const std::string& path, Interrupter* interrupter)
         }
     }
     if (columns.empty()) columns.push_back(GridColumn{"color", ColumnType::Vec3, openvdb::GRID_UNKNOWN, openvdb::Vec3f(0.0f)});
+}
 
-    // Grids: text voxel (i,j,k) is VDB voxel origin + (i,j,k); its centre is min + voxelsize·(ijk + ½).
-    openvdb::Coord origin;
-    const auto xform = textTransform(*minCorner, voxelSize, origin);
+/// One writer per declared grid on @a xform; @a valuesPerLine and @a lineForm describe a voxel line.
+std::vector<ColumnWriter> columnWriters(
+    const std::vector<GridColumn>& columns, const openvdb::math::Transform::Ptr& xform, std::size_t& valuesPerLine, std::string& lineForm)
+{
     std::vector<ColumnWriter> writers(columns.size());
-    std::size_t valuesPerLine = 4;
-    std::string lineForm = "i j k active";
+    valuesPerLine = 4;
+    lineForm = "i j k active";
     for (std::size_t c = 0; c < columns.size(); ++c) {
         ColumnWriter& w = writers[c];
         w.column = columns[c];
@@ -415,6 +403,155 @@ VoxelSet readVxfText(const std::string& path, Interrupter* interrupter)
         }
         }
     }
+    return writers;
+}
+
+/// The line before line @a here of @a path that first gave voxel @a ijk (an error's path: the file is read again).
+std::size_t firstLineOfVoxel(const std::string& path, std::size_t here, const openvdb::Coord& ijk)
+{
+    // Find the first occurrence (error path only: rescan the file).
+    std::ifstream again(path, std::ios::binary);
+    std::string earlier;
+    std::vector<Token> t;
+    std::size_t lineNo = 0, firstLine = 0;
+    while (std::getline(again, earlier) && ++lineNo < here) {
+        tokenize(earlier, t);
+        if (t.size() >= 3 && (std::isdigit(static_cast<unsigned char>(t[0].text[0])) || t[0].text[0] == '+')) {
+            int v[3];
+            bool ok = true;
+            for (int a = 0; a < 3; ++a) {
+                std::string_view s = t[std::size_t(a)].text;
+                if (!s.empty() && s[0] == '+') s.remove_prefix(1);
+                ok = ok && std::from_chars(s.data(), s.data() + s.size(), v[a]).ec == std::errc();
+            }
+            if (ok && openvdb::Coord(v[0], v[1], v[2]) == ijk) {
+                firstLine = lineNo;
+                break;
+            }
+        }
+    }
+    return firstLine;
+}
+
+/// Set voxel @a at of every grid from a voxel line's value columns (after `i j k active`).
+void setVoxel(
+    std::vector<ColumnWriter>& writers, const TextReader& reader, const std::vector<Token>& tokens, const openvdb::Coord& at, bool active)
+{
+    std::size_t t = 4;
+    for (ColumnWriter& w : writers) {
+        switch (w.column.type) {
+        case ColumnType::Bool: {
+            const std::string_view b = tokens[t].text;
+            if (b != "0" && b != "1")
+                reader.fail(tokens[t].column, fmt::format("expected 0 or 1 for bool grid '{}', found '{}'", w.column.name, b));
+            if (active)
+                w.boolAcc->setValueOn(at, b == "1");
+            else
+                w.boolAcc->setValueOff(at, b == "1");
+            break;
+        }
+        case ColumnType::Float: {
+            const float v = reader.parseReal<float>(tokens[t], fmt::format("grid '{}'", w.column.name));
+            if (active)
+                w.floatAcc->setValueOn(at, v);
+            else
+                w.floatAcc->setValueOff(at, v);
+            break;
+        }
+        case ColumnType::Vec3: {
+            openvdb::Vec3f v;
+            for (int a = 0; a < 3; ++a) {
+                v[a] = reader.parseReal<float>(tokens[t + std::size_t(a)], fmt::format("grid '{}' {}", w.column.name, "rgb"[a]));
+            }
+            if (active)
+                w.vecAcc->setValueOn(at, v);
+            else
+                w.vecAcc->setValueOff(at, v);
+            break;
+        }
+        }
+        t += std::size_t(columnWidth(w.column.type));
+    }
+}
+
+/// Keep memory near the final grids': collapse the leaves completed so far (files in tree
+/// order, as vdb2vxf writes them, complete leaves one after another).
+void collapseCompleted(
+    std::vector<ColumnWriter>& writers, openvdb::MaskTree& seen, openvdb::tree::ValueAccessor<openvdb::MaskTree>& seenAcc)
+{
+    for (ColumnWriter& w : writers) {
+        if (w.boolAcc) w.boolAcc->clear();
+        if (w.floatAcc) w.floatAcc->clear();
+        if (w.vecAcc) w.vecAcc->clear();
+        w.grid->pruneGrid(0.0f);
+    }
+    seenAcc.clear();
+    seen.prune();
+}
+
+/// The grids read, pruned (level sets flood-filled), in a set on @a xform.
+VoxelSet collectGrids(std::vector<ColumnWriter>& writers, const openvdb::math::Transform::Ptr& xform)
+{
+    VoxelSet set(xform);
+    for (ColumnWriter& w : writers) {
+        w.boolAcc.reset();
+        w.floatAcc.reset();
+        w.vecAcc.reset();
+        if (w.column.gridClass == openvdb::GRID_LEVEL_SET) {
+            auto g = openvdb::gridPtrCast<openvdb::FloatGrid>(w.grid);
+            openvdb::tools::signedFloodFill(g->tree());
+        }
+        w.grid->pruneGrid(0.0f);
+        set.put(w.grid);
+    }
+    return set;
+}
+
+} // namespace
+
+VoxelSet readVxfText(const std::string& path, Interrupter* interrupter)
+{
+    InterruptStep step(interrupter, "reading text VXF");
+    requireRegularFile(path);
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw Error(fmt::format("{}: cannot open", path));
+    std::error_code ec;
+    const auto fileSize = std::filesystem::file_size(path, ec);
+
+    TextReader reader(path);
+    std::string line;
+    std::vector<Token> tokens;
+    TextHeader header;
+    bool haveVoxelLine = false;
+    bool lastLineTerminated = true;
+
+    const auto readLine = [&]() -> bool {
+        if (!std::getline(in, line)) return false;
+        ++reader.mLine;
+        lastLineTerminated = !in.eof();
+        return true;
+    };
+
+    // Header: keyword lines until the first voxel line.
+    while (readLine()) {
+        tokenize(line, tokens);
+        if (tokens.empty()) continue;
+        const char first = tokens[0].text[0];
+        if (std::isdigit(static_cast<unsigned char>(first)) || first == '-' || first == '+') {
+            haveVoxelLine = true;
+            break;
+        }
+        parseHeaderLine(header, reader, tokens, line);
+    }
+    checkHeader(header, reader, haveVoxelLine);
+    const openvdb::Vec3i size = *header.size;
+
+    // Grids: text voxel (i,j,k) is VDB voxel origin + (i,j,k); its centre is min + voxelsize·(ijk + ½).
+    openvdb::Coord origin;
+    const auto xform = textTransform(*header.minCorner, header.voxelSize, origin);
+    std::size_t valuesPerLine = 4;
+    std::string lineForm;
+    std::vector<ColumnWriter> writers = columnWriters(header.columns, xform, valuesPerLine, lineForm);
 
     openvdb::MaskTree seen;
     openvdb::tree::ValueAccessor<openvdb::MaskTree> seenAcc(seen);
@@ -429,10 +566,10 @@ VoxelSet readVxfText(const std::string& path, Interrupter* interrupter)
         openvdb::Coord ijk;
         for (int a = 0; a < 3; ++a) {
             const auto v = reader.parseInt<std::int64_t>(tokens[std::size_t(a)], fmt::format("voxel index {}", axisNames[a]).c_str());
-            if (v < 0 || v >= (*size)[a]) {
+            if (v < 0 || v >= size[a]) {
                 reader.fail(tokens[std::size_t(a)].column,
-                    fmt::format("voxel index {} = {} is outside [0, {}) given by {} on line {}", axisNames[a], v, (*size)[a], axisSizes[a],
-                        sizeLine));
+                    fmt::format("voxel index {} = {} is outside [0, {}) given by {} on line {}", axisNames[a], v, size[a], axisSizes[a],
+                        header.sizeLine));
             }
             ijk[a] = openvdb::Int32(v);
         }
@@ -442,84 +579,19 @@ VoxelSet readVxfText(const std::string& path, Interrupter* interrupter)
         }
         const bool active = activeText == "1";
         if (seenAcc.isValueOn(ijk)) {
-            const std::size_t here = reader.mLine;
-            // Find the first occurrence (error path only: rescan the file).
-            std::ifstream again(path, std::ios::binary);
-            std::string earlier;
-            std::vector<Token> t;
-            std::size_t lineNo = 0, firstLine = 0;
-            while (std::getline(again, earlier) && ++lineNo < here) {
-                tokenize(earlier, t);
-                if (t.size() >= 3 && (std::isdigit(static_cast<unsigned char>(t[0].text[0])) || t[0].text[0] == '+')) {
-                    int v[3];
-                    bool ok = true;
-                    for (int a = 0; a < 3; ++a) {
-                        std::string_view s = t[std::size_t(a)].text;
-                        if (!s.empty() && s[0] == '+') s.remove_prefix(1);
-                        ok = ok && std::from_chars(s.data(), s.data() + s.size(), v[a]).ec == std::errc();
-                    }
-                    if (ok && openvdb::Coord(v[0], v[1], v[2]) == ijk) {
-                        firstLine = lineNo;
-                        break;
-                    }
-                }
-            }
-            reader.fail(1, fmt::format("duplicate voxel ({}, {}, {}), first given on line {}", ijk[0], ijk[1], ijk[2], firstLine));
+            reader.fail(1,
+                fmt::format("duplicate voxel ({}, {}, {}), first given on line {}", ijk[0], ijk[1], ijk[2],
+                    firstLineOfVoxel(path, reader.mLine, ijk)));
         }
         seenAcc.setValueOn(ijk);
         const openvdb::Coord at = ijk + origin; // in the .vdb
 
-        std::size_t t = 4;
-        for (ColumnWriter& w : writers) {
-            switch (w.column.type) {
-            case ColumnType::Bool: {
-                const std::string_view b = tokens[t].text;
-                if (b != "0" && b != "1")
-                    reader.fail(tokens[t].column, fmt::format("expected 0 or 1 for bool grid '{}', found '{}'", w.column.name, b));
-                if (active)
-                    w.boolAcc->setValueOn(at, b == "1");
-                else
-                    w.boolAcc->setValueOff(at, b == "1");
-                break;
-            }
-            case ColumnType::Float: {
-                const float v = reader.parseReal<float>(tokens[t], fmt::format("grid '{}'", w.column.name));
-                if (active)
-                    w.floatAcc->setValueOn(at, v);
-                else
-                    w.floatAcc->setValueOff(at, v);
-                break;
-            }
-            case ColumnType::Vec3: {
-                openvdb::Vec3f v;
-                for (int a = 0; a < 3; ++a) {
-                    v[a] = reader.parseReal<float>(tokens[t + std::size_t(a)], fmt::format("grid '{}' {}", w.column.name, "rgb"[a]));
-                }
-                if (active)
-                    w.vecAcc->setValueOn(at, v);
-                else
-                    w.vecAcc->setValueOff(at, v);
-                break;
-            }
-            }
-            t += std::size_t(columnWidth(w.column.type));
-        }
+        setVoxel(writers, reader, tokens, at, active);
         ++voxelCount;
         if ((voxelCount & 0xFFFF) == 0 && fileSize > 0) {
             checkInterrupt(interrupter, int(100.0 * double(in.tellg()) / double(fileSize)));
         }
-        if ((voxelCount & 0xFFFFF) == 0) {
-            // Keep memory near the final grids': collapse the leaves completed so far (files in
-            // tree order, as vdb2vxf writes them, complete leaves one after another).
-            for (ColumnWriter& w : writers) {
-                if (w.boolAcc) w.boolAcc->clear();
-                if (w.floatAcc) w.floatAcc->clear();
-                if (w.vecAcc) w.vecAcc->clear();
-                w.grid->pruneGrid(0.0f);
-            }
-            seenAcc.clear();
-            seen.prune();
-        }
+        if ((voxelCount & 0xFFFFF) == 0) collapseCompleted(writers, seen, seenAcc);
 
         // Next voxel line, skipping blank and comment lines.
         haveVoxelLine = false;
@@ -541,27 +613,15 @@ VoxelSet readVxfText(const std::string& path, Interrupter* interrupter)
         }
     }
     if (in.bad()) throw Error(fmt::format("{}: read error", path));
-    if (declaredCount && *declaredCount != voxelCount) {
+    if (header.declaredCount && *header.declaredCount != voxelCount) {
         reader.fail(0,
-            fmt::format("'count' on line {} promises {} voxels but the file has {}{}", countLine, *declaredCount, voxelCount,
-                voxelCount < *declaredCount ? ": the file looks truncated" : ""));
+            fmt::format("'count' on line {} promises {} voxels but the file has {}{}", header.countLine, *header.declaredCount, voxelCount,
+                voxelCount < *header.declaredCount ? ": the file looks truncated" : ""));
     }
-
-    VoxelSet set(xform);
-    for (ColumnWriter& w : writers) {
-        w.boolAcc.reset();
-        w.floatAcc.reset();
-        w.vecAcc.reset();
-        if (w.column.gridClass == openvdb::GRID_LEVEL_SET) {
-            auto g = openvdb::gridPtrCast<openvdb::FloatGrid>(w.grid);
-            openvdb::tools::signedFloodFill(g->tree());
-        }
-        w.grid->pruneGrid(0.0f);
-        set.put(w.grid);
-    }
-    set.metadata().insertMeta(kTextSizeMetaKey, openvdb::Vec3IMetadata(*size));
-    set.metadata().insertMeta(kTextMinMetaKey, openvdb::Vec3DMetadata(*minCorner));
-    set.metadata().insertMeta(kTextMaxMetaKey, openvdb::Vec3DMetadata(*maxCorner));
+    VoxelSet set = collectGrids(writers, xform);
+    set.metadata().insertMeta(kTextSizeMetaKey, openvdb::Vec3IMetadata(size));
+    set.metadata().insertMeta(kTextMinMetaKey, openvdb::Vec3DMetadata(*header.minCorner));
+    set.metadata().insertMeta(kTextMaxMetaKey, openvdb::Vec3DMetadata(*header.maxCorner));
     return set;
 }
 
@@ -657,14 +717,12 @@ void requireFinite(const T& value, const std::string& grid, const openvdb::Coord
 
 } // namespace
 
-std::vector<std::string> writeVxfText(
-    const std::string& path, const VoxelSet& set, const VxfWriteOptions& options, Interrupter* interrupter)
-{
-    InterruptStep step(interrupter, "writing text VXF");
-    std::vector<std::string> warnings;
+namespace {
 
-    // Choose the grids.
-    std::vector<ColumnReader> readers;
+/// The grids to write: @a options.grids, or every grid a text column can hold (the others
+/// named in @a warnings); their names must be column names.
+std::vector<openvdb::GridBase::Ptr> chooseGrids(const VoxelSet& set, const VxfWriteOptions& options, std::vector<std::string>& warnings)
+{
     const auto supported = [](const openvdb::GridBase& g) {
         return g.isType<openvdb::FloatGrid>() || g.isType<openvdb::Vec3SGrid>() || g.isType<openvdb::BoolGrid>();
     };
@@ -701,6 +759,158 @@ std::vector<std::string> writeVxfText(
             throw Error(fmt::format("grid name '{}' cannot be a text column name (rename it)", g->getName()));
         }
     }
+    return chosen;
+}
+
+/// The text header's extent: voxel (0, 0, 0)'s index, the size and the corners.
+struct TextExtent
+{
+    openvdb::Coord origin;
+    openvdb::Vec3i size;
+    openvdb::Vec3d minCorner, maxCorner;
+};
+
+/// The extent of @a bbox (the written voxels' bounds, @a count of them) on @a xform, or the text
+/// header @a set came from when it still describes it.
+TextExtent textExtent(
+    const VoxelSet& set, const openvdb::math::Transform& xform, double voxelSize, const openvdb::CoordBBox& bbox, openvdb::Index64 count)
+{
+    TextExtent e;
+    e.origin = bbox.min();
+    e.size = openvdb::Vec3i(bbox.dim().x(), bbox.dim().y(), bbox.dim().z());
+    e.minCorner = xform.indexToWorld(openvdb::Vec3d(e.origin.asVec3d()) - openvdb::Vec3d(0.5));
+    e.maxCorner = e.minCorner + openvdb::Vec3d(e.size) * voxelSize;
+    const auto& meta = set.metadata();
+    auto textSize = meta.getMetadata<openvdb::Vec3IMetadata>(kTextSizeMetaKey);
+    auto textMin = meta.getMetadata<openvdb::Vec3DMetadata>(kTextMinMetaKey);
+    auto textMax = meta.getMetadata<openvdb::Vec3DMetadata>(kTextMaxMetaKey);
+    if (textSize && textMin && textMax) {
+        openvdb::Coord textOrigin;
+        const auto textXform = textTransform(textMin->value(), voxelSize, textOrigin);
+        const openvdb::CoordBBox textBox(textOrigin, textOrigin + openvdb::Coord(textSize->value()) - openvdb::Coord(1));
+        if (*textXform == xform && (count == 0 || textBox.isInside(bbox))) {
+            e.origin = textOrigin;
+            e.size = textSize->value();
+            e.minCorner = textMin->value();
+            e.maxCorner = textMax->value();
+        }
+    }
+    return e;
+}
+
+/// One reader per grid, with its text column.
+std::vector<ColumnReader> columnReaders(const std::vector<openvdb::GridBase::Ptr>& chosen)
+{
+    std::vector<ColumnReader> readers;
+    for (const auto& g : chosen) {
+        ColumnReader r;
+        r.grid = g;
+        r.column.name = g->getName();
+        r.column.gridClass = g->getGridClass();
+        if (auto f = openvdb::gridConstPtrCast<openvdb::FloatGrid>(g)) {
+            r.column.type = ColumnType::Float;
+            r.column.background = openvdb::Vec3f(f->background());
+            r.floatAcc = std::make_unique<openvdb::FloatGrid::ConstAccessor>(f->getConstAccessor());
+        } else if (auto v = openvdb::gridConstPtrCast<openvdb::Vec3SGrid>(g)) {
+            r.column.type = ColumnType::Vec3;
+            r.column.background = v->background();
+            r.vecAcc = std::make_unique<openvdb::Vec3SGrid::ConstAccessor>(v->getConstAccessor());
+        } else if (auto b = openvdb::gridConstPtrCast<openvdb::BoolGrid>(g)) {
+            r.column.type = ColumnType::Bool;
+            r.column.background = openvdb::Vec3f(b->background() ? 1.0f : 0.0f);
+            r.boolAcc = std::make_unique<openvdb::BoolGrid::ConstAccessor>(b->getConstAccessor());
+        }
+        if (r.column.type != ColumnType::Float && r.column.gridClass == openvdb::GRID_LEVEL_SET) {
+            r.column.gridClass = openvdb::GRID_UNKNOWN;
+        }
+        readers.push_back(std::move(r));
+    }
+    return readers;
+}
+
+/// The header lines: vxf, size, min, max, a grid line per column and count.
+void writeHeader(
+    TextSink& out, const TextExtent& extent, double voxelSize, const std::vector<ColumnReader>& readers, openvdb::Index64 count)
+{
+    out.text(fmt::format("# text VXF voxel file written by vxf {} (spec: schemas/vxf-text.md)\nvxf 1\n", versionString()));
+    out.text("size ");
+    for (int a = 0; a < 3; ++a) {
+        out.number(extent.size[a]);
+        out.put(' ');
+    }
+    out.number(voxelSize);
+    for (int c = 0; c < 2; ++c) {
+        const openvdb::Vec3d& corner = c == 0 ? extent.minCorner : extent.maxCorner;
+        out.text(c == 0 ? "\nmin" : "\nmax");
+        for (int a = 0; a < 3; ++a) {
+            out.put(' ');
+            out.number(corner[a]);
+        }
+    }
+    out.put('\n');
+    for (const ColumnReader& r : readers) {
+        out.text(fmt::format("grid {} {}", r.column.name, columnTypeName(r.column.type)));
+        if (r.column.gridClass == openvdb::GRID_LEVEL_SET) out.text(" class=level_set");
+        if (r.column.gridClass == openvdb::GRID_FOG_VOLUME) out.text(" class=fog_volume");
+        if (r.column.background != openvdb::Vec3f(0.0f)) {
+            out.text(" background=");
+            for (int a = 0; a < columnWidth(r.column.type); ++a) {
+                if (a) out.put(',');
+                out.number(r.column.background[a]);
+            }
+        }
+        out.put('\n');
+    }
+    out.text("count ");
+    out.number(count);
+    out.put('\n');
+}
+
+/// The voxel line of @a ijk: its index from @a origin, the active flag, the columns' values.
+void writeVoxelLine(TextSink& out, const std::vector<ColumnReader>& readers, const openvdb::Coord& ijk, const openvdb::Coord& origin)
+{
+    bool active = false;
+    for (const ColumnReader& r : readers) {
+        active = active || (r.floatAcc ? r.floatAcc->isValueOn(ijk) : r.vecAcc ? r.vecAcc->isValueOn(ijk) : r.boolAcc->isValueOn(ijk));
+    }
+    const openvdb::Coord index = ijk - origin;
+    out.number(index.x());
+    out.put(' ');
+    out.number(index.y());
+    out.put(' ');
+    out.number(index.z());
+    out.text(active ? " 1" : " 0");
+    for (const ColumnReader& r : readers) {
+        if (r.floatAcc) {
+            const float v = r.floatAcc->getValue(ijk);
+            requireFinite(v, r.column.name, ijk);
+            out.put(' ');
+            out.number(v);
+        } else if (r.vecAcc) {
+            const openvdb::Vec3f v = r.vecAcc->getValue(ijk);
+            requireFinite(v, r.column.name, ijk);
+            for (int a = 0; a < 3; ++a) {
+                out.put(' ');
+                out.number(v[a]);
+            }
+        } else {
+            out.text(r.boolAcc->getValue(ijk) ? " 1" : " 0");
+        }
+    }
+    out.put('\n');
+    out.flushIfFull();
+}
+
+} // namespace
+
+std::vector<std::string> writeVxfText(
+    const std::string& path, const VoxelSet& set, const VxfWriteOptions& options, Interrupter* interrupter)
+{
+    InterruptStep step(interrupter, "writing text VXF");
+    std::vector<std::string> warnings;
+
+    // Choose the grids.
+    const std::vector<openvdb::GridBase::Ptr> chosen = chooseGrids(set, options, warnings);
     const openvdb::math::Transform& xform = chosen.front()->transform();
     const auto map = xform.baseMap();
     const bool axisAligned = map->isType<openvdb::math::UniformScaleMap>() || map->isType<openvdb::math::UniformScaleTranslateMap>() ||
@@ -739,124 +949,17 @@ std::vector<std::string> writeVxfText(
     openvdb::CoordBBox bbox;
     mask.evalActiveVoxelBoundingBox(bbox);
     if (count == 0) bbox = openvdb::CoordBBox(openvdb::Coord(0), openvdb::Coord(-1));
-    openvdb::Coord origin = bbox.min();
-    openvdb::Vec3i size(bbox.dim().x(), bbox.dim().y(), bbox.dim().z());
-    openvdb::Vec3d minCorner = xform.indexToWorld(openvdb::Vec3d(origin.asVec3d()) - openvdb::Vec3d(0.5));
-    openvdb::Vec3d maxCorner = minCorner + openvdb::Vec3d(size) * voxelSize;
-    {
-        const auto& meta = set.metadata();
-        auto textSize = meta.getMetadata<openvdb::Vec3IMetadata>(kTextSizeMetaKey);
-        auto textMin = meta.getMetadata<openvdb::Vec3DMetadata>(kTextMinMetaKey);
-        auto textMax = meta.getMetadata<openvdb::Vec3DMetadata>(kTextMaxMetaKey);
-        if (textSize && textMin && textMax) {
-            openvdb::Coord textOrigin;
-            const auto textXform = textTransform(textMin->value(), voxelSize, textOrigin);
-            const openvdb::CoordBBox textBox(textOrigin, textOrigin + openvdb::Coord(textSize->value()) - openvdb::Coord(1));
-            if (*textXform == xform && (count == 0 || textBox.isInside(bbox))) {
-                origin = textOrigin;
-                size = textSize->value();
-                minCorner = textMin->value();
-                maxCorner = textMax->value();
-            }
-        }
-    }
-
-    for (const auto& g : chosen) {
-        ColumnReader r;
-        r.grid = g;
-        r.column.name = g->getName();
-        r.column.gridClass = g->getGridClass();
-        if (auto f = openvdb::gridConstPtrCast<openvdb::FloatGrid>(g)) {
-            r.column.type = ColumnType::Float;
-            r.column.background = openvdb::Vec3f(f->background());
-            r.floatAcc = std::make_unique<openvdb::FloatGrid::ConstAccessor>(f->getConstAccessor());
-        } else if (auto v = openvdb::gridConstPtrCast<openvdb::Vec3SGrid>(g)) {
-            r.column.type = ColumnType::Vec3;
-            r.column.background = v->background();
-            r.vecAcc = std::make_unique<openvdb::Vec3SGrid::ConstAccessor>(v->getConstAccessor());
-        } else if (auto b = openvdb::gridConstPtrCast<openvdb::BoolGrid>(g)) {
-            r.column.type = ColumnType::Bool;
-            r.column.background = openvdb::Vec3f(b->background() ? 1.0f : 0.0f);
-            r.boolAcc = std::make_unique<openvdb::BoolGrid::ConstAccessor>(b->getConstAccessor());
-        }
-        if (r.column.type != ColumnType::Float && r.column.gridClass == openvdb::GRID_LEVEL_SET) {
-            r.column.gridClass = openvdb::GRID_UNKNOWN;
-        }
-        readers.push_back(std::move(r));
-    }
+    const TextExtent extent = textExtent(set, xform, voxelSize, bbox, count);
+    const std::vector<ColumnReader> readers = columnReaders(chosen);
 
     writeAtomically(path, [&](const std::string& tmpPath) {
         TextSink out(tmpPath, path);
-        out.text(fmt::format("# text VXF voxel file written by vxf {} (spec: schemas/vxf-text.md)\nvxf 1\n", versionString()));
-        out.text("size ");
-        for (int a = 0; a < 3; ++a) {
-            out.number(size[a]);
-            out.put(' ');
-        }
-        out.number(voxelSize);
-        for (int c = 0; c < 2; ++c) {
-            const openvdb::Vec3d& corner = c == 0 ? minCorner : maxCorner;
-            out.text(c == 0 ? "\nmin" : "\nmax");
-            for (int a = 0; a < 3; ++a) {
-                out.put(' ');
-                out.number(corner[a]);
-            }
-        }
-        out.put('\n');
-        for (const ColumnReader& r : readers) {
-            out.text(fmt::format("grid {} {}", r.column.name, columnTypeName(r.column.type)));
-            if (r.column.gridClass == openvdb::GRID_LEVEL_SET) out.text(" class=level_set");
-            if (r.column.gridClass == openvdb::GRID_FOG_VOLUME) out.text(" class=fog_volume");
-            if (r.column.background != openvdb::Vec3f(0.0f)) {
-                out.text(" background=");
-                for (int a = 0; a < columnWidth(r.column.type); ++a) {
-                    if (a) out.put(',');
-                    out.number(r.column.background[a]);
-                }
-            }
-            out.put('\n');
-        }
-        out.text("count ");
-        out.number(count);
-        out.put('\n');
+        writeHeader(out, extent, voxelSize, readers, count);
 
         std::uint64_t written = 0;
         for (auto leaf = mask.cbeginLeaf(); leaf; ++leaf) {
             for (auto it = leaf->cbeginValueOn(); it; ++it) {
-                const openvdb::Coord ijk = it.getCoord();
-                bool active = false;
-                for (const ColumnReader& r : readers) {
-                    active = active ||
-                        (r.floatAcc        ? r.floatAcc->isValueOn(ijk)
-                                : r.vecAcc ? r.vecAcc->isValueOn(ijk)
-                                           : r.boolAcc->isValueOn(ijk));
-                }
-                const openvdb::Coord index = ijk - origin;
-                out.number(index.x());
-                out.put(' ');
-                out.number(index.y());
-                out.put(' ');
-                out.number(index.z());
-                out.text(active ? " 1" : " 0");
-                for (const ColumnReader& r : readers) {
-                    if (r.floatAcc) {
-                        const float v = r.floatAcc->getValue(ijk);
-                        requireFinite(v, r.column.name, ijk);
-                        out.put(' ');
-                        out.number(v);
-                    } else if (r.vecAcc) {
-                        const openvdb::Vec3f v = r.vecAcc->getValue(ijk);
-                        requireFinite(v, r.column.name, ijk);
-                        for (int a = 0; a < 3; ++a) {
-                            out.put(' ');
-                            out.number(v[a]);
-                        }
-                    } else {
-                        out.text(r.boolAcc->getValue(ijk) ? " 1" : " 0");
-                    }
-                }
-                out.put('\n');
-                out.flushIfFull();
+                writeVoxelLine(out, readers, it.getCoord(), extent.origin);
             }
             written += leaf->onVoxelCount();
             if (count > 0 && (written & 0xFFFF) < 512) checkInterrupt(interrupter, int(100.0 * double(written) / double(count)));

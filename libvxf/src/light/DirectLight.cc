@@ -419,30 +419,26 @@ std::vector<openvdb::Vec3f> sweepPointLight(const LightSampler& light, const det
     return phi;
 }
 
-} // namespace
-
-DirectLightReport computeDirectLight(
-    VoxelSet& set, const Medium& medium, const std::vector<Light>& lights, const DirectLightOptions& options, Interrupter* interrupter)
+/// A warning in @a report when the medium's density has no positive value: a volume object
+/// reading the wrong grid, or a grid its writer left empty, renders black.
+void warnIfNoDensity(const Medium& medium, DirectLightReport& report)
 {
-    InterruptStep step(interrupter, "lighting");
-    requireMemory("light", stageMemory(kStageFixedBytes, double(medium.density().activeVoxelCount()), kLightBytesPerVoxel));
-    DirectLightReport report;
-    {
-        // A medium of zero (or negative) density absorbs, scatters and glows nothing: a volume
-        // object reading the wrong grid, or a grid its writer left empty, renders black.
-        const auto& density = medium.density();
-        const ValueRange range = valueRange(density);
-        const double highest = range.channels > 0 ? range.max[0] : 0.0;
-        if (!(highest > 0.0)) {
-            report.warnings.push_back(fmt::format("the medium's density ('{}', {} active voxels) has no positive value{}: nothing "
-                                                  "absorbs, scatters or glows, and the image shows surfaces only",
-                density.getName(), density.activeVoxelCount(),
-                density.activeVoxelCount() > 0 ? fmt::format(" (largest {:.4g})", highest) : std::string()));
-        }
+    const auto& density = medium.density();
+    const ValueRange range = valueRange(density);
+    const double highest = range.channels > 0 ? range.max[0] : 0.0;
+    if (!(highest > 0.0)) {
+        report.warnings.push_back(fmt::format("the medium's density ('{}', {} active voxels) has no positive value{}: nothing "
+                                              "absorbs, scatters or glows, and the image shows surfaces only",
+            density.getName(), density.activeVoxelCount(),
+            density.activeVoxelCount() > 0 ? fmt::format(" (largest {:.4g})", highest) : std::string()));
     }
-    std::vector<LightSampler> active;
-    std::vector<int> activeIndex; // per report entry: its index in `active`, or -1
-    std::vector<VolumeEmission> emission; // volume lights
+}
+
+/// The lights that shine (@a active), the volume lights (@a emission), and a report entry per
+/// light; @a activeIndex per entry: its index in @a active, or -1.
+void sortLights(const std::vector<Light>& lights, DirectLightReport& report, std::vector<LightSampler>& active,
+    std::vector<int>& activeIndex, std::vector<VolumeEmission>& emission)
+{
     for (const Light& light : lights) {
         DirectLightReport::PerLight entry;
         entry.name = light.name;
@@ -461,26 +457,90 @@ DirectLightReport computeDirectLight(
         activeIndex.push_back(-1);
         report.lights.push_back(entry);
     }
+}
+
+/// A grid of the light stage on the density's topology, one voxel beyond it (26-neighbourhood):
+/// trilinear lookups of φ near the surface then blend real values, not the background 0 (which
+/// would dim the outermost half voxel).
+openvdb::Vec3SGrid::Ptr stageGrid(const openvdb::FloatGrid& density, const char* name, bool coarseTiles)
+{
+    auto grid = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
+    grid->setTransform(density.transformPtr()->copy());
+    grid->tree().topologyUnion(density.tree());
+    grid->setName(name);
+    if (!coarseTiles) grid->tree().voxelizeActiveTiles();
+    openvdb::tools::dilateActiveValues(
+        grid->tree(), 1, openvdb::tools::NN_FACE_EDGE_VERTEX, coarseTiles ? openvdb::tools::PRESERVE_TILES : openvdb::tools::IGNORE_TILES);
+    return grid;
+}
+
+/// The light stage at one point: φ0 from every light (swept where a sweep holds the voxel,
+/// marched otherwise), J0 and the source's mean direction of travel.
+struct PointLighting
+{
+    const Medium& medium;
+    const DirectLightOptions& options;
+    const std::vector<LightSampler>& active;
+    const std::optional<detail::SweepLattice>& lattice;
+    const std::vector<std::vector<openvdb::Vec3f>>& swept;
+    const std::vector<std::vector<openvdb::Vec3f>>& sweptFlux;
+    const bool anisotropic;
+
+    /// At voxel @a ijk (index point @a pointIjk), adding each light's fluence × @a weight to @a sums.
+    void operator()(Medium::Sampler& sampler, std::vector<VolumeEmission::Sampler>& emitters, const openvdb::Coord& ijk,
+        const openvdb::Vec3d& pointIjk, std::vector<openvdb::Vec3d>& sums, openvdb::Vec3f& outDirect, openvdb::Vec3f& outSource,
+        openvdb::Vec3f& outAnisotropy, double weight) const
+    {
+        openvdb::Vec3d phi(0.0), flux(0.0);
+        // Swept lights from their sweep; the others marched (lightFluence).
+        const std::int64_t index = lattice ? lattice->indexOf(ijk) : -1;
+        for (std::size_t l = 0; l < active.size(); ++l) {
+            const bool marched = index < 0 || swept[l].empty();
+            const openvdb::Vec3d f = marched
+                ? lightFluence(active[l], sampler, medium, ijk, options.march, options.occluders, anisotropic ? &flux : nullptr)
+                : openvdb::Vec3d(swept[l][std::size_t(index)]);
+            if (anisotropic && !marched) flux += openvdb::Vec3d(sweptFlux[l][std::size_t(index)]);
+            phi += f;
+            sums[l] += f * weight;
+        }
+        // J0 = σs φ0 / 4π (+ emission of volume lights, radiance per unit length).
+        const openvdb::Vec3d scattered = sampler.sigmaS(pointIjk) * phi / (4.0 * M_PI);
+        openvdb::Vec3d j = scattered;
+        const openvdb::Vec3d world = medium.transform().indexToWorld(pointIjk);
+        for (VolumeEmission::Sampler& e : emitters) j += e.at(world);
+        for (int c = 0; c < 3; ++c) {
+            if (!std::isfinite(phi[c])) phi[c] = 0.0; // cannot happen by construction; never let NaN in
+            if (!std::isfinite(j[c])) j[c] = 0.0;
+        }
+        outDirect = openvdb::Vec3f(phi);
+        outSource = openvdb::Vec3f(j);
+        if (anisotropic) {
+            // The scattered light's first moment F·σs/4π, the emission's none: a = F/φ of the
+            // light scattered, in the share of J0 it makes (grey).
+            const double scatteredGrey = greyOf(scattered), phiGrey = greyOf(phi), jGrey = greyOf(j);
+            outAnisotropy = phiGrey > 0.0 && jGrey > 0.0 ? openvdb::Vec3f(clampedToUnit(flux / phiGrey) * (scatteredGrey / jGrey))
+                                                         : openvdb::Vec3f(0.0f);
+        }
+    }
+};
+
+} // namespace
+
+DirectLightReport computeDirectLight(
+    VoxelSet& set, const Medium& medium, const std::vector<Light>& lights, const DirectLightOptions& options, Interrupter* interrupter)
+{
+    InterruptStep step(interrupter, "lighting");
+    requireMemory("light", stageMemory(kStageFixedBytes, double(medium.density().activeVoxelCount()), kLightBytesPerVoxel));
+    DirectLightReport report;
+    warnIfNoDensity(medium, report);
+    std::vector<LightSampler> active;
+    std::vector<int> activeIndex; // per report entry: its index in `active`, or -1
+    std::vector<VolumeEmission> emission; // volume lights
+    sortLights(lights, report, active, activeIndex, emission);
 
     const openvdb::FloatGrid& density = medium.density();
-    auto direct = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
-    direct->setTransform(density.transformPtr()->copy());
-    direct->tree().topologyUnion(density.tree());
-    direct->setName(grids::kDirect);
-    auto source = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
-    source->setTransform(density.transformPtr()->copy());
-    source->tree().topologyUnion(density.tree());
-    source->setName(grids::kScatterSource);
-    if (!options.coarseTiles) {
-        direct->tree().voxelizeActiveTiles();
-        source->tree().voxelizeActiveTiles();
-    }
-    // One voxel beyond the medium (26-neighbourhood): trilinear lookups of φ near the surface
-    // then blend real values, not the background 0 (which would dim the outermost half voxel).
-    for (auto* grid : {direct.get(), source.get()}) {
-        openvdb::tools::dilateActiveValues(grid->tree(), 1, openvdb::tools::NN_FACE_EDGE_VERTEX,
-            options.coarseTiles ? openvdb::tools::PRESERVE_TILES : openvdb::tools::IGNORE_TILES);
-    }
+    auto direct = stageGrid(density, grids::kDirect, options.coarseTiles);
+    auto source = stageGrid(density, grids::kScatterSource, options.coarseTiles);
     // An anisotropic rest of the phase (Medium: delta-M's g*): the source's mean direction of travel.
     const bool anisotropic = medium.material().phaseG != 0.0;
     openvdb::Vec3SGrid::Ptr anisotropy;
@@ -529,40 +589,7 @@ DirectLightReport computeDirectLight(
         }
     }
 
-    const auto evaluate = [&](Medium::Sampler& sampler, std::vector<VolumeEmission::Sampler>& emitters, const openvdb::Coord& ijk,
-                              const openvdb::Vec3d& pointIjk, std::vector<openvdb::Vec3d>& sums, openvdb::Vec3f& outDirect,
-                              openvdb::Vec3f& outSource, openvdb::Vec3f& outAnisotropy, double weight) {
-        openvdb::Vec3d phi(0.0), flux(0.0);
-        // Swept lights from their sweep; the others marched (lightFluence).
-        const std::int64_t index = lattice ? lattice->indexOf(ijk) : -1;
-        for (std::size_t l = 0; l < active.size(); ++l) {
-            const bool marched = index < 0 || swept[l].empty();
-            const openvdb::Vec3d f = marched
-                ? lightFluence(active[l], sampler, medium, ijk, options.march, options.occluders, anisotropic ? &flux : nullptr)
-                : openvdb::Vec3d(swept[l][std::size_t(index)]);
-            if (anisotropic && !marched) flux += openvdb::Vec3d(sweptFlux[l][std::size_t(index)]);
-            phi += f;
-            sums[l] += f * weight;
-        }
-        // J0 = σs φ0 / 4π (+ emission of volume lights, radiance per unit length).
-        const openvdb::Vec3d scattered = sampler.sigmaS(pointIjk) * phi / (4.0 * M_PI);
-        openvdb::Vec3d j = scattered;
-        const openvdb::Vec3d world = medium.transform().indexToWorld(pointIjk);
-        for (VolumeEmission::Sampler& e : emitters) j += e.at(world);
-        for (int c = 0; c < 3; ++c) {
-            if (!std::isfinite(phi[c])) phi[c] = 0.0; // cannot happen by construction; never let NaN in
-            if (!std::isfinite(j[c])) j[c] = 0.0;
-        }
-        outDirect = openvdb::Vec3f(phi);
-        outSource = openvdb::Vec3f(j);
-        if (anisotropic) {
-            // The scattered light's first moment F·σs/4π, the emission's none: a = F/φ of the
-            // light scattered, in the share of J0 it makes (grey).
-            const double scatteredGrey = greyOf(scattered), phiGrey = greyOf(phi), jGrey = greyOf(j);
-            outAnisotropy = phiGrey > 0.0 && jGrey > 0.0 ? openvdb::Vec3f(clampedToUnit(flux / phiGrey) * (scatteredGrey / jGrey))
-                                                         : openvdb::Vec3f(0.0f);
-        }
-    };
+    const PointLighting evaluate{medium, options, active, lattice, swept, sweptFlux, anisotropic};
 
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, total, 1), [&](const tbb::blocked_range<std::size_t>& range) {
         Medium::Sampler sampler = lightStageSampler(medium, options);

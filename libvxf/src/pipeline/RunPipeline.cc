@@ -139,156 +139,211 @@ bool inCache(const fs::path& entry, std::optional<CacheLock>& lock, Interrupter*
     return fs::exists(entry);
 }
 
+/// One run of the pipeline over a scene (runPipelineOnce): each stage reused from the cache or
+/// run, in order, recording what it did.
+struct PipelineRun
+{
+    const Scene& scene;
+    const SceneSettings& s;
+    const Material material;
+    const fs::path out, cache;
+    Interrupter* interrupter;
+    PipelineReport& report;
+    std::optional<CacheLock> lock; ///< the entry being computed
+
+    bool wants(const char* output) const { return std::find(s.outputs.begin(), s.outputs.end(), output) != s.outputs.end(); }
+
+    template <typename F>
+    static double timed(F&& f)
+    {
+        const auto start = std::chrono::steady_clock::now();
+        f();
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    }
+
+    void record(const char* stage, const char* action, std::string why, const fs::path& file, double seconds)
+    {
+        report.stages.push_back({stage, action, std::move(why), file.string(), seconds});
+    }
+
+    /// What a stage left: its cache entry, the key later stages chain from, and the voxel set
+    /// when it computed one (empty when reused: read on demand).
+    struct Entry
+    {
+        fs::path file;
+        std::string hash;
+        VoxelSet set;
+    };
+
+    Entry voxelizeStage()
+    {
+
+        // Voxelize: the media (mesh bytes, transforms, materials when several, coefficient
+        // grids), the voxel settings.
+        json media = json::array();
+        for (const auto& o : scene.objects) {
+            if (o.role != SceneObject::Role::Medium) continue;
+            const Material& m = *o.material;
+            const std::string& file = o.isVolume() ? o.volume : o.mesh;
+            media.push_back(
+                {{o.isVolume() ? "volume" : "mesh", file}, {"grid", o.isVolume() ? json(o.grid) : json()}, {"bytes", fileFingerprint(file)},
+                    {"transform", matrix(o.objectToWorld)}, {"sigma", mediaCount(scene) > 1 ? json{vec(m.sigmaA), vec(m.sigmaS)} : json()},
+                    {"grids", m.gridsFile.empty() ? json() : json{fileFingerprint(m.gridsFile), m.sigmaAGrid, m.sigmaSGrid}}});
+        }
+        // The program too: the light and scatter stages' keys chain from this one.
+        const json voxelInputs = {
+            {"media", media}, {"dim", s.dim}, {"voxel_size", s.voxelSize}, {"band", s.band}, {"program", programFingerprint()}};
+        const std::string voxelHash = hashOf(voxelInputs);
+        const fs::path voxelFile = cache / ("voxelize-" + voxelHash + ".vdb");
+        VoxelSet set;
+        if (inCache(voxelFile, lock, interrupter)) {
+            record("voxelize", "reused", "mesh and voxel settings unchanged", voxelFile, 0.0);
+        } else {
+            const double seconds = timed([&] {
+                VoxelizeOptions options;
+                options.voxelSize = s.voxelSize;
+                options.dim = s.voxelSize > 0.0 ? 0 : s.dim;
+                options.bandWidth = float(s.band);
+                set = voxelizeMedia(scene, options, interrupter);
+                set.setProvenance("voxelize", voxelInputs.dump());
+                writeVoxelSet(voxelFile.string(), set);
+            });
+            record("voxelize", "ran", "no cached voxel set for these inputs", voxelFile, seconds);
+        }
+        lock.reset();
+        return {voxelFile, voxelHash, std::move(set)};
+    }
+
+    Entry lightStage(Entry voxels)
+    {
+        const std::string& voxelHash = voxels.hash;
+        const fs::path& voxelFile = voxels.file;
+        VoxelSet& set = voxels.set;
+
+        // Light: the voxel set, the material, the lights.
+        json lights = json::array();
+        for (const auto& l : scene.lights) lights.push_back(lightJson(l));
+        json occluders = json::array();
+        for (const auto& o : scene.objects) {
+            if (o.role == SceneObject::Role::Occluder) occluders.push_back({fileFingerprint(o.mesh), matrix(o.objectToWorld)});
+        }
+        for (const auto& l : scene.lights) {
+            if (!l.file.empty()) lights.push_back(fileFingerprint(l.file)); // environment map, emission grid: their bytes
+        }
+        json lightInputs = {{"voxels", voxelHash}, {"sigma_a", vec(material.sigmaA)}, {"sigma_s", vec(material.sigmaS)}, {"lights", lights},
+            {"occluders", occluders}, {"step", s.step}, {"sweep", true}};
+        // A forward phase's first moment is carried by the accelerated sweeps alone (Scatter.h);
+        // for any other scatter the light stage lights the similarity relation's medium too.
+        const bool carriesMoment = s.kernel == "sweep" && s.accelerate && !wants("scatter_passes") && s.finePasses == 0;
+        if (material.phaseG != 0.0) { // isotropic scenes keep their cached stages
+            lightInputs["phase_g"] = material.phaseG;
+            lightInputs["phase_scaling"] = carriesMoment ? "delta-M 3, Henyey-Greenstein lobe" : "similarity";
+        }
+        const std::string lightHash = hashOf(lightInputs);
+        const fs::path lightFile = cache / ("light-" + lightHash + ".vdb");
+        if (inCache(lightFile, lock, interrupter)) {
+            record("light", "reused", "voxels, material and lights unchanged", lightFile, 0.0);
+        } else {
+            const double seconds = timed([&] {
+                if (set.empty()) set = readCacheEntry(voxelFile);
+                DirectLightOptions options;
+                options.march.step = s.step;
+                options.similarity = !carriesMoment;
+                const DirectLightReport lit = lightScene(set, scene, options, interrupter);
+                report.warnings.insert(report.warnings.end(), lit.warnings.begin(), lit.warnings.end());
+                set.setProvenance("light", lightInputs.dump());
+                writeVoxelSet(lightFile.string(), set);
+            });
+            record("light", "ran", "no cached lighting for these inputs", lightFile, seconds);
+            set = VoxelSet();
+        }
+        lock.reset();
+        return {lightFile, lightHash, VoxelSet()};
+    }
+
+    /// The volume the render reads: the scatter stage's entry, or the light stage's when it does not run.
+    Entry scatterStage(const Entry& lit)
+    {
+        const fs::path& lightFile = lit.file;
+        const std::string& lightHash = lit.hash;
+
+        // Scatter, only when it matters.
+        fs::path volumeFile = lightFile;
+        std::string volumeHash = lightHash;
+        const bool needScatter = wants("image") || wants("scatter") || wants("illumination") || wants("scatter_passes");
+        if (!material.scatters() && material.sigmaSGrid.empty()) { // (several media: the maximum of their σs)
+            record("scatter", "skipped", "the material does not scatter (sigma_s = 0)", "", 0.0);
+        } else if (!needScatter) {
+            record("scatter", "skipped", "no requested output needs it", "", 0.0);
+        } else {
+            const json scatterInputs = {{"lit", lightHash}, {"passes", s.passes}, {"directions", s.directions}, {"step", s.step},
+                {"cutoff", s.cutoff}, {"tolerance", s.tolerance}, {"extrapolate", s.extrapolate}, {"band", s.scatterBand},
+                {"keep", wants("scatter_passes")}, {"fine_passes", s.finePasses}, {"coarse_factor", s.coarseFactor}, {"kernel", s.kernel},
+                {"accelerate", s.accelerate}};
+            // (every field scatterOptionsFrom reads)
+            volumeHash = hashOf(scatterInputs);
+            volumeFile = cache / ("scatter-" + volumeHash + ".vdb");
+            if (inCache(volumeFile, lock, interrupter)) {
+                record("scatter", "reused", "lighting and scatter settings unchanged", volumeFile, 0.0);
+            } else {
+                ScatterReport scattered;
+                const double seconds = timed([&] {
+                    VoxelSet lit = readCacheEntry(lightFile);
+                    const Medium medium(lit, material);
+                    const ScatterOptions options = scatterOptionsFrom(s);
+                    scattered = scatter(lit, medium, options, interrupter);
+                    lit.setProvenance("scatter", scatterInputs.dump());
+                    writeVoxelSet(volumeFile.string(), lit);
+                });
+                record("scatter", "ran", fmt::format("{} passes: {}", scattered.passes.size(), scattered.stopReason), volumeFile, seconds);
+            }
+            lock.reset();
+        }
+        return {volumeFile, volumeHash, VoxelSet()};
+    }
+
+    void renderStage(const fs::path& volumeFile, const std::string& stem)
+    {
+
+        // Render: always when an image is asked for (it is the cheap end of the chain).
+        if (!wants("image")) {
+            record("render", "skipped", "no image requested", "", 0.0);
+            return;
+        }
+        report.image = (out / (stem + ".exr")).string();
+        report.preview = (out / (stem + ".png")).string();
+        std::string why = "images are always rendered from the (cached) volume";
+        const double seconds = timed([&] {
+            const VoxelSet volume = readCacheEntry(volumeFile);
+            const Medium medium(volume, material);
+            const RenderOptions options = renderOptionsFrom(s);
+            const SceneRayScenes meshes = sceneRayScenes(scene);
+            const RenderedImage image =
+                render(volume, medium, scene, options, {&meshes.visible, &meshes.occluders, &meshes.media}, interrupter);
+            writeExr(report.image, image);
+            writePng(report.preview, image);
+            if (image.refinedPixels > 0) why += "; " + refinedSummary(image, options);
+        });
+        record("render", "ran", why, report.image, seconds);
+    }
+};
+
 PipelineReport runPipelineOnce(const Scene& scene, const std::string& outDir, Interrupter* interrupter)
 {
     PipelineReport report;
     const Material material = sceneMaterial(scene);
     const SceneSettings& s = scene.settings;
-    const auto& outputs = s.outputs;
-    const auto wants = [&](const char* o) { return std::find(outputs.begin(), outputs.end(), o) != outputs.end(); };
 
     const fs::path out(outDir), cache = out / "cache";
     fs::create_directories(cache);
     const std::string stem = fs::path(scene.path).stem().string().empty() ? "scene" : fs::path(scene.path).stem().string();
-    if (wants("image") && !scene.path.empty()) claimImageName(out, stem, scene.path);
-    const auto timed = [](auto&& f) {
-        const auto start = std::chrono::steady_clock::now();
-        f();
-        return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    };
-    const auto record = [&](const char* stage, const char* action, std::string why, const fs::path& file, double seconds) {
-        report.stages.push_back({stage, action, std::move(why), file.string(), seconds});
-    };
-
-    // Voxelize: the media (mesh bytes, transforms, materials when several, coefficient
-    // grids), the voxel settings.
-    json media = json::array();
-    for (const auto& o : scene.objects) {
-        if (o.role != SceneObject::Role::Medium) continue;
-        const Material& m = *o.material;
-        const std::string& file = o.isVolume() ? o.volume : o.mesh;
-        media.push_back(
-            {{o.isVolume() ? "volume" : "mesh", file}, {"grid", o.isVolume() ? json(o.grid) : json()}, {"bytes", fileFingerprint(file)},
-                {"transform", matrix(o.objectToWorld)}, {"sigma", mediaCount(scene) > 1 ? json{vec(m.sigmaA), vec(m.sigmaS)} : json()},
-                {"grids", m.gridsFile.empty() ? json() : json{fileFingerprint(m.gridsFile), m.sigmaAGrid, m.sigmaSGrid}}});
-    }
-    // The program too: the light and scatter stages' keys chain from this one.
-    const json voxelInputs = {
-        {"media", media}, {"dim", s.dim}, {"voxel_size", s.voxelSize}, {"band", s.band}, {"program", programFingerprint()}};
-    const std::string voxelHash = hashOf(voxelInputs);
-    const fs::path voxelFile = cache / ("voxelize-" + voxelHash + ".vdb");
-    VoxelSet set;
-    std::optional<CacheLock> lock;
-    if (inCache(voxelFile, lock, interrupter)) {
-        record("voxelize", "reused", "mesh and voxel settings unchanged", voxelFile, 0.0);
-    } else {
-        const double seconds = timed([&] {
-            VoxelizeOptions options;
-            options.voxelSize = s.voxelSize;
-            options.dim = s.voxelSize > 0.0 ? 0 : s.dim;
-            options.bandWidth = float(s.band);
-            set = voxelizeMedia(scene, options, interrupter);
-            set.setProvenance("voxelize", voxelInputs.dump());
-            writeVoxelSet(voxelFile.string(), set);
-        });
-        record("voxelize", "ran", "no cached voxel set for these inputs", voxelFile, seconds);
-    }
-    lock.reset();
-
-    // Light: the voxel set, the material, the lights.
-    json lights = json::array();
-    for (const auto& l : scene.lights) lights.push_back(lightJson(l));
-    json occluders = json::array();
-    for (const auto& o : scene.objects) {
-        if (o.role == SceneObject::Role::Occluder) occluders.push_back({fileFingerprint(o.mesh), matrix(o.objectToWorld)});
-    }
-    for (const auto& l : scene.lights) {
-        if (!l.file.empty()) lights.push_back(fileFingerprint(l.file)); // environment map, emission grid: their bytes
-    }
-    json lightInputs = {{"voxels", voxelHash}, {"sigma_a", vec(material.sigmaA)}, {"sigma_s", vec(material.sigmaS)}, {"lights", lights},
-        {"occluders", occluders}, {"step", s.step}, {"sweep", true}};
-    // A forward phase's first moment is carried by the accelerated sweeps alone (Scatter.h);
-    // for any other scatter the light stage lights the similarity relation's medium too.
-    const bool carriesMoment = s.kernel == "sweep" && s.accelerate && !wants("scatter_passes") && s.finePasses == 0;
-    if (material.phaseG != 0.0) { // isotropic scenes keep their cached stages
-        lightInputs["phase_g"] = material.phaseG;
-        lightInputs["phase_scaling"] = carriesMoment ? "delta-M 3, Henyey-Greenstein lobe" : "similarity";
-    }
-    const std::string lightHash = hashOf(lightInputs);
-    const fs::path lightFile = cache / ("light-" + lightHash + ".vdb");
-    if (inCache(lightFile, lock, interrupter)) {
-        record("light", "reused", "voxels, material and lights unchanged", lightFile, 0.0);
-    } else {
-        const double seconds = timed([&] {
-            if (set.empty()) set = readCacheEntry(voxelFile);
-            DirectLightOptions options;
-            options.march.step = s.step;
-            options.similarity = !carriesMoment;
-            const DirectLightReport lit = lightScene(set, scene, options, interrupter);
-            report.warnings.insert(report.warnings.end(), lit.warnings.begin(), lit.warnings.end());
-            set.setProvenance("light", lightInputs.dump());
-            writeVoxelSet(lightFile.string(), set);
-        });
-        record("light", "ran", "no cached lighting for these inputs", lightFile, seconds);
-        set = VoxelSet();
-    }
-    lock.reset();
-
-    // Scatter, only when it matters.
-    fs::path volumeFile = lightFile;
-    std::string volumeHash = lightHash;
-    const bool needScatter = wants("image") || wants("scatter") || wants("illumination") || wants("scatter_passes");
-    if (!material.scatters() && material.sigmaSGrid.empty()) { // (several media: the maximum of their σs)
-        record("scatter", "skipped", "the material does not scatter (sigma_s = 0)", "", 0.0);
-    } else if (!needScatter) {
-        record("scatter", "skipped", "no requested output needs it", "", 0.0);
-    } else {
-        const json scatterInputs = {{"lit", lightHash}, {"passes", s.passes}, {"directions", s.directions}, {"step", s.step},
-            {"cutoff", s.cutoff}, {"tolerance", s.tolerance}, {"extrapolate", s.extrapolate}, {"band", s.scatterBand},
-            {"keep", wants("scatter_passes")}, {"fine_passes", s.finePasses}, {"coarse_factor", s.coarseFactor}, {"kernel", s.kernel},
-            {"accelerate", s.accelerate}};
-        // (every field scatterOptionsFrom reads)
-        volumeHash = hashOf(scatterInputs);
-        volumeFile = cache / ("scatter-" + volumeHash + ".vdb");
-        if (inCache(volumeFile, lock, interrupter)) {
-            record("scatter", "reused", "lighting and scatter settings unchanged", volumeFile, 0.0);
-        } else {
-            ScatterReport scattered;
-            const double seconds = timed([&] {
-                VoxelSet lit = readCacheEntry(lightFile);
-                const Medium medium(lit, material);
-                const ScatterOptions options = scatterOptionsFrom(s);
-                scattered = scatter(lit, medium, options, interrupter);
-                lit.setProvenance("scatter", scatterInputs.dump());
-                writeVoxelSet(volumeFile.string(), lit);
-            });
-            record("scatter", "ran", fmt::format("{} passes: {}", scattered.passes.size(), scattered.stopReason), volumeFile, seconds);
-        }
-        lock.reset();
-    }
-
-    report.volume = volumeFile.string();
-
-    // Render: always when an image is asked for (it is the cheap end of the chain).
-    if (!wants("image")) {
-        record("render", "skipped", "no image requested", "", 0.0);
-        return report;
-    }
-    report.image = (out / (stem + ".exr")).string();
-    report.preview = (out / (stem + ".png")).string();
-    std::string why = "images are always rendered from the (cached) volume";
-    const double seconds = timed([&] {
-        const VoxelSet volume = readCacheEntry(volumeFile);
-        const Medium medium(volume, material);
-        const RenderOptions options = renderOptionsFrom(s);
-        const SceneRayScenes meshes = sceneRayScenes(scene);
-        const RenderedImage image =
-            render(volume, medium, scene, options, {&meshes.visible, &meshes.occluders, &meshes.media}, interrupter);
-        writeExr(report.image, image);
-        writePng(report.preview, image);
-        if (image.refinedPixels > 0) why += "; " + refinedSummary(image, options);
-    });
-    record("render", "ran", why, report.image, seconds);
+    if (std::find(s.outputs.begin(), s.outputs.end(), "image") != s.outputs.end() && !scene.path.empty())
+        claimImageName(out, stem, scene.path);
+    PipelineRun run{scene, s, material, out, cache, interrupter, report, std::nullopt};
+    const PipelineRun::Entry lit = run.lightStage(run.voxelizeStage());
+    const PipelineRun::Entry volume = run.scatterStage(lit);
+    report.volume = volume.file.string();
+    run.renderStage(volume.file, stem);
     return report;
 }
 

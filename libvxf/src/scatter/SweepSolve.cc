@@ -29,49 +29,42 @@ double secondsSince(std::chrono::steady_clock::time_point start)
 }
 
 /// The diffusion correction's relative residual: it only needs to be about as good as the
-/// sweeps' convergence rate (about 0.2) makes the next change small; 1e-2 took about half the
-/// conjugate-gradient iterations of 1e-3 for the same sweeps (bunny dim 128, albedo 0.99).
+/// sweeps' convergence rate (about 0.2) makes the next change small (docs/accuracy-notes.md,
+/// "Behind the code: SweepSolve").
 constexpr double kDiffusionTolerance = 1e-2;
 
 /// The share of the diffusion correction added once it has stalled (the changes stopped
-/// falling). A unit sphere at dim 48, σt 50 (2 mean free paths per voxel), albedo 0.999: the
-/// whole correction stalls at a change of 1.2% by sweep 9 (and dropping it then stopped on a
-/// false rate after 11 sweeps); 0.6 of it converges in 9 sweeps at a rate of 0.45, 0.8 in 17.
-/// Halved at sweep 8 to 10 (albedo 0.99, 0.999, 0.9999): 11, 14 and 15 sweeps, rates 0.43-0.54.
-/// Stalling before sweep kDampAfter it is dropped at once, as at σt·dx = 31 (σt 1000 at dim 64),
-/// where halving it cost a sweep and the 40 sweeps ended 3% off instead of 1%.
+/// falling: in media of a few mean free paths per voxel near albedo 1 the whole correction
+/// stalls, and dropping it stops on a false rate). Stalling before sweep kDampAfter (voxels of
+/// tens of mean free paths) it is dropped at once (docs/accuracy-notes.md, "Behind the code:
+/// SweepSolve").
 constexpr double kDampedCorrection = 0.5;
 constexpr int kDampAfter = 5;
 
 /// The gather's correction (transport synthetic acceleration): each gather's change is
 /// corrected by the sweeps' own accelerated solve of its scattered light, to this fraction of
 /// that solve's sum. The correction's error carries into the gathers' rate, which the sweeps'
-/// own difference from the gather already holds at 0.08-0.3 (thick bunny dim 96: the second
-/// gather moved the sum 4.7%, the third 0.38%); to 1e-3 the inner solves took one sweep more for
-/// the same gathers.
-/// At most kSweepCorrectionSweeps sweeps (a sphere at 2 mean free paths per voxel, albedo
-/// 0.9999, took 12-13 to 1e-2); once the correction's own diffusion correction was dropped
-/// (voxels many mean free paths thick, where plain sweeps converge at about the albedo) it runs
-/// without and stops after kPlainCorrectionSweeps: at σt·dx = 31 (the stability suite's σt 1000,
-/// dim 64) up to 40 sweeps a correction took 29.6 s for 7 gathers, 12 rebuilding the diffusion
-/// each time 14.8 s, 4 plain ones 10.6 s (the diffusion-corrected gathers: 9 in 8.0 s).
+/// own difference from the gather already holds at 0.08-0.3: a tighter tolerance buys nothing.
+/// At most kSweepCorrectionSweeps sweeps; once the correction's own diffusion correction was
+/// dropped (voxels many mean free paths thick, where plain sweeps converge at about the albedo)
+/// it runs without and stops after kPlainCorrectionSweeps (docs/accuracy-notes.md, "Behind the
+/// code: SweepSolve").
 constexpr double kSweepCorrectionTolerance = 1e-2;
 constexpr int kSweepCorrectionSweeps = 12;
 constexpr int kPlainCorrectionSweeps = 4;
 
 /// The second iteration's change over the first is no convergence rate when the first made the
-/// whole estimate (an accelerated solve from zero): a sphere whose second gather changed the sum
-/// by 2.8% "converged" at an estimated 8e-4 while 0.33% off. Accelerated, a second iteration
+/// whole estimate (an accelerated solve from zero: it "converged" while off by more than its
+/// tolerance, docs/accuracy-notes.md, "Behind the code: SweepSolve"). Accelerated, a second iteration
 /// stops only when its change is below this fraction of the tolerance (the sums of a medium that
 /// barely scatters); otherwise a third measures the rate.
 constexpr double kSecondIterationStop = 0.1;
 
 /// Anderson mixing of depth one (Walker and Ni 2011) for the corrected gathers, whose fixed-point
 /// map G (a gather, then its correction) contracts at a rate the sweeps' difference from the
-/// gather sets, and may overshoot: where the sweeps' sum lies above the gather's (a sphere of
-/// radius 8 voxels at 2 mean free paths per voxel, albedo 0.9999: the sweeps 10% above) the
-/// changes alternated in sign and grew to a rate of 1.1 by the ninth gather (12 gathers, the
-/// correction halved); mixed, 4 gathers at rates of 0.12-0.13. φ_{l+1} = G_l − γ(G_l − G_{l−1}),
+/// gather sets, and may overshoot: where the sweeps' sum lies above the gather's the changes
+/// alternate in sign and grow (docs/accuracy-notes.md, "Behind the code: SweepSolve"); mixing
+/// brings them back to a steady rate. φ_{l+1} = G_l − γ(G_l − G_{l−1}),
 /// γ per channel minimising |f_l − γ(f_l − f_{l−1})|₂, f = G(φ) − φ: interpolation (0 < γ < 1)
 /// where the changes alternate, extrapolation (γ < 0) where they shrink slowly; γ is kept
 /// within [−2, 0.9] (at most twice the last step beyond it, at least a tenth of the new
@@ -126,199 +119,97 @@ double l1Max(const std::vector<openvdb::Vec3f>& values)
     return std::max({s[0], s[1], s[2]});
 }
 
-} // namespace
-
-openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGrid& source, const SweepSolveOptions& options,
-    SweepSolveReport& report, Interrupter* interrupter, SweepMoments* moments)
+/// The accelerated (or plain) iteration of sweepSolve: the lattice and its arrays, one
+/// iteration (the transport of a gather or a sweep, its correction, the change it made) and the
+/// decisions to stop, halve or drop the correction.
+class SweepSolver
 {
-    InterruptStep step(interrupter, options.kernel == ScatterKernel::Gather ? "gathering" : "sweeping");
-    auto start = std::chrono::steady_clock::now();
-    const double restG = medium.material().phaseG; // the transport's rest of the phase (Phase.h)
-    const bool gather = options.kernel == ScatterKernel::Gather;
-    if (gather && restG != 0.0) throw UsageError("the accelerated gather carries no anisotropic phase: solve Medium::isotropic()");
-    detail::SweepLattice lattice(medium, source);
-    const std::size_t count = lattice.voxelCount();
-    report.voxels = count;
-    std::optional<detail::DiffusionCorrection> diffusion; // the sweeps' correction (the gathers' is the sweeps' solve)
-    if (options.accelerate && !gather) {
-        diffusion.emplace(lattice,
-            options.diffusionCoarsening > 0 ? options.diffusionCoarsening : detail::DiffusionCorrection::coarseningFor(lattice), restG);
-        report.diffusionUnknowns = diffusion->size();
-        report.diffusionCoarsening = diffusion->coarsening();
-        lattice.releaseSigmaT(); // the matrices are built
-    }
-    report.accelerated = options.accelerate;
-    report.setupSeconds = secondsSince(start);
+public:
+    SweepSolver(const Medium& medium_, const openvdb::Vec3SGrid& source_, const SweepSolveOptions& options_, SweepSolveReport& report_,
+        Interrupter* interrupter_, SweepMoments* moments_)
+        : medium(medium_)
+        , source(source_)
+        , options(options_)
+        , report(report_)
+        , interrupter(interrupter_)
+        , moments(moments_)
+        , restG(medium_.material().phaseG)
+        , gather(options_.kernel == ScatterKernel::Gather)
+        , lattice(checkedLattice(medium_, source_, gather, restG))
+        , count(lattice.voxelCount())
+        , accelerate(options_.accelerate)
+        , iterations(gather ? "gathers" : "sweeps")
+        , iteration(gather ? "gather" : "sweep")
+        , correctionName(gather ? "the sweeps' correction" : "the diffusion correction")
+    {
+        report.voxels = count;
+        if (options.accelerate && !gather) {
+            diffusion.emplace(lattice,
+                options.diffusionCoarsening > 0 ? options.diffusionCoarsening : detail::DiffusionCorrection::coarseningFor(lattice), restG);
+            report.diffusionUnknowns = diffusion->size();
+            report.diffusionCoarsening = diffusion->coarsening();
+            lattice.releaseSigmaT(); // the matrices are built
+        }
+        report.accelerated = options.accelerate;
+        report.setupSeconds = secondsSince(setupStart);
 
-    const std::vector<openvdb::Vec3f> j0 = gather                     ? std::vector<openvdb::Vec3f>()
-        : options.source == ScatterPassOptions::SourceRead::Continued ? detail::readPassSource(lattice, medium, source)
-                                                                      : lattice.read(source); // (the gather reads the grid)
-    const std::vector<openvdb::Vec3f>& sigmaS = lattice.sigmaS();
-    const std::vector<openvdb::Vec3d> directions = sweepDirections(std::max(options.directions, 1), options.rotationSeed);
-    const double weight = 4.0 * M_PI / double(directions.size());
-    // The rest of the phase (restG ≠ 0): J0's mean direction of travel a0, per voxel; the
-    // directions in world space.
-    std::optional<detail::SweepLattice::FirstMoment> moment;
-    std::vector<openvdb::Vec3f> a0, flux, previousFlux, a;
-    std::vector<openvdb::Vec3d> pairFirsts;
-    if (restG != 0.0) {
-        moment.emplace();
-        moment->rest = RestPhase(transportScaling(medium.phaseG()));
-        for (const openvdb::Vec3d& d : directions) {
-            moment->worldDirections.push_back(medium.transform().baseMap()->applyJacobian(d).unit());
+        j0 = gather                                                       ? std::vector<openvdb::Vec3f>()
+            : options.source == ScatterPassOptions::SourceRead::Continued ? detail::readPassSource(lattice, medium, source)
+                                                                          : lattice.read(source); // (the gather reads the grid)
+        directions = sweepDirections(std::max(options.directions, 1), options.rotationSeed);
+        weight = 4.0 * M_PI / double(directions.size());
+        if (restG != 0.0) {
+            moment.emplace();
+            moment->rest = RestPhase(transportScaling(medium.phaseG()));
+            for (const openvdb::Vec3d& d : directions) {
+                moment->worldDirections.push_back(medium.transform().baseMap()->applyJacobian(d).unit());
+            }
+            // The direction set's opposite pairs (sweepDirections: ω, −ω in turn), one of each, for
+            // the rest's quadrature correction (none for a set of no such pairs).
+            const std::vector<openvdb::Vec3d>& world = moment->worldDirections;
+            bool paired = world.size() % 2 == 0;
+            for (std::size_t i = 0; paired && i < world.size(); i += 2) paired = (world[i] + world[i + 1]).length() < 1e-9;
+            for (std::size_t i = 0; paired && i < world.size(); i += 2) pairFirsts.push_back(world[i]);
+            if (moments && moments->source) {
+                a0 = lattice.read(*moments->source);
+                for (openvdb::Vec3f& v : a0) v = openvdb::Vec3f(clampedToUnit(openvdb::Vec3d(v)));
+            } else {
+                a0.assign(count, openvdb::Vec3f(0.0f));
+            }
         }
-        // The direction set's opposite pairs (sweepDirections: ω, −ω in turn), one of each, for
-        // the rest's quadrature correction (none for a set of no such pairs).
-        const std::vector<openvdb::Vec3d>& world = moment->worldDirections;
-        bool paired = world.size() % 2 == 0;
-        for (std::size_t i = 0; paired && i < world.size(); i += 2) paired = (world[i] + world[i + 1]).length() < 1e-9;
-        for (std::size_t i = 0; paired && i < world.size(); i += 2) pairFirsts.push_back(world[i]);
-        if (moments && moments->source) {
-            a0 = lattice.read(*moments->source);
-            for (openvdb::Vec3f& v : a0) v = openvdb::Vec3f(clampedToUnit(openvdb::Vec3d(v)));
-        } else {
-            a0.assign(count, openvdb::Vec3f(0.0f));
-        }
+        phi.assign(count, openvdb::Vec3f(0.0f));
+        gatherOptions = options.gather;
+        gatherOptions.kernel = ScatterKernel::Gather;
     }
-    // Per voxel: what the iteration keeps (the sweep's own arrays and J come and go, so that at
-    // most six such arrays and the padded source live at once: 950 MB at dim 256, 4.5M voxels;
-    // a first moment adds a0, a, F, the last sweep's F and the correction's ΔF, and two padded
-    // arrays, a's and the source toward a direction).
-    std::vector<openvdb::Vec3f> phi(count, openvdb::Vec3f(0.0f)), next, skin;
-    std::vector<openvdb::Vec3f> firstFlight; // the gather's K J0 (the same every iteration)
-    AndersonMixing mixing; // of the corrected gathers
-    // Whether the correction's sweeps take their diffusion correction: once dropped there (voxels
-    // many mean free paths thick), building it again for every gather cost more than the sweeps.
-    bool correctionAccelerates = true;
-    ScatterPassOptions gatherOptions = options.gather;
-    gatherOptions.kernel = ScatterKernel::Gather;
-    bool corrected = false; // the last sweep added the diffusion correction (it holds it)
-    double previousChange = 0.0;
-    double previousMoved = 0.0; // |φ_{l+½} − φ_l|₁ of the last accelerated sweep, largest channel
-    std::string correctionNote; // whether and why the correction was halved or dropped
-    bool accelerate = options.accelerate;
-    double damping = 1.0; // of the correction: kDampedCorrection once it stalled
-    const char* iterations = gather ? "gathers" : "sweeps"; // (the report's words)
-    const char* iteration = gather ? "gather" : "sweep";
-    const char* correctionName = gather ? "the sweeps' correction" : "the diffusion correction";
-    for (int l = 1; l <= std::max(options.maxSweeps, 1); ++l) {
-        start = std::chrono::steady_clock::now();
+
+    openvdb::Vec3SGrid::Ptr solve()
+    {
+        for (int l = 1; l <= std::max(options.maxSweeps, 1); ++l) {
+            if (iterate(l)) break;
+        }
+        return result();
+    }
+
+private:
+    static detail::SweepLattice checkedLattice(const Medium& medium, const openvdb::Vec3SGrid& source, bool gather, double restG)
+    {
+        if (gather && restG != 0.0) throw UsageError("the accelerated gather carries no anisotropic phase: solve Medium::isotropic()");
+        return detail::SweepLattice(medium, source);
+    }
+
+    /// Iteration @a l; true when the solve stops after it.
+    bool iterate(int l)
+    {
+        const auto start = std::chrono::steady_clock::now();
         SweepSolveReport::Iteration it;
         if (gather) {
-            // φ_{l+½} = K J0 + K(Sφ_l): J0 read fraction-weighted, Sφ_l continued (SourceField).
-            const auto transportStart = std::chrono::steady_clock::now();
-            if (firstFlight.empty()) {
-                gatherOptions.source = ScatterPassOptions::SourceRead::FractionWeighted;
-                firstFlight = lattice.read(*scatterPass(medium, source, gatherOptions, interrupter));
-                gatherOptions.source = ScatterPassOptions::SourceRead::Continued;
-            }
-            next = firstFlight;
-            if (l > 1) {
-                const auto scattered =
-                    lattice.read(*scatterPass(medium, *sourceFromFluence(medium, *lattice.write(phi, source)), gatherOptions, interrupter));
-                tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
-                    for (std::size_t v = r.begin(); v != r.end(); ++v) next[v] += scattered[v];
-                });
-            }
-            it.sweepSeconds = secondsSince(transportStart);
+            gatherStep(l, it);
         } else {
-            // J = J0 + σs·φ/4π, then φ_{l+½} = K J.
-            std::vector<openvdb::Vec3f> j(count);
-            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
-                for (std::size_t v = r.begin(); v != r.end(); ++v) {
-                    for (int ch = 0; ch < 3; ++ch) j[v][ch] = j0[v][ch] + sigmaS[v][ch] * phi[v][ch] * float(1.0 / (4.0 * M_PI));
-                }
-            });
-            if (moment) {
-                // One mean direction for the sum: its parts' a weighted by their grey J, the
-                // scattered light's a = F/φ.
-                a.resize(count);
-                tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
-                    for (std::size_t v = r.begin(); v != r.end(); ++v) {
-                        const double total = greyOf(openvdb::Vec3d(j[v])), own = greyOf(openvdb::Vec3d(j0[v]));
-                        const double phiGrey = greyOf(openvdb::Vec3d(phi[v]));
-                        openvdb::Vec3d sum = own * openvdb::Vec3d(a0[v]);
-                        if (phiGrey > 0.0 && !flux.empty()) sum += (total - own) * clampedToUnit(openvdb::Vec3d(flux[v]) / phiGrey);
-                        a[v] = total > 0.0 ? openvdb::Vec3f(sum / total) : openvdb::Vec3f(0.0f);
-                    }
-                });
-            }
-            const std::vector<openvdb::Vec3f> paddedA = moment ? lattice.padded(a) : std::vector<openvdb::Vec3f>();
-            std::vector<openvdb::Vec3f> paddedBeta;
-            if (moment && !pairFirsts.empty()) {
-                // The direction set's own error in the rest's first moment, taken off (Phase.h).
-                std::vector<openvdb::Vec3f> beta(count);
-                tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
-                    for (std::size_t v = r.begin(); v != r.end(); ++v) beta[v] = moment->rest.quadratureCorrection(a[v], pairFirsts);
-                });
-                paddedBeta = lattice.padded(beta);
-                moment->quadratureCorrection = &paddedBeta;
-            }
-            if (moment) {
-                moment->sourceAnisotropy = &paddedA;
-                previousFlux.swap(flux);
-                flux.assign(count, openvdb::Vec3f(0.0f));
-                moment->flux = &flux;
-            }
-            next.assign(count, openvdb::Vec3f(0.0f));
-            const auto sweepStart = std::chrono::steady_clock::now();
-            lattice.sweep(lattice.sweepSource(std::move(j)), directions, weight, next, &skin, nullptr, moment ? &*moment : nullptr);
-            it.sweepSeconds = secondsSince(sweepStart);
+            sweepStep(it);
         }
         corrected = false;
         it.index = l;
-        if (accelerate) {
-            std::vector<openvdb::Vec3f> change(count);
-            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
-                for (std::size_t v = r.begin(); v != r.end(); ++v) change[v] = next[v] - phi[v];
-            });
-            if (gather) {
-                // δ = (I − K_s S)⁻¹ K_s S (φ_{l+½} − φ_l): the error the gather leaves, as the
-                // sweeps would leave it, by their own accelerated solve of the change's scattered
-                // light (its skin voxels hold the light on the surface: read at their centres).
-                SweepSolveOptions correction;
-                correction.kernel = ScatterKernel::Sweep;
-                correction.directions = options.directions;
-                correction.rotationSeed = options.rotationSeed;
-                correction.diffusionCoarsening = options.diffusionCoarsening;
-                correction.tolerance = kSweepCorrectionTolerance;
-                correction.maxSweeps = correctionAccelerates ? kSweepCorrectionSweeps : kPlainCorrectionSweeps;
-                correction.accelerate = correctionAccelerates;
-                correction.source = ScatterPassOptions::SourceRead::Continued;
-                SweepSolveReport solved;
-                const auto delta = lattice.read(
-                    *sweepSolve(medium, *sourceFromFluence(medium, *lattice.write(change, source)), correction, solved, interrupter));
-                tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
-                    for (std::size_t v = r.begin(); v != r.end(); ++v) next[v] += delta[v] * float(damping);
-                });
-                it.correctionSweeps = int(solved.iterations.size());
-                correctionAccelerates = correctionAccelerates && solved.accelerated;
-            } else {
-                // Start from the last correction scaled as the change shrank: near albedo 1 the
-                // error left is the slowest mode, its shape the same from sweep to sweep.
-                const double moved = l1Max(change);
-                const double scale = previousChange > 0.0 ? std::min(1.0, moved / std::max(previousMoved, 1e-300)) : 0.0;
-                previousMoved = moved;
-                // With a phase, the first moment's change too (along the lattice's axes).
-                std::vector<openvdb::Vec3f> fluxChange;
-                if (moment) {
-                    const openvdb::math::MapBase& map = *medium.transform().baseMap();
-                    const double dx = medium.voxelSize();
-                    fluxChange.resize(count);
-                    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
-                        for (std::size_t v = r.begin(); v != r.end(); ++v) {
-                            const openvdb::Vec3d d(previousFlux.empty() ? flux[v] : flux[v] - previousFlux[v]);
-                            fluxChange[v] = openvdb::Vec3f(map.applyInverseJacobian(d) * dx);
-                        }
-                    });
-                }
-                const auto solved = diffusion->solve(change, scale, kDiffusionTolerance, 1000, fluxChange.empty() ? nullptr : &fluxChange);
-                corrected = true;
-                it.diffusionIterations = solved.iterations;
-                it.diffusionResidual = solved.residual;
-                diffusion->addTo(next, damping);
-            }
-        }
+        if (accelerate) correct(it);
         if (accelerate && gather) mixing.mix(phi, next);
         // How far this sweep moved the sum, per channel relative to it.
         openvdb::Vec3d moved(0.0);
@@ -343,19 +234,19 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
         if (std::max({size[0], size[1], size[2]}) == 0.0) {
             report.stopReason = "the source is zero";
             report.converged = true;
-            break;
+            return true;
         }
         const bool rateKnown = l >= 3 || (l == 2 && !options.accelerate); // (kSecondIterationStop)
         if (l == 2 && options.accelerate && it.change <= kSecondIterationStop * options.tolerance) {
             report.converged = true;
             report.stopReason = fmt::format("converged in 2 {} (the change {:.2g} of the sum)", iterations, it.change);
-            break;
+            return true;
         }
         if (rateKnown && it.ratio < 1.0 && it.error <= options.tolerance) {
             report.converged = true;
             report.stopReason = correctionNote +
                 fmt::format("converged in {} {} (estimated error {:.2g} of the sum, rate {:.3f})", l, iterations, it.error, it.ratio);
-            break;
+            return true;
         }
         if (l >= 3 && it.ratio >= 1.0 && it.change <= options.tolerance) {
             // The changes stopped falling below the tolerance: the floor the diffusion solve's
@@ -365,7 +256,7 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
                 fmt::format("converged in {} {} (the change {:.2g} of the sum, below the tolerance, "
                             "stopped falling)",
                     l, iterations, it.change);
-            break;
+            return true;
         }
         if (accelerate && l >= 3 && it.ratio >= 1.0) {
             // The correction overshoots what it should damp (in voxels thicker than a mean free
@@ -382,33 +273,213 @@ openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGri
                     correctionNote.empty() ? correctionName : "it", iteration, l, it.ratio);
             }
         }
+        return false;
     }
-    if (!report.converged) {
-        report.stopReason = correctionNote +
-            fmt::format("stopped after {} {}, estimated error {:.2g} of the sum", report.iterations.size(), iterations,
-                report.iterations.empty() ? 0.0 : report.iterations.back().error);
+
+    /// φ_{l+½} = K J0 + K(Sφ_l): J0 read fraction-weighted, Sφ_l continued (SourceField).
+    void gatherStep(int l, SweepSolveReport::Iteration& it)
+    {
+        const auto transportStart = std::chrono::steady_clock::now();
+        if (firstFlight.empty()) {
+            gatherOptions.source = ScatterPassOptions::SourceRead::FractionWeighted;
+            firstFlight = lattice.read(*scatterPass(medium, source, gatherOptions, interrupter));
+            gatherOptions.source = ScatterPassOptions::SourceRead::Continued;
+        }
+        next = firstFlight;
+        if (l > 1) {
+            const auto scattered =
+                lattice.read(*scatterPass(medium, *sourceFromFluence(medium, *lattice.write(phi, source)), gatherOptions, interrupter));
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
+                for (std::size_t v = r.begin(); v != r.end(); ++v) next[v] += scattered[v];
+            });
+        }
+        it.sweepSeconds = secondsSince(transportStart);
     }
-    // The skin voxels hold the fluence on the surface, as the gathers give it.
-    std::vector<openvdb::Vec3f> shift;
-    if (corrected) {
-        shift.assign(count, openvdb::Vec3f(0.0f));
-        diffusion->addTo(shift, damping);
-    }
-    if (moment && moments) {
-        // a = F/φ at the centres (the skin's too: the correction is isotropic, F the last sweep's).
-        a.resize(count);
+
+    /// J = J0 + σs·φ/4π, then φ_{l+½} = K J.
+    void sweepStep(SweepSolveReport::Iteration& it)
+    {
+        const std::vector<openvdb::Vec3f>& sigmaS = lattice.sigmaS();
+        std::vector<openvdb::Vec3f> j(count);
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
             for (std::size_t v = r.begin(); v != r.end(); ++v) {
-                const double phiGrey = greyOf(openvdb::Vec3d(phi[v]));
-                a[v] = phiGrey > 0.0 ? openvdb::Vec3f(clampedToUnit(openvdb::Vec3d(flux[v]) / phiGrey)) : openvdb::Vec3f(0.0f);
+                for (int ch = 0; ch < 3; ++ch) j[v][ch] = j0[v][ch] + sigmaS[v][ch] * phi[v][ch] * float(1.0 / (4.0 * M_PI));
             }
         });
-        moments->scattered = lattice.write(a, source);
-        moments->scattered->setName(grids::kScatterAnisotropy);
+        if (moment) {
+            // One mean direction for the sum: its parts' a weighted by their grey J, the
+            // scattered light's a = F/φ.
+            a.resize(count);
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
+                for (std::size_t v = r.begin(); v != r.end(); ++v) {
+                    const double total = greyOf(openvdb::Vec3d(j[v])), own = greyOf(openvdb::Vec3d(j0[v]));
+                    const double phiGrey = greyOf(openvdb::Vec3d(phi[v]));
+                    openvdb::Vec3d sum = own * openvdb::Vec3d(a0[v]);
+                    if (phiGrey > 0.0 && !flux.empty()) sum += (total - own) * clampedToUnit(openvdb::Vec3d(flux[v]) / phiGrey);
+                    a[v] = total > 0.0 ? openvdb::Vec3f(sum / total) : openvdb::Vec3f(0.0f);
+                }
+            });
+        }
+        const std::vector<openvdb::Vec3f> paddedA = moment ? lattice.padded(a) : std::vector<openvdb::Vec3f>();
+        std::vector<openvdb::Vec3f> paddedBeta;
+        if (moment && !pairFirsts.empty()) {
+            // The direction set's own error in the rest's first moment, taken off (Phase.h).
+            std::vector<openvdb::Vec3f> beta(count);
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
+                for (std::size_t v = r.begin(); v != r.end(); ++v) beta[v] = moment->rest.quadratureCorrection(a[v], pairFirsts);
+            });
+            paddedBeta = lattice.padded(beta);
+            moment->quadratureCorrection = &paddedBeta;
+        }
+        if (moment) {
+            moment->sourceAnisotropy = &paddedA;
+            previousFlux.swap(flux);
+            flux.assign(count, openvdb::Vec3f(0.0f));
+            moment->flux = &flux;
+        }
+        next.assign(count, openvdb::Vec3f(0.0f));
+        const auto sweepStart = std::chrono::steady_clock::now();
+        lattice.sweep(lattice.sweepSource(std::move(j)), directions, weight, next, &skin, nullptr, moment ? &*moment : nullptr);
+        it.sweepSeconds = secondsSince(sweepStart);
     }
-    auto grid = lattice.write(lattice.withSkin(phi, skin, corrected ? &shift : nullptr), source);
-    grid->setName(grids::kScatter);
-    return grid;
+
+    /// The correction of φ_{l+½} toward the sum: the sweeps' own solve of the gather's change, or
+    /// the diffusion correction of the sweep's.
+    void correct(SweepSolveReport::Iteration& it)
+    {
+        std::vector<openvdb::Vec3f> change(count);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t v = r.begin(); v != r.end(); ++v) change[v] = next[v] - phi[v];
+        });
+        if (gather) {
+            // δ = (I − K_s S)⁻¹ K_s S (φ_{l+½} − φ_l): the error the gather leaves, as the
+            // sweeps would leave it, by their own accelerated solve of the change's scattered
+            // light (its skin voxels hold the light on the surface: read at their centres).
+            SweepSolveOptions correction;
+            correction.kernel = ScatterKernel::Sweep;
+            correction.directions = options.directions;
+            correction.rotationSeed = options.rotationSeed;
+            correction.diffusionCoarsening = options.diffusionCoarsening;
+            correction.tolerance = kSweepCorrectionTolerance;
+            correction.maxSweeps = correctionAccelerates ? kSweepCorrectionSweeps : kPlainCorrectionSweeps;
+            correction.accelerate = correctionAccelerates;
+            correction.source = ScatterPassOptions::SourceRead::Continued;
+            SweepSolveReport solved;
+            const auto delta = lattice.read(
+                *sweepSolve(medium, *sourceFromFluence(medium, *lattice.write(change, source)), correction, solved, interrupter));
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
+                for (std::size_t v = r.begin(); v != r.end(); ++v) next[v] += delta[v] * float(damping);
+            });
+            it.correctionSweeps = int(solved.iterations.size());
+            correctionAccelerates = correctionAccelerates && solved.accelerated;
+        } else {
+            // Start from the last correction scaled as the change shrank: near albedo 1 the
+            // error left is the slowest mode, its shape the same from sweep to sweep.
+            const double moved = l1Max(change);
+            const double scale = previousChange > 0.0 ? std::min(1.0, moved / std::max(previousMoved, 1e-300)) : 0.0;
+            previousMoved = moved;
+            // With a phase, the first moment's change too (along the lattice's axes).
+            std::vector<openvdb::Vec3f> fluxChange;
+            if (moment) {
+                const openvdb::math::MapBase& map = *medium.transform().baseMap();
+                const double dx = medium.voxelSize();
+                fluxChange.resize(count);
+                tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
+                    for (std::size_t v = r.begin(); v != r.end(); ++v) {
+                        const openvdb::Vec3d d(previousFlux.empty() ? flux[v] : flux[v] - previousFlux[v]);
+                        fluxChange[v] = openvdb::Vec3f(map.applyInverseJacobian(d) * dx);
+                    }
+                });
+            }
+            const auto solved = diffusion->solve(change, scale, kDiffusionTolerance, 1000, fluxChange.empty() ? nullptr : &fluxChange);
+            corrected = true;
+            it.diffusionIterations = solved.iterations;
+            it.diffusionResidual = solved.residual;
+            diffusion->addTo(next, damping);
+        }
+    }
+
+    openvdb::Vec3SGrid::Ptr result()
+    {
+        if (!report.converged) {
+            report.stopReason = correctionNote +
+                fmt::format("stopped after {} {}, estimated error {:.2g} of the sum", report.iterations.size(), iterations,
+                    report.iterations.empty() ? 0.0 : report.iterations.back().error);
+        }
+        // The skin voxels hold the fluence on the surface, as the gathers give it.
+        std::vector<openvdb::Vec3f> shift;
+        if (corrected) {
+            shift.assign(count, openvdb::Vec3f(0.0f));
+            diffusion->addTo(shift, damping);
+        }
+        if (moment && moments) {
+            // a = F/φ at the centres (the skin's too: the correction is isotropic, F the last sweep's).
+            a.resize(count);
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
+                for (std::size_t v = r.begin(); v != r.end(); ++v) {
+                    const double phiGrey = greyOf(openvdb::Vec3d(phi[v]));
+                    a[v] = phiGrey > 0.0 ? openvdb::Vec3f(clampedToUnit(openvdb::Vec3d(flux[v]) / phiGrey)) : openvdb::Vec3f(0.0f);
+                }
+            });
+            moments->scattered = lattice.write(a, source);
+            moments->scattered->setName(grids::kScatterAnisotropy);
+        }
+        auto grid = lattice.write(lattice.withSkin(phi, skin, corrected ? &shift : nullptr), source);
+        grid->setName(grids::kScatter);
+        return grid;
+    }
+
+    const Medium& medium;
+    const openvdb::Vec3SGrid& source;
+    const SweepSolveOptions& options;
+    SweepSolveReport& report;
+    Interrupter* interrupter;
+    SweepMoments* moments;
+    const std::chrono::steady_clock::time_point setupStart = std::chrono::steady_clock::now(); ///< before the lattice is built
+    const double restG; ///< the transport's rest of the phase (Phase.h)
+    const bool gather;
+    detail::SweepLattice lattice;
+    const std::size_t count;
+    std::optional<detail::DiffusionCorrection> diffusion; ///< the sweeps' correction (the gathers' is the sweeps' solve)
+    std::vector<openvdb::Vec3f> j0;
+    std::vector<openvdb::Vec3d> directions;
+    double weight = 0.0;
+    // The rest of the phase (restG ≠ 0): J0's mean direction of travel a0, per voxel; the
+    // directions in world space; the direction set's opposite pairs (sweepDirections: ω, −ω in
+    // turn), one of each, for the rest's quadrature correction (none for a set of no such pairs).
+    std::optional<detail::SweepLattice::FirstMoment> moment;
+    std::vector<openvdb::Vec3f> a0, flux, previousFlux, a;
+    std::vector<openvdb::Vec3d> pairFirsts;
+    // Per voxel: what the iteration keeps (the sweep's own arrays and J come and go, so that at
+    // most six such arrays and the padded source live at once: 950 MB at dim 256, 4.5M voxels;
+    // a first moment adds a0, a, F, the last sweep's F and the correction's ΔF, and two padded
+    // arrays, a's and the source toward a direction).
+    std::vector<openvdb::Vec3f> phi, next, skin;
+    std::vector<openvdb::Vec3f> firstFlight; ///< the gather's K J0 (the same every iteration)
+    AndersonMixing mixing; ///< of the corrected gathers
+    /// Whether the correction's sweeps take their diffusion correction: once dropped there (voxels
+    /// many mean free paths thick), building it again for every gather cost more than the sweeps.
+    bool correctionAccelerates = true;
+    ScatterPassOptions gatherOptions;
+    bool corrected = false; ///< the last sweep added the diffusion correction (it holds it)
+    double previousChange = 0.0;
+    double previousMoved = 0.0; ///< |φ_{l+½} − φ_l|₁ of the last accelerated sweep, largest channel
+    std::string correctionNote; ///< whether and why the correction was halved or dropped
+    bool accelerate;
+    double damping = 1.0; ///< of the correction: kDampedCorrection once it stalled
+    const char* iterations; ///< the report's words
+    const char* iteration;
+    const char* correctionName;
+};
+
+} // namespace
+
+openvdb::Vec3SGrid::Ptr sweepSolve(const Medium& medium, const openvdb::Vec3SGrid& source, const SweepSolveOptions& options,
+    SweepSolveReport& report, Interrupter* interrupter, SweepMoments* moments)
+{
+    InterruptStep step(interrupter, options.kernel == ScatterKernel::Gather ? "gathering" : "sweeping");
+    SweepSolver solver(medium, source, options, report, interrupter, moments);
+    return solver.solve();
 }
 
 } // namespace vxf

@@ -147,9 +147,7 @@ inline Characteristic characteristic(const openvdb::Vec3d& omega)
 /// opticalDepthAlong continues the outside voxels' depth through the surface where the light
 /// enters it at least this steeply (cosine to the inward normal); more grazing, the plane's
 /// distance along the light is too uncertain and the step's inside part is taken as it is.
-/// The accuracy bench's translucent bunny (sun and sky, dim 64, 16 directions): 2.36% without
-/// the continuation, 1.718% from 0.3, 1.713% from 0.45, 2.18% from 0.6 (every light marched:
-/// 1.734%); a sphere's voxels a voxel deep (DirectLightTest): −7%, +3.7%, ±2%, −3.3% of the march.
+/// The best of the cosines tried (docs/accuracy-notes.md, "Behind the code: SweepLattice").
 constexpr double kContinuedCosine = 0.45;
 
 /// The octant of direction ω: bit a set where it runs toward −a.

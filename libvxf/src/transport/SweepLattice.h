@@ -42,11 +42,8 @@ public:
     /// Voxels of a leaf's three downwind faces (64 each) along an octant: what a sweep keeps of a leaf.
     static constexpr int kFaceVoxels = 192;
     /// At most this many directions of one octant sweep a leaf in turn (sweep), keeping
-    /// kFaceVoxels values per leaf and direction. The thick bunny, 16 directions, 2 cores: a
-    /// voxel per direction at a time, the whole ψ kept, 25-30 ns per voxel and direction at dim
-    /// 256 (26-27 at 128); a leaf at a time across the dominant axis, 22-24 at 128; batches and
-    /// faces, 17-20 at 256 and 19 at 128 (interleaved runs; single runs here spread ±20%).
-    /// Batches of 4 were no faster at 16 directions and took 40 MiB more at dim 256.
+    /// kFaceVoxels values per leaf and direction: the fastest batch measured, and the smallest
+    /// (docs/accuracy-notes.md, "Behind the code: SweepLattice").
     static constexpr std::size_t kSweepBatch = 2;
 
     /// The lattice over @a medium's active density and @a topology's active values.

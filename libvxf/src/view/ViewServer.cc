@@ -165,6 +165,194 @@ struct ViewServer::Impl
             ownFolder = true;
         }
     }
+
+    /// Before any page or request: the Host, the session's secret, the Origin and the body's type;
+    /// vxf's errors from bad input answered 400, anything else 500.
+    void guardRequests()
+    {
+        Impl& impl = *this;
+        // Before any page or request: a Host of this server's (DNS rebinding); for the API the
+        // session's secret (another page on this machine cannot know it); for every request that
+        // changes or writes, the page's own Origin and a JSON body (a cross-origin form or text/plain
+        // POST, which a browser sends without asking, is refused before it is read).
+        server.set_pre_routing_handler([&impl](const httplib::Request& req, httplib::Response& res) {
+            const auto refuse = [&res](int status, const std::string& why) {
+                sendError(res, status, why);
+                res.set_header("Connection", "close");
+                return httplib::Server::HandlerResponse::Handled;
+            };
+            if (!impl.hostAllowed(req.get_header_value("Host"))) {
+                return refuse(403, fmt::format("Host '{}' is not this server's", req.get_header_value("Host").substr(0, 100)));
+            }
+            if (req.path.rfind("/api/", 0) != 0) return httplib::Server::HandlerResponse::Unhandled;
+            const std::string given = req.has_header(kTokenHeader) ? req.get_header_value(kTokenHeader)
+                : req.has_param("token")                           ? req.get_param_value("token")
+                                                                   : std::string();
+            if (!sameSecret(given, impl.options.token)) {
+                return refuse(403, "this request lacks the session's token (open the address vxf view printed, with its ?token=)");
+            }
+            if (req.method != "GET" && req.method != "HEAD") {
+                if (req.has_header("Origin") && !impl.originAllowed(req.get_header_value("Origin"))) {
+                    return refuse(403, fmt::format("Origin '{}' is not this server's page", req.get_header_value("Origin").substr(0, 100)));
+                }
+                if (mediaType(req.get_header_value("Content-Type")) != "application/json") {
+                    return refuse(415, "a request that changes or writes must send application/json");
+                }
+            }
+            return httplib::Server::HandlerResponse::Unhandled;
+        });
+        // vxf's errors from bad input are the client's (400); anything else is the server's (500).
+        server.set_exception_handler([](const httplib::Request&, httplib::Response& res, std::exception_ptr ep) {
+            try {
+                std::rethrow_exception(ep);
+            } catch (const Error& e) {
+                sendError(res, 400, e.what());
+            } catch (const std::exception& e) {
+                sendError(res, 500, e.what());
+            } catch (...) {
+                sendError(res, 500, "unknown error");
+            }
+        });
+    }
+
+    /// The page and its scripts, compiled in.
+    void serveAssets()
+    {
+        const auto asset = [this](const char* path, const char* const& body, const char* type) {
+            server.Get(
+                path, [&body, type](const httplib::Request&, httplib::Response& res) { res.set_content(body, std::strlen(body), type); });
+        };
+        asset("/", detail::kIndexHtml, "text/html; charset=utf-8");
+        asset("/view.js", detail::kViewJs, kJavaScript);
+        asset("/three.module.min.js", detail::kThreeJs, kJavaScript);
+        asset("/OrbitControls.js", detail::kOrbitControlsJs, kJavaScript);
+
+        server.Get("/favicon.ico", [](const httplib::Request&, httplib::Response& res) { res.status = 204; });
+    }
+
+    /// What the page reads: the file's description, renders, points, slices, the surface and the pipeline.
+    void routeReads()
+    {
+        ViewSession& s = session;
+        Impl& impl = *this;
+        server.Get("/api/info", [&s, &impl](const httplib::Request&, httplib::Response& res) {
+            nlohmann::json info = s.describe();
+            info["scene"] = impl.options.scene.empty() ? nlohmann::json(nullptr) : nlohmann::json(impl.options.scene);
+            sendJson(res, info);
+        });
+        server.Post("/api/render", [&s, &impl](const httplib::Request& req, httplib::Response& res) {
+            if (impl.options.scene.empty()) throw UsageError("no scene to render with: start vxf view with --scene S.json");
+            const nlohmann::json body = bodyJson(req);
+            const auto dimension = [&](const char* key, int fallback) {
+                if (!body.contains(key)) return fallback;
+                if (!body[key].is_number_integer() || body[key].get<long long>() < 1 || body[key].get<long long>() > 8192) {
+                    throw UsageError(fmt::format("'{}' must be a whole number of pixels in [1, 8192]", key));
+                }
+                return body[key].get<int>();
+            };
+            const int width = dimension("width", 480), height = dimension("height", 360);
+            std::lock_guard<std::mutex> lock(impl.renderMutex);
+            const ViewSession::Rendered r = s.render(impl.options.scene, width, height, impl.options.renderFolder);
+            impl.lastPng = r.png;
+            sendJson(res, {{"ran", r.ran}, {"seconds", r.seconds}});
+        });
+        server.Get("/api/image", [&impl](const httplib::Request&, httplib::Response& res) {
+            std::lock_guard<std::mutex> lock(impl.renderMutex);
+            std::ifstream file(impl.lastPng, std::ios::binary);
+            if (impl.lastPng.empty() || !file) {
+                sendError(res, 404, "nothing rendered yet (POST /api/render)");
+                return;
+            }
+            res.set_content(std::string(std::istreambuf_iterator<char>(file), {}), "image/png");
+        });
+        server.Get("/api/points", [&s](const httplib::Request& req, httplib::Response& res) {
+            const long long budget = integerParam(req, "budget", 200000);
+            if (budget < 1 || std::size_t(budget) > kMaxPointBudget) {
+                throw UsageError(fmt::format("query parameter 'budget': {} is not in [1, {}]", budget, kMaxPointBudget));
+            }
+            const PointCloud cloud = s.points(param(req, "grid"), std::size_t(budget));
+            const std::size_t count = cloud.positions.size() / 3;
+            std::string body;
+            body.reserve(count * std::size_t(3 + cloud.channels) * sizeof(float));
+            for (std::size_t i = 0; i < count; ++i) {
+                append(body, &cloud.positions[3 * i], 3);
+                append(body, &cloud.values[std::size_t(cloud.channels) * i], std::size_t(cloud.channels));
+            }
+            res.set_header("X-Vxf-Count", std::to_string(count));
+            res.set_header("X-Vxf-Channels", std::to_string(cloud.channels));
+            res.set_header("X-Vxf-Cell-Voxels", std::to_string(cloud.cellVoxels));
+            res.set_header("X-Vxf-Cell-Size", fmt::format("{}", cloud.cellSize));
+            res.set_header("X-Vxf-Min", fmt::format("{}", cloud.minValue));
+            res.set_header("X-Vxf-Max", fmt::format("{}", cloud.maxValue));
+            res.set_header("X-Vxf-Active", std::to_string(cloud.activeVoxels));
+            res.set_content(body, "application/octet-stream");
+        });
+        server.Get("/api/slice", [&s](const httplib::Request& req, httplib::Response& res) {
+            const long long axis = integerParam(req, "axis", 2), index = integerParam(req, "index", 0);
+            if (axis < 0 || axis > 2) throw UsageError(fmt::format("query parameter 'axis': {} is not 0, 1 or 2", axis));
+            const Slice slice = s.slice(param(req, "grid"), int(axis), int(std::clamp<long long>(index, INT32_MIN / 2, INT32_MAX / 2)));
+            nlohmann::json values = nlohmann::json::array();
+            for (float v : slice.values) values.push_back(std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr));
+            sendJson(res,
+                {{"axis", slice.axis}, {"index", slice.index}, {"origin", {slice.origin.x(), slice.origin.y(), slice.origin.z()}},
+                    {"width", slice.width}, {"height", slice.height}, {"channels", slice.channels}, {"values", values}});
+        });
+        server.Get("/api/mesh", [&s](const httplib::Request& req, httplib::Response& res) {
+            const long long budget = integerParam(req, "triangles", 30000);
+            if (budget < 1 || budget > 10'000'000)
+                throw UsageError(fmt::format("query parameter 'triangles': {} is not in [1, 1e7]", budget));
+            const SurfaceMesh mesh = s.surfaceMesh(std::size_t(budget));
+            const std::uint32_t counts[2] = {std::uint32_t(mesh.positions.size() / 3), std::uint32_t(mesh.triangles.size() / 3)};
+            std::string body;
+            append(body, counts, 2);
+            append(body, mesh.positions.data(), mesh.positions.size());
+            append(body, mesh.triangles.data(), mesh.triangles.size());
+            res.set_content(body, "application/octet-stream");
+        });
+        server.Get("/api/pipeline", [&s](const httplib::Request& req, httplib::Response& res) {
+            sendJson(res, s.pipeline(req.has_param("output") ? req.get_param_value("output") : "edited.vdb"));
+        });
+    }
+
+    /// What changes the session or writes: apply, undo, export.
+    void routeEdits()
+    {
+        ViewSession& s = session;
+        server.Post("/api/apply", [&s](const httplib::Request& req, httplib::Response& res) {
+            const nlohmann::json body = bodyJson(req);
+            const nlohmann::json params = body.contains("params") ? body["params"] : nlohmann::json::object();
+            const std::string report = s.apply(stringField(body, "op"), params);
+            sendJson(res, {{"report", report}, {"steps", s.steps()}});
+        });
+        server.Post("/api/undo", [&s](const httplib::Request&, httplib::Response& res) {
+            const bool undone = s.undo();
+            sendJson(res, {{"undone", undone}, {"steps", s.steps()}});
+        });
+        server.Post("/api/export", [&s](const httplib::Request& req, httplib::Response& res) {
+            const nlohmann::json body = bodyJson(req);
+            const std::string mode = stringField(body, "mode", "whole", false);
+            ExportMode m;
+            if (mode == "whole")
+                m = ExportMode::Whole;
+            else if (mode == "diff")
+                m = ExportMode::Diff;
+            else if (mode == "smoothed")
+                m = ExportMode::Smoothed;
+            else
+                throw UsageError(fmt::format("export mode '{}' is not whole, diff or smoothed", mode));
+            int smooth = 2;
+            if (body.contains("smooth")) {
+                if (!body["smooth"].is_number_integer()) throw UsageError("'smooth' must be a whole number of voxels");
+                smooth = body["smooth"].get<int>();
+            }
+            const std::string written =
+                s.exportTo(stringField(body, "path"), m, stringField(body, "grid", "", m != ExportMode::Whole), smooth);
+            sendJson(res, {{"written", written}});
+        });
+        server.set_error_handler([](const httplib::Request& req, httplib::Response& res) {
+            if (res.status == 404 && res.body.empty()) sendError(res, 404, fmt::format("no such page or request: {}", req.path));
+        });
+    }
     ~Impl()
     {
         std::error_code ignored;
@@ -176,174 +364,16 @@ ViewServer::ViewServer(ViewSession& session, ViewServerOptions options)
     : mImpl(std::make_unique<Impl>(session, std::move(options)))
 {
     httplib::Server& server = mImpl->server;
-    ViewSession& s = session;
     Impl& impl = *mImpl;
     server.set_payload_max_length(kMaxRequestBytes);
     server.set_read_timeout(kReadTimeoutSeconds);
     server.set_keep_alive_timeout(kKeepAliveSeconds);
     server.new_task_queue = [] { return new httplib::ThreadPool(kWorkerThreads); };
     if (impl.options.token.empty()) impl.options.token = newToken();
-    // Before any page or request: a Host of this server's (DNS rebinding); for the API the
-    // session's secret (another page on this machine cannot know it); for every request that
-    // changes or writes, the page's own Origin and a JSON body (a cross-origin form or text/plain
-    // POST, which a browser sends without asking, is refused before it is read).
-    server.set_pre_routing_handler([&impl](const httplib::Request& req, httplib::Response& res) {
-        const auto refuse = [&res](int status, const std::string& why) {
-            sendError(res, status, why);
-            res.set_header("Connection", "close");
-            return httplib::Server::HandlerResponse::Handled;
-        };
-        if (!impl.hostAllowed(req.get_header_value("Host"))) {
-            return refuse(403, fmt::format("Host '{}' is not this server's", req.get_header_value("Host").substr(0, 100)));
-        }
-        if (req.path.rfind("/api/", 0) != 0) return httplib::Server::HandlerResponse::Unhandled;
-        const std::string given = req.has_header(kTokenHeader) ? req.get_header_value(kTokenHeader)
-            : req.has_param("token")                           ? req.get_param_value("token")
-                                                               : std::string();
-        if (!sameSecret(given, impl.options.token)) {
-            return refuse(403, "this request lacks the session's token (open the address vxf view printed, with its ?token=)");
-        }
-        if (req.method != "GET" && req.method != "HEAD") {
-            if (req.has_header("Origin") && !impl.originAllowed(req.get_header_value("Origin"))) {
-                return refuse(403, fmt::format("Origin '{}' is not this server's page", req.get_header_value("Origin").substr(0, 100)));
-            }
-            if (mediaType(req.get_header_value("Content-Type")) != "application/json") {
-                return refuse(415, "a request that changes or writes must send application/json");
-            }
-        }
-        return httplib::Server::HandlerResponse::Unhandled;
-    });
-    // vxf's errors from bad input are the client's (400); anything else is the server's (500).
-    server.set_exception_handler([](const httplib::Request&, httplib::Response& res, std::exception_ptr ep) {
-        try {
-            std::rethrow_exception(ep);
-        } catch (const Error& e) {
-            sendError(res, 400, e.what());
-        } catch (const std::exception& e) {
-            sendError(res, 500, e.what());
-        } catch (...) {
-            sendError(res, 500, "unknown error");
-        }
-    });
-    const auto asset = [&server](const char* path, const char* const& body, const char* type) {
-        server.Get(
-            path, [&body, type](const httplib::Request&, httplib::Response& res) { res.set_content(body, std::strlen(body), type); });
-    };
-    asset("/", detail::kIndexHtml, "text/html; charset=utf-8");
-    asset("/view.js", detail::kViewJs, kJavaScript);
-    asset("/three.module.min.js", detail::kThreeJs, kJavaScript);
-    asset("/OrbitControls.js", detail::kOrbitControlsJs, kJavaScript);
-
-    server.Get("/favicon.ico", [](const httplib::Request&, httplib::Response& res) { res.status = 204; });
-    server.Get("/api/info", [&s, &impl](const httplib::Request&, httplib::Response& res) {
-        nlohmann::json info = s.describe();
-        info["scene"] = impl.options.scene.empty() ? nlohmann::json(nullptr) : nlohmann::json(impl.options.scene);
-        sendJson(res, info);
-    });
-    server.Post("/api/render", [&s, &impl](const httplib::Request& req, httplib::Response& res) {
-        if (impl.options.scene.empty()) throw UsageError("no scene to render with: start vxf view with --scene S.json");
-        const nlohmann::json body = bodyJson(req);
-        const auto dimension = [&](const char* key, int fallback) {
-            if (!body.contains(key)) return fallback;
-            if (!body[key].is_number_integer() || body[key].get<long long>() < 1 || body[key].get<long long>() > 8192) {
-                throw UsageError(fmt::format("'{}' must be a whole number of pixels in [1, 8192]", key));
-            }
-            return body[key].get<int>();
-        };
-        const int width = dimension("width", 480), height = dimension("height", 360);
-        std::lock_guard<std::mutex> lock(impl.renderMutex);
-        const ViewSession::Rendered r = s.render(impl.options.scene, width, height, impl.options.renderFolder);
-        impl.lastPng = r.png;
-        sendJson(res, {{"ran", r.ran}, {"seconds", r.seconds}});
-    });
-    server.Get("/api/image", [&impl](const httplib::Request&, httplib::Response& res) {
-        std::lock_guard<std::mutex> lock(impl.renderMutex);
-        std::ifstream file(impl.lastPng, std::ios::binary);
-        if (impl.lastPng.empty() || !file) {
-            sendError(res, 404, "nothing rendered yet (POST /api/render)");
-            return;
-        }
-        res.set_content(std::string(std::istreambuf_iterator<char>(file), {}), "image/png");
-    });
-    server.Get("/api/points", [&s](const httplib::Request& req, httplib::Response& res) {
-        const long long budget = integerParam(req, "budget", 200000);
-        if (budget < 1 || std::size_t(budget) > kMaxPointBudget) {
-            throw UsageError(fmt::format("query parameter 'budget': {} is not in [1, {}]", budget, kMaxPointBudget));
-        }
-        const PointCloud cloud = s.points(param(req, "grid"), std::size_t(budget));
-        const std::size_t count = cloud.positions.size() / 3;
-        std::string body;
-        body.reserve(count * std::size_t(3 + cloud.channels) * sizeof(float));
-        for (std::size_t i = 0; i < count; ++i) {
-            append(body, &cloud.positions[3 * i], 3);
-            append(body, &cloud.values[std::size_t(cloud.channels) * i], std::size_t(cloud.channels));
-        }
-        res.set_header("X-Vxf-Count", std::to_string(count));
-        res.set_header("X-Vxf-Channels", std::to_string(cloud.channels));
-        res.set_header("X-Vxf-Cell-Voxels", std::to_string(cloud.cellVoxels));
-        res.set_header("X-Vxf-Cell-Size", fmt::format("{}", cloud.cellSize));
-        res.set_header("X-Vxf-Min", fmt::format("{}", cloud.minValue));
-        res.set_header("X-Vxf-Max", fmt::format("{}", cloud.maxValue));
-        res.set_header("X-Vxf-Active", std::to_string(cloud.activeVoxels));
-        res.set_content(body, "application/octet-stream");
-    });
-    server.Get("/api/slice", [&s](const httplib::Request& req, httplib::Response& res) {
-        const long long axis = integerParam(req, "axis", 2), index = integerParam(req, "index", 0);
-        if (axis < 0 || axis > 2) throw UsageError(fmt::format("query parameter 'axis': {} is not 0, 1 or 2", axis));
-        const Slice slice = s.slice(param(req, "grid"), int(axis), int(std::clamp<long long>(index, INT32_MIN / 2, INT32_MAX / 2)));
-        nlohmann::json values = nlohmann::json::array();
-        for (float v : slice.values) values.push_back(std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr));
-        sendJson(res,
-            {{"axis", slice.axis}, {"index", slice.index}, {"origin", {slice.origin.x(), slice.origin.y(), slice.origin.z()}},
-                {"width", slice.width}, {"height", slice.height}, {"channels", slice.channels}, {"values", values}});
-    });
-    server.Get("/api/mesh", [&s](const httplib::Request& req, httplib::Response& res) {
-        const long long budget = integerParam(req, "triangles", 30000);
-        if (budget < 1 || budget > 10'000'000) throw UsageError(fmt::format("query parameter 'triangles': {} is not in [1, 1e7]", budget));
-        const SurfaceMesh mesh = s.surfaceMesh(std::size_t(budget));
-        const std::uint32_t counts[2] = {std::uint32_t(mesh.positions.size() / 3), std::uint32_t(mesh.triangles.size() / 3)};
-        std::string body;
-        append(body, counts, 2);
-        append(body, mesh.positions.data(), mesh.positions.size());
-        append(body, mesh.triangles.data(), mesh.triangles.size());
-        res.set_content(body, "application/octet-stream");
-    });
-    server.Get("/api/pipeline", [&s](const httplib::Request& req, httplib::Response& res) {
-        sendJson(res, s.pipeline(req.has_param("output") ? req.get_param_value("output") : "edited.vdb"));
-    });
-    server.Post("/api/apply", [&s](const httplib::Request& req, httplib::Response& res) {
-        const nlohmann::json body = bodyJson(req);
-        const nlohmann::json params = body.contains("params") ? body["params"] : nlohmann::json::object();
-        const std::string report = s.apply(stringField(body, "op"), params);
-        sendJson(res, {{"report", report}, {"steps", s.steps()}});
-    });
-    server.Post("/api/undo", [&s](const httplib::Request&, httplib::Response& res) {
-        const bool undone = s.undo();
-        sendJson(res, {{"undone", undone}, {"steps", s.steps()}});
-    });
-    server.Post("/api/export", [&s](const httplib::Request& req, httplib::Response& res) {
-        const nlohmann::json body = bodyJson(req);
-        const std::string mode = stringField(body, "mode", "whole", false);
-        ExportMode m;
-        if (mode == "whole")
-            m = ExportMode::Whole;
-        else if (mode == "diff")
-            m = ExportMode::Diff;
-        else if (mode == "smoothed")
-            m = ExportMode::Smoothed;
-        else
-            throw UsageError(fmt::format("export mode '{}' is not whole, diff or smoothed", mode));
-        int smooth = 2;
-        if (body.contains("smooth")) {
-            if (!body["smooth"].is_number_integer()) throw UsageError("'smooth' must be a whole number of voxels");
-            smooth = body["smooth"].get<int>();
-        }
-        const std::string written = s.exportTo(stringField(body, "path"), m, stringField(body, "grid", "", m != ExportMode::Whole), smooth);
-        sendJson(res, {{"written", written}});
-    });
-    server.set_error_handler([](const httplib::Request& req, httplib::Response& res) {
-        if (res.status == 404 && res.body.empty()) sendError(res, 404, fmt::format("no such page or request: {}", req.path));
-    });
+    impl.guardRequests();
+    impl.serveAssets();
+    impl.routeReads();
+    impl.routeEdits();
 }
 
 ViewServer::~ViewServer() = default;

@@ -18,10 +18,9 @@ namespace vxf {
 /// sources) is exact for a uniform field. But light entering a thick medium falls by e over a
 /// mean free path, a voxel or two: the whole voxel under the surface then outweighs the
 /// boundary voxel and pulls the value just inside down, where the camera sees most; and
-/// trilinear interpolation of a convex fall-off overshoots between voxels. On the thick bunny
-/// (albedo 0.99, 1.3 voxels per mean free path at 64 voxels across) single scattering read so
-/// came out 11%, 6.3% and 3.6% dark at 64, 96 and 128 voxels across, against 0.3% marched to
-/// the lights.
+/// trilinear interpolation of a convex fall-off overshoots between voxels. The thick bunny's
+/// single scattering read so came out several percent dark (docs/accuracy-notes.md, "Behind the
+/// code: InteriorField").
 ///
 /// With a surface, J is first made a smooth field on the lattice that continues the interior
 /// one:
@@ -39,16 +38,12 @@ namespace vxf {
 ///   the square root of the depth and the log-linear continuation alone came out low;
 /// and J is read by geometric (log-trilinear) interpolation where the eight values of a
 /// channel are positive, linear otherwise. Both are exact for light falling off exponentially
-/// in any direction. The thick bunny's single scattering read so is −1.3%, −0.7% and +0.9%
-/// at 64, 96 and 128 voxels across (Mitsuba, single scattering only); a sphere lit by a point
-/// light at 1.3 voxels per mean free path, −3.1% against a quadrature of the exact integral
-/// (−9.9% before).
+/// in any direction.
 ///
 /// The scatter passes' sources and multiple scattering are not read so: the scattered fluence
 /// near a lit surface rises inward and is neither exponential nor linear there. Read this way
 /// (continued and interpolated log-linearly, or linearly) they moved the thick bunny's image
-/// at 96 voxels across from 2.44% to 3.4% and 3.5% off the reference; the lights' J0 alone
-/// read so in the first pass, to 2.57% (double scattering −4.7% → −4.2%).
+/// away from the reference (docs/accuracy-notes.md, "Behind the code: InteriorField").
 ///
 /// Without a surface J is read as it is (trilinear): the density's own ramp carries the edge.
 /// Immutable after construction and shared by threads; each thread reads through a Sampler.

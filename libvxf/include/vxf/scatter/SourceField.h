@@ -36,25 +36,10 @@ namespace vxf {
 ///   inside holds its layer at its centre, one outside (and every voxel outside within kReach) the
 ///   line through J on the surface and J a voxel beneath it, continued outward.
 /// A linear field is read as it is (z), and so is the first pass from a uniform source (the
-/// rise): on a flat face, 2 voxels per mean free path, to 0.03% at every depth with the face
-/// anywhere in its voxel, and a second pass gathered through the layers then came out within
-/// 0.25% of a 1-D quadrature at every depth (ScatterTest, before the passes read
-/// Near::Lattice), where the line through J on the surface and J a voxel beneath left it 6.6%
-/// low on the face when it passed through the centres, and the fraction-weighted read (σs·φ
-/// interpolated, divided by the interpolated f) holds the field flat from the last centre out,
-/// too bright by as much. Near a lit face (bench/accuracy/slab_model, albedo 0.99, the
-/// scattered fluence 1.54 on the surface, 2.94 a mean free path deep, peaking at 2.99 and then
-/// falling), the layers through the exact values read, weighted as a camera leaving at cosines
-/// 1, 0.5 and 0.25 sees them, +1.5%, +2.9%, +4.6% at 0.78 mean free paths per voxel and +4.5%,
-/// +6.8%, +8.8% at 1.56 (the lattice alone: −4.8%, −7.1%, −8.7% and −14%, −17%, −17%). On the
-/// thick bunny the layers pay through the camera; in the passes they gained nothing at dim 96
-/// and lost at 48 and 64 against the lattice alone (docs/accuracy-notes.md (h)), which the passes
-/// read (Near::Lattice).
-///
-/// Not for the lights' source J0: near a lit surface and at the terminator J0 varies within a
-/// voxel along the surface as much as across it, and a continuation along the normal misreads
-/// it (with every source read so, the thick sphere's shadowed third came out +14% instead of
-/// +5% at dim 64). It keeps the fraction-weighted read.
+/// rise). The layers pay through the camera; the passes read the lattice (Near::Lattice), where
+/// the layers gained nothing. Not for the lights' source J0, which varies along the surface
+/// within a voxel as much as across it: it keeps the fraction-weighted read. (Measured:
+/// docs/accuracy-notes.md, "Behind the code: SourceField".)
 /// Immutable after construction and shared by threads; each thread reads through a Sampler.
 class SourceField
 {
@@ -65,10 +50,8 @@ public:
         /// read of the `scatter` grid (Render), where the eye sees the first voxel's light.
         Layers,
         /// The lattice alone (its skin and outside voxels filled from the layers as above): the
-        /// passes' gathers. On the thick bunny against the layers: dim 48 7.00% → 6.52%, dim 64
-        /// 4.02% → 3.73%, dim 96 1.83% → 1.81% (docs/accuracy-notes.md (h), (i)), and no distance
-        /// read per sample. On a flat face the second pass's skin then comes out up to 2.8% off a
-        /// 1-D quadrature (0.25% with the layers), the next voxel 0.7%, deeper 0.5% (ScatterTest).
+        /// passes' gathers, closer to the reference there than the layers and no distance read
+        /// per sample (docs/accuracy-notes.md, "Behind the code: SourceField").
         Lattice
     };
 
