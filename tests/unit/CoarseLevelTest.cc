@@ -26,7 +26,7 @@ TEST_CASE("a coarse voxel covers a block of fine voxels, centre on centre", "[co
     }
 }
 
-TEST_CASE("block averages keep the total; voxels and tiles alike", "[coarse]")
+TEST_CASE("block averages keep the total, voxels and tiles alike", "[coarse]")
 {
     auto fine = openvdb::FloatGrid::create(0.0f);
     fine->setTransform(openvdb::math::Transform::createLinearTransform(0.5));

@@ -2,7 +2,7 @@
 
 #include <catch2/catch.hpp>
 
-TEST_CASE("diff holds only the edited voxels; applying it replays the edit; smoothing blends the edge", "[ops]")
+TEST_CASE("diff holds only the edited voxels, applying it replays the edit, smoothing blends the edge", "[ops]")
 {
     auto original = openvdb::FloatGrid::create(0.0f);
     original->tree().fill(openvdb::CoordBBox(openvdb::Coord(0), openvdb::Coord(15, 0, 0)), 1.0f, true);

@@ -2,7 +2,7 @@
 
 #include <catch2/catch.hpp>
 
-TEST_CASE("edit on a selection: set, hue, saturation, value, add and remove; the rest untouched", "[ops]")
+TEST_CASE("edit on a selection: set, hue, saturation, value, add and remove, the rest untouched", "[ops]")
 {
     CHECK((vxf::ops::hsvToRgb(vxf::ops::rgbToHsv(openvdb::Vec3d(0.2, 0.5, 0.9))) - openvdb::Vec3d(0.2, 0.5, 0.9)).length() < 1e-12);
     CHECK(vxf::ops::rgbToHsv(openvdb::Vec3d(1, 0, 0))[0] == 0.0);

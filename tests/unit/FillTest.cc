@@ -2,7 +2,7 @@
 
 #include <catch2/catch.hpp>
 
-TEST_CASE("blur_special fills unset voxels from their neighbours; the artist's voxels stay bit-identical", "[ops]")
+TEST_CASE("blur_special fills unset voxels from their neighbours, the artist's voxels stay bit-identical", "[ops]")
 {
     auto region = openvdb::FloatGrid::create(0.0f);
     region->tree().fill(openvdb::CoordBBox(openvdb::Coord(0), openvdb::Coord(9, 0, 0)), 1.0f, true); // a row of 10

@@ -52,7 +52,7 @@ TEST_CASE("normalize without the exact scale puts the maximum on 1", "[ops]")
     CHECK(g->tree().getValue(openvdb::Coord(0)) == Approx(0.3f).epsilon(1e-7));
 }
 
-TEST_CASE("normalize: negatives give an offset or are clamped; all-zero grids stay finite", "[ops][stability]")
+TEST_CASE("normalize: negatives give an offset or are clamped, all-zero grids stay finite", "[ops][stability]")
 {
     auto g = openvdb::FloatGrid::create(0.0f);
     g->tree().setValueOn(openvdb::Coord(0), -2.0f);

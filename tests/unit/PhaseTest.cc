@@ -30,7 +30,7 @@ TEST_CASE("Henyey-Greenstein: unit mean over the sphere, mean cosine g, 1 everyw
     CHECK(vxf::henyeyGreenstein4Pi(0.0, 0.3) == 1.0);
 }
 
-TEST_CASE("a medium of phase g holds the delta-M transport; isotropic() the similarity relation's; actual() the material's", "[phase]")
+TEST_CASE("a medium of phase g holds the delta-M transport, isotropic() the similarity relation's, actual() the material's", "[phase]")
 {
     vxf::Material m = vxf::test::greyMaterial(1.0, 4.0);
     m.phaseG = 0.75;

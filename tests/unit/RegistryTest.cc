@@ -104,7 +104,7 @@ TEST_CASE("an operator runs on a voxel set and leaves the other grids untouched"
     CHECK_THROWS_WITH(mul.run(bad), Catch::Contains("mul: no grid named 'nothing'") && Catch::Contains("density"));
 }
 
-TEST_CASE("rename and copy: grids between files, resampled when asked; backgrounds kept", "[ops][registry]")
+TEST_CASE("rename and copy: grids between files, resampled when asked, backgrounds kept", "[ops][registry]")
 {
     vxf::test::TempDir dir;
     vxf::VoxelSet other(openvdb::math::Transform::createLinearTransform(0.5));

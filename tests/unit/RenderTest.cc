@@ -394,7 +394,7 @@ TEST_CASE("surface term shadowed by a medium: Beer-Lambert along the chord, the 
     CHECK(onMesh.surface[bottom][0] == Approx(marched.surface[bottom][0]).epsilon(0.01));
 }
 
-TEST_CASE("an emitter is seen by its emission and casts no shadow; an occluder in its place does", "[render][rayscene]")
+TEST_CASE("an emitter is seen by its emission and casts no shadow, an occluder in its place does", "[render][rayscene]")
 {
     // A wall (front face y = 1) lit by a point light inside a small emitting sphere between
     // it and the camera: the sphere covers the centre pixel, the light reaches the wall

@@ -38,7 +38,7 @@ TEST_CASE("in a large homogeneous medium each pass scales by the albedo", "[scat
     for (std::size_t p = 1; p < report.passes.size(); ++p) CHECK(report.passes[p].ratio <= 0.9 + 1e-6);
 }
 
-TEST_CASE("albedo near 1 stays finite and bounded; tolerance stops the passes", "[scatter][stability]")
+TEST_CASE("albedo near 1 stays finite and bounded, tolerance stops the passes", "[scatter][stability]")
 {
     const vxf::Material m = vxf::test::albedoMaterial(8.0, 0.9999);
     vxf::VoxelSet set = uniformSphere(m, 1.0);
@@ -267,7 +267,7 @@ TEST_CASE("two passes from a uniform source near a flat face: the closed form an
     }
 }
 
-TEST_CASE("with a Henyey-Greenstein phase each pass scales by the reduced albedo; at albedo 1 none loses light", "[scatter][phase]")
+TEST_CASE("with a Henyey-Greenstein phase each pass scales by the reduced albedo, at albedo 1 none loses light", "[scatter][phase]")
 {
     // The transport's medium (Phase.h): σs' = (1 − g)σs, σt' = σt − gσs, so each pass deep in a
     // large medium scales by a' = σs'/σt', and at albedo 1 by exactly 1 for any g: the forward

@@ -226,7 +226,7 @@ TEST_CASE("the embedded scene schema is the committed one", "[pipeline][scene][s
     CHECK(vxf::sceneSchemaText() == vxf::test::slurp(vxf::test::source("schemas/scene.schema.json")));
 }
 
-TEST_CASE("a volume object's emission is a volume light on its file that moves with it; a mesh has none", "[scene][emission]")
+TEST_CASE("a volume object's emission is a volume light on its file that moves with it, a mesh has none", "[scene][emission]")
 {
     const vxf::Scene scene = parse(R"({
       "objects": [{"name": "fire", "volume": "sim/fire.vdb", "transform": {"translate": [1, 2, 3]},

@@ -37,7 +37,7 @@ openvdb::Vec3f at(const vxf::VoxelSet& set, const char* grid, const openvdb::Vec
 
 } // namespace
 
-TEST_CASE("several media share one lattice, each keeping its material; overlaps add", "[scene][voxelize]")
+TEST_CASE("several media share one lattice, each keeping its material, overlaps add", "[scene][voxelize]")
 {
     vxf::VoxelizeOptions options;
     options.dim = 64;
@@ -112,7 +112,7 @@ TEST_CASE("a material's per-voxel coefficient grids are read and resampled onto 
     CHECK_THROWS_WITH(vxf::voxelizeMedia(scene("not_a_vector"), options), Catch::Contains("needs vec3s"));
 }
 
-TEST_CASE("a volume object's grid is the medium, on its own voxels; level sets and missing grids are refused", "[scene][voxelize][volume]")
+TEST_CASE("a volume object's grid is the medium, on its own voxels, level sets and missing grids are refused", "[scene][voxelize][volume]")
 {
     // A fog sphere (OpenVDB's level set sphere made a fog volume) as a simulation would write
     // it, beside a temperature grid; the same sphere as a level set in another file.

@@ -2,7 +2,7 @@
 
 #include <catch2/catch.hpp>
 
-TEST_CASE("selections by box, sphere and range; remove and include", "[ops]")
+TEST_CASE("selections by box, sphere and range, remove and include", "[ops]")
 {
     auto g = openvdb::FloatGrid::create(0.0f);
     g->setTransform(openvdb::math::Transform::createLinearTransform(0.5));

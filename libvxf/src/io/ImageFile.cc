@@ -8,12 +8,14 @@
 #include <OpenEXR/ImfHeader.h>
 #include <OpenEXR/ImfInputFile.h>
 #include <OpenEXR/ImfOutputFile.h>
+#include <Imath/half.h>
 #include <png.h>
 
 #include <fmt/format.h>
 
 #include <cmath>
 #include <cstdio>
+#include <deque>
 #include <memory>
 
 namespace vxf {
@@ -22,22 +24,28 @@ void writeExr(const std::string& path, const RenderedImage& image, bool half)
 {
     const int w = image.width, h = image.height;
     if (w < 1 || h < 1) throw Error(fmt::format("{}: cannot write an empty image", path));
-    // OpenEXR converts float slices to half channels on writing.
+    // OpenEXR 3.1's OutputFile does not convert a float slice into a half channel (it refuses the
+    // frame buffer: `vxf render --half` failed so until 2026-12): half channels get half copies.
     const Imf::PixelType type = half ? Imf::HALF : Imf::FLOAT;
     Imf::Header header(w, h);
     Imf::FrameBuffer frame;
-    const std::size_t vecStride = sizeof(openvdb::Vec3f), rowVec = vecStride * std::size_t(w);
-    const auto addVec = [&](const std::vector<openvdb::Vec3f>& layer, const std::string& prefix, const char* names) {
-        for (int c = 0; c < 3; ++c) {
-            const std::string name = prefix + names[c];
-            header.channels().insert(name, Imf::Channel(type));
-            frame.insert(name, Imf::Slice(Imf::FLOAT, (char*)(const_cast<float*>(layer.data()->asPointer()) + c), vecStride, rowVec));
-        }
-    };
-    const auto addScalar = [&](const std::vector<float>& layer, const std::string& name) {
+    const std::size_t n = std::size_t(w) * std::size_t(h);
+    std::deque<std::vector<Imath::half>> halves; // the half copies, alive until written
+    const auto addChannel = [&](const std::string& name, const float* values, std::size_t stride) {
         header.channels().insert(name, Imf::Channel(type));
-        frame.insert(name, Imf::Slice(Imf::FLOAT, (char*)layer.data(), sizeof(float), sizeof(float) * std::size_t(w)));
+        if (!half) {
+            frame.insert(name, Imf::Slice(Imf::FLOAT, (char*)const_cast<float*>(values), stride, stride * std::size_t(w)));
+            return;
+        }
+        std::vector<Imath::half>& copy = halves.emplace_back(n);
+        for (std::size_t i = 0; i < n; ++i)
+            copy[i] = Imath::half(*reinterpret_cast<const float*>(reinterpret_cast<const char*>(values) + i * stride));
+        frame.insert(name, Imf::Slice(Imf::HALF, (char*)copy.data(), sizeof(Imath::half), sizeof(Imath::half) * std::size_t(w)));
     };
+    const auto addVec = [&](const std::vector<openvdb::Vec3f>& layer, const std::string& prefix, const char* names) {
+        for (int c = 0; c < 3; ++c) addChannel(prefix + names[c], layer.data()->asPointer() + c, sizeof(openvdb::Vec3f));
+    };
+    const auto addScalar = [&](const std::vector<float>& layer, const std::string& name) { addChannel(name, layer.data(), sizeof(float)); };
     addVec(image.combined, "", "RGB");
     addScalar(image.alpha, "A");
     addVec(image.surface, "surface.", "RGB");

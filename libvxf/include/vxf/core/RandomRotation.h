@@ -1,7 +1,7 @@
 // vxf — a uniformly random rotation from three numbers in [0, 1) (Shoemake's quaternions).
 #pragma once
 
-#include <openvdb/math/Mat3.h>
+#include <openvdb/Types.h> // openvdb::Mat3d
 
 #include <cmath>
 

@@ -1,0 +1,58 @@
+// The lattice the sweeps run on (src/transport/SweepLattice.h, private to light and scatter): a
+// grid's values read and written back, optical depth along a direction, and the transport
+// sweep's fixed point deep in a homogeneous medium.
+#include "transport/SweepLattice.h"
+
+#include <vxf/scatter/SweepPass.h>
+
+#include "TestSupport.h"
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+TEST_CASE("a sweep lattice reads a grid's voxels and writes them back as they were", "[transport][lattice]")
+{
+    const vxf::Material m = vxf::test::albedoMaterial(3.0, 0.5);
+    const vxf::VoxelSet set = vxf::test::uniformSphere(m, 2.0, 8);
+    const auto& source = *set.get<openvdb::Vec3SGrid>("scatter_source");
+    const vxf::Medium medium(set, m);
+    const vxf::detail::SweepLattice lattice(medium, source);
+    CHECK(lattice.voxelCount() == lattice.leafCount() * vxf::detail::SweepLattice::kLeafVoxels);
+    CHECK(lattice.voxelSize() == Approx(1.0 / 8.0));
+    const std::vector<openvdb::Vec3f> values = lattice.read(source);
+    REQUIRE(values.size() == lattice.voxelCount());
+    const auto back = lattice.write(values, source);
+    std::string why;
+    CHECK(vxf::test::identicalGrids(*back, source, &why));
+    INFO(why);
+    const openvdb::Coord c(1, 2, 3);
+    REQUIRE(lattice.indexOf(c) >= 0);
+    CHECK(values[std::size_t(lattice.indexOf(c))] == source.tree().getValue(c));
+    CHECK(lattice.indexOf(openvdb::Coord(1000)) == -1);
+}
+
+TEST_CASE("optical depth along an axis is sigma_t times the way in, and a sweep's fixed point is 4 pi J / sigma_t",
+    "[transport][lattice]")
+{
+    const double sigmaT = 30.0; // a unit sphere, 16 voxels across the radius: 1.9 mean free paths per voxel
+    const vxf::Material m = vxf::test::albedoMaterial(sigmaT, 0.5);
+    const vxf::VoxelSet set = vxf::test::uniformSphere(m, 1.0, 16);
+    const auto& source = *set.get<openvdb::Vec3SGrid>("scatter_source");
+    const vxf::Medium medium(set, m);
+    const vxf::detail::SweepLattice lattice(medium, source);
+    const std::size_t centre = std::size_t(lattice.indexOf(openvdb::Coord(0)));
+
+    std::vector<openvdb::Vec3f> tau;
+    lattice.opticalDepthAlong(openvdb::Vec3d(0.0, 0.0, -1.0), tau);
+    REQUIRE(tau.size() == lattice.voxelCount());
+    CHECK(tau[centre][0] == Approx(sigmaT * 1.0).epsilon(0.04)); // the radius, to the edge's ramp of a voxel
+    const std::size_t below = std::size_t(lattice.indexOf(openvdb::Coord(0, 0, -8)));
+    CHECK(tau[below][0] == Approx(sigmaT * 1.5).epsilon(0.04)); // half a radius further along the light
+
+    const std::vector<openvdb::Vec3d> directions = vxf::sweepDirections(16, 0);
+    std::vector<openvdb::Vec3f> fluence(lattice.voxelCount(), openvdb::Vec3f(0.0f));
+    lattice.sweep(lattice.sweepSource(lattice.read(source)), directions, 4.0 * M_PI / double(directions.size()), fluence);
+    const double j = source.tree().getValue(openvdb::Coord(0))[0];
+    CHECK(fluence[centre][0] == Approx(4.0 * M_PI * j / sigmaT).epsilon(1e-4));
+}
