@@ -73,7 +73,6 @@ std::string OperatorOptions::label(const ops::Param& param) const
     return op + (comma == std::string::npos ? spelt->second : spelt->second.substr(comma + 1));
 }
 
-
 nlohmann::json OperatorOptions::given() const
 {
     nlohmann::json values = nlohmann::json::object();

@@ -10,10 +10,7 @@
 using nlohmann::json;
 
 namespace {
-vxf::ops::Args defaultsOf(const char* stage, json values = json::object())
-{
-    return vxf::ops::checkArgs(vxf::findOperator(stage), values);
-}
+vxf::ops::Args defaultsOf(const char* stage, json values = json::object()) { return vxf::ops::checkArgs(vxf::findOperator(stage), values); }
 } // namespace
 
 TEST_CASE("a stage operator's defaults are its options' and a scene's defaults", "[pipeline][operators]")

@@ -11,8 +11,8 @@ TEST_CASE("a random rotation is orthonormal with determinant one, and turns the 
     openvdb::Vec3d meanPole(0.0);
     const int n = 20000;
     for (int i = 0; i < n; ++i) {
-        const openvdb::Mat3d r = vxf::randomRotation(vxf::unitHash(7, std::uint64_t(i), 0), vxf::unitHash(7, std::uint64_t(i), 1),
-            vxf::unitHash(7, std::uint64_t(i), 2));
+        const openvdb::Mat3d r = vxf::randomRotation(
+            vxf::unitHash(7, std::uint64_t(i), 0), vxf::unitHash(7, std::uint64_t(i), 1), vxf::unitHash(7, std::uint64_t(i), 2));
         const openvdb::Mat3d identity = r * r.transpose();
         for (int a = 0; a < 3; ++a) {
             for (int b = 0; b < 3; ++b) REQUIRE(identity(a, b) == Approx(a == b ? 1.0 : 0.0).margin(1e-12));

@@ -10,8 +10,7 @@
 
 #include <cmath>
 
-TEST_CASE("a gather holds 4 pi J / sigma_t deep in a homogeneous medium, and J / sigma_t (1 - e^-tau) toward the edge",
-    "[scatter][gather]")
+TEST_CASE("a gather holds 4 pi J / sigma_t deep in a homogeneous medium, and J / sigma_t (1 - e^-tau) toward the edge", "[scatter][gather]")
 {
     const double sigmaT = 20.0, albedo = 0.5;
     const vxf::Material m = vxf::test::albedoMaterial(sigmaT, albedo);

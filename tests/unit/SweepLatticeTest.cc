@@ -32,8 +32,7 @@ TEST_CASE("a sweep lattice reads a grid's voxels and writes them back as they we
     CHECK(lattice.indexOf(openvdb::Coord(1000)) == -1);
 }
 
-TEST_CASE("optical depth along an axis is sigma_t times the way in, and a sweep's fixed point is 4 pi J / sigma_t",
-    "[transport][lattice]")
+TEST_CASE("optical depth along an axis is sigma_t times the way in, and a sweep's fixed point is 4 pi J / sigma_t", "[transport][lattice]")
 {
     const double sigmaT = 30.0; // a unit sphere, 16 voxels across the radius: 1.9 mean free paths per voxel
     const vxf::Material m = vxf::test::albedoMaterial(sigmaT, 0.5);

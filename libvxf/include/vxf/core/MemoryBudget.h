@@ -29,7 +29,7 @@ std::uint64_t memoryBudget();
 inline constexpr double kStageFixedBytes = 100.0 * 1024 * 1024;
 
 /// A stage's peak estimate: a fixed part (the process, libraries, small tables) plus what it
-/// holds per voxel and per pixel, measured on the bunny (docs/performance.md, bench/pipeline).
+/// holds per voxel and per pixel, measured on the bunny (docs/reports/performance.md, bench/pipeline).
 struct MemoryEstimate
 {
     double bytes = 0.0;

@@ -36,7 +36,7 @@ struct DirectLightOptions
     /// to the next mesh ahead in one go); the deeper ones blended from them. Area lights (many
     /// points) are marched either way.
     /// Off: every light marched (the reference). The bunny at dim 256 with a point light and a
-    /// 16-direction sky, steps of a voxel: 78 s marched, 5.1 s swept (docs/performance.md).
+    /// 16-direction sky, steps of a voxel: 78 s marched, 5.1 s swept (docs/reports/performance.md).
     bool sweep = true;
     /// Light the similarity relation's isotropic medium (Medium::isotropic()) rather than the
     /// transport's: for a scatter that will carry no angular moment (the gather kernel, plain
@@ -87,7 +87,7 @@ openvdb::Vec3d lightFluence(const LightSampler& light, Medium::Sampler& sampler,
     const MarchOptions& options, const RayScene* occluders = nullptr, openvdb::Vec3d* flux = nullptr);
 
 /// The light stage's peak per active voxel of the medium's density (tiles' voxels counted):
-/// 773 MiB for the bunny's 3.67M at dim 256 (docs/performance.md), less the fixed part,
+/// 773 MiB for the bunny's 3.67M at dim 256 (docs/reports/performance.md), less the fixed part,
 /// rounded up. computeDirectLight checks it against the memory budget before it allocates.
 inline constexpr double kLightBytesPerVoxel = 200.0;
 

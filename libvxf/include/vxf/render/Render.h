@@ -55,7 +55,7 @@ struct RenderMeshes
 
 /// The render stage's peak per active voxel of the medium's density and per pixel (its layers,
 /// sample tables and the EXR written): 1,322 MiB at dim 256 and 1280x720, 367 MiB at dim 128
-/// (docs/performance.md), less the fixed part, rounded up. render checks them against the
+/// (docs/reports/performance.md), less the fixed part, rounded up. render checks them against the
 /// memory budget before it allocates (a 32768² image is refused at once).
 inline constexpr double kRenderBytesPerVoxel = 300.0;
 inline constexpr double kRenderBytesPerPixel = 160.0;

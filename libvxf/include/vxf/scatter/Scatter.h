@@ -84,7 +84,7 @@ ScatterOptions scatterOptionsFrom(const SceneSettings& settings);
 openvdb::Vec3d gridEnergy(const openvdb::Vec3SGrid& grid);
 
 /// The scatter stage's peak per active voxel of the medium's density: 976 MiB for the bunny's
-/// 3.67M at dim 256 solved whole by accelerated sweeps (docs/performance.md), less the fixed
+/// 3.67M at dim 256 solved whole by accelerated sweeps (docs/reports/performance.md), less the fixed
 /// part, rounded up. scatter checks it against the memory budget before it allocates.
 inline constexpr double kScatterBytesPerVoxel = 260.0;
 
