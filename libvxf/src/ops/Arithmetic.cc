@@ -12,10 +12,10 @@ void arithmetic(openvdb::GridBase& grid, ArithmeticOp op, const openvdb::Vec3d& 
         using GridT = std::decay_t<decltype(g)>;
         using ValueT = typename GridT::ValueType;
         const ValueT operand = detail::fromColor<ValueT>(value);
-        const auto apply = [&g, &operand](auto&& op) {
+        const auto apply = [&g, &operand](auto&& combine) {
             detail::forEachActiveValue(g, [&](ValueT& v) {
                 for (int c = 0; c < detail::channels(v); ++c)
-                    detail::ref(v, c) = detail::finite(op(detail::get(v, c), detail::get(operand, c)));
+                    detail::ref(v, c) = detail::finite(combine(detail::get(v, c), detail::get(operand, c)));
             });
         };
         switch (op) {

@@ -262,10 +262,10 @@ struct PipelineRun
     }
 
     /// The volume the render reads: the scatter stage's entry, or the light stage's when it does not run.
-    Entry scatterStage(const Entry& lit)
+    Entry scatterStage(const Entry& lighting)
     {
-        const fs::path& lightFile = lit.file;
-        const std::string& lightHash = lit.hash;
+        const fs::path& lightFile = lighting.file;
+        const std::string& lightHash = lighting.hash;
 
         // Scatter, only when it matters.
         fs::path volumeFile = lightFile;

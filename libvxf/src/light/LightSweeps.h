@@ -1,0 +1,62 @@
+// vxf — the light stage's sweeps (private to light/): directional and environment lights by one
+// optical-depth sweep over the medium per direction, point and spot lights by one sweep around
+// the light, the surface's rim marched along the directions that graze it. DirectLight.cc runs
+// them for computeDirectLight (vxf/light/DirectLight.h says what each light type takes).
+#pragma once
+
+#include <vxf/light/DirectLight.h>
+#include <vxf/light/LightSampler.h>
+#include <vxf/core/RayScene.h>
+
+#include "../transport/SweepLattice.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace vxf::detail {
+
+/// The rim's light (voxels whose centre lies outside the surface within half a voxel; their
+/// light is taken on the surface beneath) comes from the sweep along directions that meet the
+/// surface at least this steeply (|cosine| to its normal), and is marched along the others.
+/// Steeply, the centre and the surface point see the light along neighbouring rays that cross
+/// no surface between them: from outside, through vacuum; from inside, leaving the medium at
+/// the surface the step to the centre crosses. Grazing, the two rays part where the surface
+/// curves away (the terminator), and only a march from the surface point is right.
+inline constexpr double kRimSweptCosine = 0.45;
+
+/// The rim: per lattice voxel, its entry in `voxels`, `points` and `normals` (its per-voxel
+/// index, its medium point and the surface's outward unit normal there, index space) or −1 for
+/// a voxel not in the rim.
+struct Rim
+{
+    std::vector<std::int32_t> entry;
+    std::vector<std::size_t> voxels;
+    std::vector<openvdb::Vec3d> points, normals;
+    bool grazing(std::int32_t e, const openvdb::Vec3d& towardLight) const
+    {
+        return std::abs(normals[std::size_t(e)].dot(towardLight)) < kRimSweptCosine;
+    }
+};
+
+/// Whether none of @a occluders (may be null) blocks sample @a s seen from world point @a x.
+inline bool unoccluded(const RayScene* occluders, const Medium& medium, const openvdb::Vec3d& x, const LightSample& s)
+{
+    return !occluders || !occluders->occluded(x, s.direction, 1e-4 * medium.voxelSize(), s.distance);
+}
+
+/// The rim of @a lattice's voxels (centres outside the surface within half a voxel).
+Rim rimOf(const SweepLattice& lattice, const Medium& medium);
+/// The light stage's medium sampler (crossings snapped to the media's meshes).
+Medium::Sampler lightStageSampler(const Medium& medium, const DirectLightOptions& options);
+/// Directional and environment lights: one optical-depth sweep per direction.
+bool sweepable(const Light& light);
+/// A sweepable light's fluence at every lattice voxel (its first moment into @a flux when given).
+std::vector<openvdb::Vec3f> sweepLight(const LightSampler& light, const SweepLattice& lattice, const Medium& medium, const Rim& rim,
+    const DirectLightOptions& options, std::vector<openvdb::Vec3f>* flux);
+/// Point and spot lights: one sweep around the light.
+bool sweepableFromPoint(const Light& light);
+/// A point or spot light's fluence at every lattice voxel, the voxels near the surface marched.
+std::vector<openvdb::Vec3f> sweepPointLight(const LightSampler& light, const SweepLattice& lattice, const Medium& medium, const Rim& rim,
+    const DirectLightOptions& options, std::vector<openvdb::Vec3f>* flux);
+
+} // namespace vxf::detail

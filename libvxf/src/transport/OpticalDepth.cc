@@ -1,0 +1,181 @@
+#include "SweepSteps.h"
+
+#include <vxf/core/Error.h>
+#include <vxf/core/Hash.h>
+
+#include <openvdb/tree/LeafManager.h>
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <optional>
+#include <unordered_map>
+
+namespace vxf::detail {
+
+openvdb::Vec3f SweepLattice::depthStep(std::size_t leaf, int p, const openvdb::Vec3d& omega, const float (&weight)[4],
+    const int (&offset)[4], double length, const openvdb::Vec3f (&tauUpwind)[4]) const
+{
+    const openvdb::Vec3f* st = &mSigmaT[leaf * kPaddedVoxels];
+    const float* distance = &mDistance[leaf * kPaddedVoxels];
+    openvdb::Vec3f tauIn(0.0f), stIn(0.0f);
+    float dIn = 0.0f;
+    bool outside = false, inside = false; // upwind voxels on either side of the surface
+    for (int k = 0; k < 4; ++k) {
+        const int q = p + offset[k];
+        tauIn += weight[k] * tauUpwind[k];
+        stIn += weight[k] * st[q];
+        dIn += weight[k] * distance[q];
+        if (weight[k] > 0.0f) (distance[q] >= 0.0f ? outside : inside) = true;
+    }
+    const float dHere = distance[p];
+    // Light entering through the surface between the upwind voxels: τ rises linearly from the
+    // surface, 0 before it, and blending across that kink overstates it (the first voxel inside
+    // came out 16% dark at 0.77 mean free paths per voxel). The outside voxels' τ is continued
+    // through the surface instead, as far as a plane (the level set's normal here) puts it,
+    // with this voxel's σt, and the step taken whole.
+    double cosine = 0.0;
+    if (outside && inside && dHere < 0.0f) {
+        const openvdb::Vec3d normal(
+            distance[p + 100] - distance[p - 100], distance[p + 10] - distance[p - 10], distance[p + 1] - distance[p - 1]);
+        if (normal.length() > 1e-6) cosine = -omega.dot(normal.unit());
+    }
+    openvdb::Vec3f result = tauIn;
+    if (cosine > kContinuedCosine) {
+        result = openvdb::Vec3f(float(length * mVoxelSize) * st[p]);
+        for (int k = 0; k < 4; ++k) {
+            const int q = p + offset[k];
+            openvdb::Vec3f t = tauUpwind[k];
+            if (distance[q] >= 0.0f) t -= float(distance[q] / cosine * mVoxelSize) * st[p];
+            result += weight[k] * t;
+        }
+        for (int ch = 0; ch < 3; ++ch) result[ch] = std::max(result[ch], 0.0f);
+    } else {
+        const InsidePart part = insidePart(dIn, dHere);
+        if (part.fraction > 0.0) {
+            const openvdb::Vec3f sigmaStart = part.startOutside ? st[p] : stIn, sigmaEnd = part.endOutside ? stIn : st[p];
+            result += float(0.5 * length * part.fraction * mVoxelSize) * (sigmaStart + sigmaEnd);
+        }
+    }
+    return result;
+}
+
+void SweepLattice::opticalDepthAlong(const openvdb::Vec3d& omega, std::vector<openvdb::Vec3f>& tau, const EnteringDepth& entering) const
+{
+    tau.assign(voxelCount(), openvdb::Vec3f(0.0f));
+    const Characteristic c = characteristic(omega);
+    const float halfStep = float(0.5 * c.length * mVoxelSize);
+    inUpwindOrder(
+        omega, tau,
+        [&](std::size_t n, openvdb::Vec3f* buffer, const UpwindVoxel* voxels) {
+            openvdb::Vec3f* out = &tau[n * kLeafVoxels];
+            if (mUniform[n]) {
+                // One σt over the padded block: every step adds the same (its upwind blend of σt
+                // the same sum at every voxel), the block's σt not read (it is most of a sweep's
+                // memory traffic).
+                const openvdb::Vec3f sigmaT = mSigmaT[n * kPaddedVoxels];
+                openvdb::Vec3f stIn(0.0f);
+                for (int k = 0; k < 4; ++k) stIn += c.weight[k] * sigmaT;
+                const openvdb::Vec3f own = halfStep * (stIn + sigmaT);
+                for (int voxel = 0; voxel < kLeafVoxels; ++voxel) {
+                    const int p = voxels[voxel].padded;
+                    openvdb::Vec3f tauIn(0.0f);
+                    for (int k = 0; k < 4; ++k) tauIn += c.weight[k] * buffer[p + c.offset[k]];
+                    const openvdb::Vec3f result = tauIn + own;
+                    buffer[p] = result;
+                    out[voxels[voxel].local] = result;
+                }
+                return;
+            }
+            for (int voxel = 0; voxel < kLeafVoxels; ++voxel) {
+                const int p = voxels[voxel].padded;
+                const openvdb::Vec3f upwind[4] = {
+                    buffer[p + c.offset[0]], buffer[p + c.offset[1]], buffer[p + c.offset[2]], buffer[p + c.offset[3]]};
+                const openvdb::Vec3f result = depthStep(n, p, omega, c.weight, c.offset, c.length, upwind);
+                buffer[p] = result;
+                out[voxels[voxel].local] = result;
+            }
+        },
+        entering);
+}
+
+int SweepLattice::octantAround(const openvdb::Coord& ijk, const openvdb::Vec3d& point)
+{
+    return (ijk[0] < point[0] ? 1 : 0) | (ijk[1] < point[1] ? 2 : 0) | (ijk[2] < point[2] ? 4 : 0);
+}
+
+void SweepLattice::opticalDepthFrom(
+    const openvdb::Vec3d& point, std::vector<openvdb::Vec3f>& tau, std::vector<std::uint8_t>& state, const MarchedDepth& marched) const
+{
+    tau.assign(voxelCount(), openvdb::Vec3f(0.0f));
+    state.assign(voxelCount(), kPending);
+    const float* distances = mDistance.data();
+    for (int octant = 0; octant < 8; ++octant) {
+        // The leaves holding voxels of this octant (bit a set: below the point along axis a).
+        const auto holds = [&](std::size_t n) {
+            for (int a = 0; a < 3; ++a) {
+                const bool below = (octant >> a) & 1;
+                if (below ? !(mOrigins[n][a] < point[a]) : !(mOrigins[n][a] + 7 >= point[a])) return false;
+            }
+            return true;
+        };
+        leavesInUpwindOrder(octant, [&](std::size_t n) {
+            if (!holds(n)) return;
+            const SweptSoFar swept(*this, tau, octant, n, frontKey(n, octant), point, &state);
+            const openvdb::Coord& o = mOrigins[n];
+            const openvdb::Vec3d centre = o.asVec3d() + openvdb::Vec3d(3.5) - point;
+            const std::array<UpwindVoxel, kLeafVoxels>& voxels = upwindVoxels(octant, dominantAxis(centre));
+            for (const UpwindVoxel& voxel : voxels) {
+                const int local = voxel.local;
+                const openvdb::Coord ijk = o.offsetBy(local >> 6, (local >> 3) & 7, local & 7);
+                if (octantAround(ijk, point) != octant) continue;
+                const std::size_t i = n * kLeafVoxels + std::size_t(local);
+                const float d = distances[n * kPaddedVoxels + std::size_t(voxel.padded)];
+                const openvdb::Vec3d away = ijk.asVec3d() - point;
+                // A characteristic reaching back past the point's own layer (a voxel next to the
+                // point) has no upwind layer to read: marched.
+                bool sweepable = std::abs(away[dominantAxis(away)]) > 1.0;
+                Characteristic c{};
+                openvdb::Vec3f upwind[4];
+                if (sweepable) {
+                    c = characteristic(away.unit());
+                    const double crossing = away.length() - c.length; // the crossing's distance from the point
+                    for (int k = 0; k < 4 && sweepable; ++k) {
+                        upwind[k] = openvdb::Vec3f(0.0f);
+                        if (!(c.weight[k] > 0.0f)) continue;
+                        const int q = voxel.padded + c.offset[k];
+                        const int ux = q / 100 - 1, uy = q / 10 % 10 - 1, uz = q % 10 - 1;
+                        const std::int64_t at = voxelIndex(n, ux, uy, uz);
+                        // An upwind voxel of no leaf (light across vacuum) or across one of the
+                        // point's planes not yet swept: marched.
+                        if (at < 0 || octantAround(o.offsetBy(ux, uy, uz), point) > octant) {
+                            sweepable = false;
+                        } else {
+                            // τ grows along each ray from the point, not across the fan: blended
+                            // as it is, the cone σt·r is convex across the layer and every step
+                            // overstates it (3.5% of the light off at 30 voxels in a uniform box).
+                            // Blended as the mean σt of each ray (τ/r) times the crossing's own
+                            // distance, a uniform medium's τ is exact.
+                            const double r = (o.offsetBy(ux, uy, uz).asVec3d() - point).length();
+                            upwind[k] = tau[std::size_t(at)] * float(crossing / r);
+                        }
+                    }
+                }
+                openvdb::Vec3f depth;
+                if (marched(ijk, d, !sweepable, swept, depth)) {
+                    tau[i] = depth;
+                    state[i] = kMarched;
+                } else {
+                    tau[i] = depthStep(n, voxel.padded, away.unit(), c.weight, c.offset, c.length, upwind);
+                    state[i] = kBlended;
+                }
+            }
+        });
+    }
+}
+
+} // namespace vxf::detail

@@ -1,0 +1,207 @@
+#include "SweepSteps.h"
+
+#include <vxf/core/Error.h>
+#include <vxf/core/Hash.h>
+
+#include <openvdb/tree/LeafManager.h>
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <optional>
+#include <unordered_map>
+
+namespace vxf::detail {
+
+void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::vector<openvdb::Vec3d>& directions, double weight,
+    std::vector<openvdb::Vec3f>& fluence, std::vector<openvdb::Vec3f>* skinFluence, Interrupter* interrupter,
+    const FirstMoment* moment) const
+{
+    if (skinFluence) skinFluence->assign(mSkin.size(), openvdb::Vec3f(0.0f));
+    const bool skins = skinFluence && !mSkin.empty();
+    if (source.size() != mOrigins.size() * kPaddedVoxels || fluence.size() != voxelCount()) {
+        throw Error("sweep: source or fluence does not match the lattice");
+    }
+    const float w = float(weight);
+    if (moment &&
+        (moment->worldDirections.size() != directions.size() || !moment->sourceAnisotropy ||
+            moment->sourceAnisotropy->size() != source.size() || !moment->flux || moment->flux->size() != voxelCount())) {
+        throw Error("sweep: the first moment's arrays do not match the lattice");
+    }
+    std::vector<openvdb::Vec3f>* flux = moment ? moment->flux : nullptr;
+
+    // The directions in batches of one octant, at most kSweepBatch each (in the order given
+    // within an octant): a batch's directions visit a leaf one after another while its source
+    // and fluence are in cache, and each keeps of a leaf only its downwind faces, all that the
+    // next leaves read.
+    std::vector<std::vector<std::size_t>> batches;
+    for (int o = 0; o < 8; ++o) {
+        std::vector<std::size_t> inOctant;
+        for (std::size_t d = 0; d < directions.size(); ++d) {
+            if (octantOf(directions[d]) == o) inOctant.push_back(d);
+        }
+        for (std::size_t i = 0; i < inOctant.size(); i += kSweepBatch) {
+            batches.emplace_back(
+                inOctant.begin() + std::ptrdiff_t(i), inOctant.begin() + std::ptrdiff_t(std::min(inOctant.size(), i + kSweepBatch)));
+        }
+    }
+    const std::size_t leaves = mOrigins.size();
+    std::size_t largest = 0;
+    for (const std::vector<std::size_t>& batch : batches) largest = std::max(largest, batch.size());
+    std::vector<openvdb::Vec3f> faces(largest * leaves * kFaceVoxels);
+    struct Scratch
+    {
+        std::vector<openvdb::Vec3f> buffer, toward;
+    };
+    tbb::enumerable_thread_specific<Scratch> scratches([] {
+        return Scratch{std::vector<openvdb::Vec3f>(kPaddedVoxels, openvdb::Vec3f(0.0f)), std::vector<openvdb::Vec3f>(kPaddedVoxels)};
+    });
+    std::size_t swept = 0;
+    for (const std::vector<std::size_t>& batch : batches) {
+        const int octant = octantOf(directions[batch.front()]);
+        const std::vector<Ghost> upwind = upwindGhosts(octant);
+        const std::array<std::int16_t, kFaceVoxels> downwind = downwindFaces(octant);
+        leavesInUpwindOrder(octant, [&](std::size_t n) {
+            Scratch& scratch = scratches.local();
+            openvdb::Vec3f* buffer = scratch.buffer.data();
+            for (std::size_t slot = 0; slot < batch.size(); ++slot) {
+                const std::size_t d = batch[slot];
+                const openvdb::Vec3d& omega = directions[d];
+                const openvdb::Vec3f* ownFaces = &faces[slot * leaves * kFaceVoxels];
+                for (const Ghost& g : upwind) {
+                    const int leaf = mNeighbours[n * 27 + g.slot];
+                    buffer[g.padded] = leaf >= 0 ? ownFaces[std::size_t(leaf) * kFaceVoxels + std::size_t(g.face)] : openvdb::Vec3f(0.0f);
+                }
+                // With a moment, the source toward ω: J·RestPhase(a, ω) over the leaf's padded block.
+                const openvdb::Vec3f* j = &source[n * kPaddedVoxels];
+                openvdb::Vec3f worldOmega(0.0f);
+                if (moment) {
+                    worldOmega = openvdb::Vec3f(moment->worldDirections[d]);
+                    const openvdb::Vec3f* a = &(*moment->sourceAnisotropy)[n * kPaddedVoxels];
+                    if (moment->quadratureCorrection) {
+                        const openvdb::Vec3f* beta = &(*moment->quadratureCorrection)[n * kPaddedVoxels];
+                        for (int q = 0; q < kPaddedVoxels; ++q)
+                            scratch.toward[std::size_t(q)] = j[q] * moment->rest(a[q], worldOmega, beta[q]);
+                    } else {
+                        for (int q = 0; q < kPaddedVoxels; ++q) scratch.toward[std::size_t(q)] = j[q] * moment->rest(a[q], worldOmega);
+                    }
+                    j = scratch.toward.data();
+                }
+                sweepLeaf(n, omega, upwindVoxels(octant, dominantAxis(omega)).data(), j, buffer, w, &fluence[n * kLeafVoxels],
+                    flux ? &(*flux)[n * kLeafVoxels] : nullptr, worldOmega, skins ? skinFluence : nullptr);
+                openvdb::Vec3f* leafFaces = &faces[(slot * leaves + n) * kFaceVoxels];
+                for (int k = 0; k < kFaceVoxels; ++k) leafFaces[k] = buffer[downwind[std::size_t(k)]];
+            }
+        });
+        swept += batch.size();
+        if (interrupter && interrupter->wasInterrupted(int(100 * swept / directions.size()))) throw Interrupted();
+    }
+}
+
+void SweepLattice::sweepLeaf(std::size_t n, const openvdb::Vec3d& omega, const UpwindVoxel* voxels, const openvdb::Vec3f* j,
+    openvdb::Vec3f* buffer, float w, openvdb::Vec3f* phi, openvdb::Vec3f* fluxHere, const openvdb::Vec3f& worldOmega,
+    std::vector<openvdb::Vec3f>* skinFluence) const
+{
+    const Characteristic path = characteristic(omega);
+    const float* wt = path.weight;
+    const int* off = path.offset;
+    const double len = mVoxelSize * path.length;
+    const openvdb::Vec3f* st = &mSigmaT[n * kPaddedVoxels];
+    const float* distance = &mDistance[n * kPaddedVoxels];
+    // Per channel, the last step's weights (uniformWeights).
+    UniformWeights uw[3];
+    if (mUniform[n]) {
+        // The short path of a deep leaf of one σt (about half the thick bunny's leaves at dim
+        // 256): what the general path below computes there (every step whole, σt the same at
+        // both ends, no skin), to the bit, without its tests, the step's weights once a leaf.
+        const openvdb::Vec3f sigmaT = st[0]; // the leaf's one σt: its padded block is not streamed
+        for (int ch = 0; ch < 3; ++ch) uniformWeights(sigmaT[ch], len, uw[ch]);
+        const openvdb::Vec3f transmittance(uw[0].transmittance, uw[1].transmittance, uw[2].transmittance), in(uw[0].in, uw[1].in, uw[2].in),
+            own(uw[0].own, uw[1].own, uw[2].own);
+        for (int k = 0; k < kLeafVoxels; ++k) {
+            const int p = voxels[k].padded, v = voxels[k].local;
+            openvdb::Vec3f psiIn(0.0f), jIn(0.0f);
+            for (int i = 0; i < 4; ++i) {
+                psiIn += wt[i] * buffer[p + off[i]];
+                jIn += wt[i] * j[p + off[i]];
+            }
+            openvdb::Vec3f result;
+            for (int ch = 0; ch < 3; ++ch) result[ch] = transmittance[ch] * psiIn[ch] + in[ch] * jIn[ch] + own[ch] * j[p][ch];
+            buffer[p] = result;
+            phi[v] += w * result;
+            if (fluxHere) fluxHere[v] += (w * (result[0] + result[1] + result[2]) / 3.0f) * worldOmega;
+        }
+        return;
+    }
+    const bool deep = mDeep[n] != 0; // no surface within reach: every step whole, no skin
+    const std::int32_t* skinIndex = skinFluence && !deep ? &mSkinIndex[n * kLeafVoxels] : nullptr;
+    for (int k = 0; k < kLeafVoxels; ++k) {
+        const int p = voxels[k].padded, v = voxels[k].local;
+        openvdb::Vec3f psiIn(0.0f), jIn(0.0f), stIn(0.0f);
+        float dIn = -1.0f;
+        bool uniform = true; // σt the same upwind as here: then exactly so, and the step's weights repeat
+        for (int i = 0; i < 4; ++i) {
+            psiIn += wt[i] * buffer[p + off[i]];
+            jIn += wt[i] * j[p + off[i]];
+            stIn += wt[i] * st[p + off[i]];
+            uniform = uniform && st[p + off[i]] == st[p];
+        }
+        if (!deep) {
+            dIn = 0.0f;
+            for (int i = 0; i < 4; ++i) dIn += wt[i] * distance[p + off[i]];
+        }
+        if (uniform) stIn = st[p];
+        // The step's part inside the surface (signed distance linear along it):
+        // all of it, none, or the part next to the end inside, whose σt and J
+        // then hold over that part.
+        const InsidePart part = deep ? InsidePart{} : insidePart(dIn, distance[p]);
+        const double inside = part.fraction;
+        openvdb::Vec3f sigmaStart = stIn, sigmaEnd = st[p], jStart = jIn, jEnd = j[p];
+        if (part.endOutside) {
+            sigmaEnd = stIn;
+            jEnd = jIn;
+        } else if (part.startOutside) {
+            sigmaStart = st[p];
+            jStart = j[p];
+        }
+        openvdb::Vec3f result = psiIn;
+        if (inside > 0.0) {
+            const double h = len * inside;
+            for (int ch = 0; ch < 3; ++ch) {
+                const double sa = sigmaStart[ch], sb = sigmaEnd[ch];
+                // No extinction, or the common case inside, σt the same at both ends (S linear
+                // is J linear, no division).
+                if ((sa <= 0.0 && sb <= 0.0) || sa == sb) {
+                    result[ch] = uniformStep(psiIn[ch], jStart[ch], jEnd[ch], std::max(sa, sb), h, uw[ch]);
+                    continue;
+                }
+                result[ch] = float(varyingStep(psiIn[ch], jStart[ch], jEnd[ch], sa, sb, h));
+            }
+        }
+        buffer[p] = result;
+        phi[v] += w * result;
+        if (fluxHere) fluxHere[v] += (w * (result[0] + result[1] + result[2]) / 3.0f) * worldOmega;
+        const std::int32_t s = skinIndex ? skinIndex[v] : -1;
+        if (s >= 0) {
+            // On from the centre to the surface along ω, if ω leaves it.
+            const Skin& sk = mSkin[std::size_t(s)];
+            const double cosine = double(sk.normal.dot(openvdb::Vec3f(omega)));
+            if (cosine > 0.0) {
+                const double toSurface = double(sk.depth) / std::max(cosine, 0.05); // voxels along ω
+                openvdb::Vec3f onSurface;
+                for (int ch = 0; ch < 3; ++ch) {
+                    const double sigma = st[p][ch], tau = sigma * toSurface;
+                    onSurface[ch] = sigma > 0.0 ? float(result[ch] * std::exp(-tau) - double(j[p][ch]) / sigma * std::expm1(-tau))
+                                                : float(result[ch] + double(j[p][ch]) * toSurface);
+                }
+                (*skinFluence)[std::size_t(s)] += w * onSurface;
+            }
+        }
+    }
+}
+
+} // namespace vxf::detail
