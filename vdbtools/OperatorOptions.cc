@@ -76,7 +76,9 @@ std::string OperatorOptions::label(const ops::Param& param) const
 nlohmann::json OperatorOptions::given() const
 {
     nlohmann::json values = nlohmann::json::object();
-    for (const auto& [name, text] : mValues) {
+    for (const auto& value : mValues) {
+        const std::string& name = value.first; // (clang 14 captures no structured binding)
+        const std::string& text = value.second;
         const auto p = std::find_if(mOp->params.begin(), mOp->params.end(), [&](const ops::Param& q) { return q.name == name; });
         values[name] = ops::parseParamText(*mOp, *p, text, [this](const ops::Operator&, const ops::Param& q) { return label(q); });
     }
