@@ -90,7 +90,10 @@ TEST_CASE("scattering with a band matches full resolution near the surface", "[b
 {
     // A homogeneous cube, lit uniformly: J0 = σs φ0/4π everywhere inside.
     const vxf::Material m = vxf::test::albedoMaterial(10.0, 0.8); // mean free path 0.1 = 1 voxel
-    auto [density, source] = cube(16, 0.1);
+    // (Not a structured binding: clang 14 lets no lambda capture one.)
+    const auto grids = cube(16, 0.1);
+    const auto density = grids.first;
+    const auto source = grids.second;
     for (auto it = source->tree().beginValueOn(); it; ++it) it.setValue(openvdb::Vec3f(float(m.sigmaS[0] / (4.0 * M_PI))));
     const auto run = [&](double band) {
         vxf::VoxelSet set(density->transformPtr());
