@@ -43,37 +43,36 @@ public:
         VoxelSet set = readVoxelSet(mInput);
         const Material material = mScene.empty() ? recordedMaterial(set) : sceneMaterial(loadScene(mScene));
         const Medium medium(set, material);
-        mOptions = scatterOptions(args, material);
-        const ScatterReport report = scatter(set, medium, mOptions, &progress);
+        const ScatterOptions options = scatterOptions(args, material);
+        const ScatterReport report = scatter(set, medium, options, &progress);
         nlohmann::json params = args.json();
         params.update({{"command", "scatter"}, {"input", mInput},
-            {"kernel", mOptions.pass.kernel == ScatterKernel::Sweep ? "sweep" : "gather"}, {"passes_run", report.passes.size()}});
+            {"kernel", options.pass.kernel == ScatterKernel::Sweep ? "sweep" : "gather"}, {"passes_run", report.passes.size()}});
         set.setProvenance("scatter", params.dump());
         recordMaterial(set, material);
         writeVoxelSet(mOutput, set, mWrite);
         if (mQuiet) return;
         std::cout << fmt::format("scattered {} -> {}: {} passes ({})\n", mInput, mOutput, report.passes.size(), report.stopReason);
-        if (mOptions.band > 0.0) {
-            std::cout << fmt::format("  band {}: {} voxels at full resolution, {} voxels in {} 8^3 and {} 128^3 tiles\n", mOptions.band,
+        if (options.band > 0.0) {
+            std::cout << fmt::format("  band {}: {} voxels at full resolution, {} voxels in {} 8^3 and {} 128^3 tiles\n", options.band,
                 report.band.fineVoxels, report.band.coarseVoxels, report.band.leafTiles, report.band.internalTiles);
         }
         if (report.accelerated) {
-            const bool sweeps = mOptions.pass.kernel == ScatterKernel::Sweep;
+            const bool sweeps = options.pass.kernel == ScatterKernel::Sweep;
             if (sweeps) {
                 std::cout << fmt::format("  {} voxels swept per direction ({} directions), {} diffusion unknowns (cells of {}^3 voxels), "
                                          "setup {:.3f} s\n",
-                    report.sweptVoxels, mOptions.pass.directions, report.diffusionUnknowns, report.diffusionCoarsening,
-                    report.setupSeconds);
+                    report.sweptVoxels, options.pass.directions, report.diffusionUnknowns, report.diffusionCoarsening, report.setupSeconds);
             } else {
                 std::cout << fmt::format("  {} voxels in the lattice per direction ({} directions), each gather corrected by accelerated "
                                          "sweeps, setup {:.3f} s\n",
-                    report.sweptVoxels, mOptions.pass.directions, report.setupSeconds);
+                    report.sweptVoxels, options.pass.directions, report.setupSeconds);
             }
             std::cout << fmt::format("  {}  energy of the sum (over voxels, r g b)             change  rate    {}   seconds  ({}, "
                                      "ns/voxel/direction)\n",
                 sweeps ? "sweep" : " pass", sweeps ? "diffusion CG" : "corr. sweeps", sweeps ? "sweep" : "gather");
             for (const auto& p : report.passes) {
-                const double ns = 1e9 * p.sweepSeconds / std::max(1.0, double(report.sweptVoxels) * mOptions.pass.directions);
+                const double ns = 1e9 * p.sweepSeconds / std::max(1.0, double(report.sweptVoxels) * options.pass.directions);
                 std::cout << fmt::format("  {:>4}   {:>12.5g} {:>12.5g} {:>12.5g}   {:>7.1e} {:>7.4f} {:>8}   {:>7.3f}  ({:.3f}, {:.1f})\n",
                     p.index, p.energy[0], p.energy[1], p.energy[2], p.change, p.ratio, sweeps ? p.diffusionIterations : p.correctionSweeps,
                     p.seconds, p.sweepSeconds, ns);
@@ -92,7 +91,6 @@ public:
 private:
     std::string mInput, mOutput, mScene;
     std::unique_ptr<OperatorOptions> mParams; ///< the scatter operator's parameters (pipeline/Operators.cc)
-    ScatterOptions mOptions;
     VoxelSetWriteOptions mWrite;
     bool mQuiet = false;
 };
