@@ -1,5 +1,7 @@
 #include <vxf/pipeline/RunPipeline.h>
 
+#include <vxf/core/Frames.h>
+#include <vxf/core/GridRoles.h>
 #include <vxf/io/AtomicFile.h>
 #include <vxf/io/ContentHash.h>
 #include <vxf/io/ImageFile.h>
@@ -148,6 +150,7 @@ struct PipelineRun
     const Material material;
     const fs::path out, cache;
     Interrupter* interrupter;
+    const PipelineOptions& pipelineOptions;
     PipelineReport& report;
     std::optional<CacheLock> lock; ///< the entry being computed
 
@@ -276,11 +279,14 @@ struct PipelineRun
         } else if (!needScatter) {
             record("scatter", "skipped", "no requested output needs it", "", 0.0);
         } else {
-            const json scatterInputs = {{"lit", lightHash}, {"passes", s.passes}, {"directions", s.directions}, {"step", s.step},
+            json scatterInputs = {{"lit", lightHash}, {"passes", s.passes}, {"directions", s.directions}, {"step", s.step},
                 {"cutoff", s.cutoff}, {"tolerance", s.tolerance}, {"extrapolate", s.extrapolate}, {"band", s.scatterBand},
                 {"keep", wants("scatter_passes")}, {"fine_passes", s.finePasses}, {"coarse_factor", s.coarseFactor}, {"kernel", s.kernel},
                 {"accelerate", s.accelerate}};
             // (every field scatterOptionsFrom reads)
+            const fs::path warmFile = pipelineOptions.warmStart;
+            const bool warm = !warmFile.empty() && fs::exists(warmFile);
+            if (warm) scatterInputs["warm_start"] = warmFile.filename().string();
             volumeHash = hashOf(scatterInputs);
             volumeFile = cache / ("scatter-" + volumeHash + ".vdb");
             if (inCache(volumeFile, lock, interrupter)) {
@@ -290,12 +296,18 @@ struct PipelineRun
                 const double seconds = timed([&] {
                     VoxelSet lit = readCacheEntry(lightFile);
                     const Medium medium(lit, material);
-                    const ScatterOptions options = scatterOptionsFrom(s);
-                    scattered = scatter(lit, medium, options, interrupter);
+                    ScatterOptions scatterOptions = scatterOptionsFrom(s);
+                    if (warm) scatterOptions.warmStart = readCacheEntry(warmFile).get<openvdb::Vec3SGrid>(grids::kScatter);
+                    scattered = scatter(lit, medium, scatterOptions, interrupter);
                     lit.setProvenance("scatter", scatterInputs.dump());
                     writeVoxelSet(volumeFile.string(), lit);
                 });
-                record("scatter", "ran", fmt::format("{} passes: {}", scattered.passes.size(), scattered.stopReason), volumeFile, seconds);
+                record("scatter", "ran",
+                    fmt::format("{} passes{}: {}", scattered.passes.size(), scattered.warmStarted ? " from the frame before" : "",
+                        scattered.stopReason),
+                    volumeFile, seconds);
+                report.scatterIterations = int(scattered.passes.size());
+                report.warmStarted = scattered.warmStarted;
             }
             lock.reset();
         }
@@ -328,7 +340,7 @@ struct PipelineRun
     }
 };
 
-PipelineReport runPipelineOnce(const Scene& scene, const std::string& outDir, Interrupter* interrupter)
+PipelineReport runPipelineOnce(const Scene& scene, const std::string& outDir, Interrupter* interrupter, const PipelineOptions& options)
 {
     PipelineReport report;
     const Material material = sceneMaterial(scene);
@@ -339,23 +351,23 @@ PipelineReport runPipelineOnce(const Scene& scene, const std::string& outDir, In
     const std::string stem = fs::path(scene.path).stem().string().empty() ? "scene" : fs::path(scene.path).stem().string();
     if (std::find(s.outputs.begin(), s.outputs.end(), "image") != s.outputs.end() && !scene.path.empty())
         claimImageName(out, stem, scene.path);
-    PipelineRun run{scene, s, material, out, cache, interrupter, report, std::nullopt};
+    PipelineRun run{scene, s, material, out, cache, interrupter, options, report, std::nullopt};
     const PipelineRun::Entry lit = run.lightStage(run.voxelizeStage());
     const PipelineRun::Entry volume = run.scatterStage(lit);
     report.volume = volume.file.string();
-    run.renderStage(volume.file, stem);
+    run.renderStage(volume.file, scene.frame ? stem + "." + paddedFrame(*scene.frame) : stem);
     return report;
 }
 
 } // namespace
 
-PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interrupter* interrupter)
+PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interrupter* interrupter, const PipelineOptions& options)
 {
     std::vector<std::string> warnings;
     // Each pass over an unreadable entry removes it; the chain has three entries to lose.
     for (int attempt = 0;; ++attempt) {
         try {
-            PipelineReport report = runPipelineOnce(scene, outDir, interrupter);
+            PipelineReport report = runPipelineOnce(scene, outDir, interrupter, options);
             report.warnings.insert(report.warnings.begin(), warnings.begin(), warnings.end());
             return report;
         } catch (const UnreadableCacheEntry& stale) {
@@ -363,6 +375,25 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
             warnings.push_back(stale.warning);
         }
     }
+}
+
+void requireSceneInputs(const Scene& scene)
+{
+    const auto require = [&](const std::string& file, const std::string& what) {
+        if (file.empty() || file.rfind("builtin:", 0) == 0) return;
+        std::error_code error;
+        if (!fs::exists(file, error)) {
+            throw InputError(scene.path, 0, 0,
+                fmt::format(
+                    "{}{}: {} does not exist", scene.frame ? fmt::format("at frame {}: ", *scene.frame) : std::string(), what, file));
+        }
+    };
+    for (const SceneObject& o : scene.objects) {
+        const std::string what = fmt::format("object '{}'", o.name);
+        require(o.isVolume() ? o.volume : o.mesh, what);
+        if (o.material) require(o.material->gridsFile, what + "'s coefficient grids");
+    }
+    for (const Light& l : scene.lights) require(l.file, fmt::format("light '{}'", l.name));
 }
 
 } // namespace vxf

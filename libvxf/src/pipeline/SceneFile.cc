@@ -1,5 +1,7 @@
 #include <vxf/pipeline/SceneFile.h>
 
+#include "SceneAnimation.h"
+
 #include <vxf/io/InputFile.h>
 #include <vxf/scatter/ScatterPass.h>
 
@@ -248,14 +250,46 @@ SceneSettings readSettings(const json& document, const SceneReader& reader, doub
 
 } // namespace
 
-Scene parseScene(const std::string& text, const std::string& path)
+namespace {
+
+/// The scene document of @a text, checked, at @a frame when it is animated.
+json sceneDocument(const std::string& text, const std::string& path, std::optional<int> frame)
 {
-    const json document = parseJsonText(text, path);
-    sceneSchema().check(document, path);
+    const json raw = parseJsonText(text, path);
+    sceneSchema().check(raw, path);
+    const std::vector<std::string> animated = detail::animatedValues(raw);
+    if (animated.empty()) return raw;
+    if (!frame) {
+        throw InputError(path, 0, 0,
+            fmt::format("the scene is animated ({}{}): render it frame by frame (vxf run SCENE --frames FIRST-LAST)", animated.front(),
+                animated.size() > 1 ? fmt::format(" and {} more", animated.size() - 1) : std::string()));
+    }
+    json document = detail::sceneAtFrame(raw, *frame, path);
+    try {
+        sceneSchema().check(document, path);
+    } catch (const InputError& e) {
+        throw InputError(path, 0, 0, fmt::format("at frame {}: {}", *frame, std::string(e.what()).substr(path.size() + 2)));
+    }
+    return document;
+}
+
+} // namespace
+
+std::vector<std::string> sceneAnimation(const std::string& path)
+{
+    const json raw = parseJsonText(readBoundedFile(path, kMaxSceneBytes, "a scene file"), path);
+    sceneSchema().check(raw, path);
+    return detail::animatedValues(raw);
+}
+
+Scene parseScene(const std::string& text, const std::string& path, std::optional<int> frame)
+{
+    const json document = sceneDocument(text, path, frame);
 
     SceneReader reader(path);
     Scene scene;
     scene.path = path;
+    scene.frame = frame;
     std::vector<Light> emitting; // the volume objects' emission, as volume lights that move with them
     for (std::size_t i = 0; i < document["objects"].size(); ++i) {
         const json& o = document["objects"][i];
@@ -333,6 +367,9 @@ Scene parseScene(const std::string& text, const std::string& path)
     return scene;
 }
 
-Scene loadScene(const std::string& path) { return parseScene(readBoundedFile(path, kMaxSceneBytes, "a scene file"), path); }
+Scene loadScene(const std::string& path, std::optional<int> frame)
+{
+    return parseScene(readBoundedFile(path, kMaxSceneBytes, "a scene file"), path, frame);
+}
 
 } // namespace vxf

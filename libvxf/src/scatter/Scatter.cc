@@ -111,6 +111,8 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
         solve.directions = options.pass.directions;
         solve.kernel = options.pass.kernel;
         solve.gather = options.pass;
+        if (options.warmStart && options.warmStart->transform() == j->transform()) solve.initial = options.warmStart.get();
+        report.warmStarted = solve.initial != nullptr;
         SweepSolveReport solved;
         if (carriesMoment) {
             moments.source = set.get<openvdb::Vec3SGrid>(grids::kSourceAnisotropy).get();

@@ -178,6 +178,12 @@ public:
             }
         }
         phi.assign(count, openvdb::Vec3f(0.0f));
+        if (options.initial) {
+            phi = lattice.read(*options.initial);
+            for (openvdb::Vec3f& v : phi) {
+                for (int ch = 0; ch < 3; ++ch) v[ch] = std::isfinite(v[ch]) && v[ch] > 0.0f ? v[ch] : 0.0f;
+            }
+        }
         gatherOptions = options.gather;
         gatherOptions.kernel = ScatterKernel::Gather;
     }

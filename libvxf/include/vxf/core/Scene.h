@@ -124,6 +124,9 @@ struct SceneSettings
 struct Scene
 {
     std::string path; ///< the file it was read from
+    /// The frame it was read at (an animated scene: `vxf run --frames`); images are then
+    /// named NAME.0001.exr. None for a still scene read as one.
+    std::optional<int> frame;
     std::vector<SceneObject> objects;
     std::vector<Light> lights;
     Camera camera;

@@ -26,6 +26,18 @@ struct PipelineReport
     /// Cache entries that could not be read (removed and recomputed), and the light stage's
     /// warnings when it ran (a medium with no positive density).
     std::vector<std::string> warnings;
+    int scatterIterations = 0; ///< when scatter ran: its passes (or accelerated iterations)
+    bool warmStarted = false; ///< when scatter ran: it started from PipelineOptions::warmStart
+};
+
+struct PipelineOptions
+{
+    /// Warm start (a sequence's frames, `vxf run --frames --warm-start`): the scatter cache
+    /// entry of the frame before (its PipelineReport::volume). Where this frame's medium lies
+    /// on the same voxels, its solve starts from that `scatter` and stops by the same rule, in
+    /// fewer sweeps; the entry's name joins this frame's scatter key (a warm result is not a
+    /// cold one's, to the tolerance). "": start from zero, every frame alike.
+    std::string warmStart;
 };
 
 /// Run @a scene's pipeline into @a outDir. Each stage's output is cached in
@@ -40,7 +52,15 @@ struct PipelineReport
 /// removed and recomputed, with a warning in the report. Runs sharing a cache compute each
 /// entry once: a run finding another computing an entry waits for its file (a lock per entry).
 /// Several media objects are voxelized together (voxelizeMedia); occluders cast shadows in
-/// the light stage and show in the render.
-PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interrupter* interrupter = nullptr);
+/// the light stage and show in the render. A scene read at a frame (Scene::frame) writes
+/// NAME.0001.exr (the frame padded to 4 digits); its stages are cached as any scene's, so the
+/// frames of a still mesh under a moving camera voxelize, light and scatter once.
+PipelineReport runPipeline(
+    const Scene& scene, const std::string& outDir, Interrupter* interrupter = nullptr, const PipelineOptions& options = {});
+
+/// Every input file @a scene reads exists (its meshes, volumes, coefficient grids, light files):
+/// InputError naming the scene, the object or light and the missing file otherwise (a sequence's
+/// missing frame is found before any frame is rendered).
+void requireSceneInputs(const Scene& scene);
 
 } // namespace vxf

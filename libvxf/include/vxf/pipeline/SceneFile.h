@@ -3,7 +3,9 @@
 
 #include <vxf/core/Scene.h>
 
+#include <optional>
 #include <string>
+#include <vector>
 
 namespace vxf {
 
@@ -11,11 +13,19 @@ namespace vxf {
 /// name the field (as a JSON pointer, e.g. /lights/1/cone_angle) and what was expected,
 /// and geometric nonsense (a zero direction, an up vector along the view) is refused.
 /// Relative mesh and grid paths are resolved against the scene file's folder.
+/// An animated scene (keyframed values, frame tokens in its paths) is read at @a frame: the
+/// keyframes interpolated there, the paths' tokens expanded, the result checked again (errors
+/// then say "at frame N"). Without a frame an animated scene is refused, naming what is
+/// animated; a still scene read at a frame is the same at every frame.
 /// Throws vxf::InputError.
-Scene loadScene(const std::string& path);
+Scene loadScene(const std::string& path, std::optional<int> frame = std::nullopt);
 
 /// Parse scene JSON text; @a path names it in messages and anchors relative paths.
-Scene parseScene(const std::string& text, const std::string& path);
+Scene parseScene(const std::string& text, const std::string& path, std::optional<int> frame = std::nullopt);
+
+/// Whether the scene file at @a path is animated (keyframes or frame tokens): the JSON
+/// pointers of what is, empty for a still scene. Checks the file as loadScene does.
+std::vector<std::string> sceneAnimation(const std::string& path);
 
 /// The JSON Schema scenes are checked against (schemas/scene.schema.json, embedded).
 const std::string& sceneSchemaText();

@@ -44,6 +44,10 @@ struct ScatterOptions
     /// scattering orders. Not with keepPasses, fromPass or finePasses, which need the orders:
     /// those run plain source iteration, one order per pass.
     bool accelerate = true;
+    /// Warm start of the accelerated solve (SweepSolveOptions::initial): a previous frame's
+    /// `scatter`, taken when it lies on the source's voxels (the same transform), ignored
+    /// otherwise (ScatterReport::warmStarted says which). Null: start from zero.
+    openvdb::Vec3SGrid::ConstPtr warmStart;
     ScatterPassOptions pass;
 };
 
@@ -71,6 +75,7 @@ struct ScatterReport
     int correctionPasses = 0; ///< coarse passes of the correction cycles
     int correctionCycles = 0; ///< how many correction cycles ran
     bool accelerated = false; ///< the sum was solved by accelerated sweeps or gathers (passes are iterations)
+    bool warmStarted = false; ///< the solve started from options.warmStart
     std::size_t sweptVoxels = 0; ///< accelerated sweeps: voxels swept per direction (the touched leaves')
     std::size_t diffusionUnknowns = 0; ///< accelerated sweeps: cells of the diffusion correction
     int diffusionCoarsening = 1; ///< accelerated sweeps: those cells are blocks of this many voxels cubed

@@ -34,6 +34,10 @@ struct SweepSolveOptions
     /// made from a fluence whose skin voxels hold the light on the surface (Continued: those at
     /// their centres, SweepPass). The gather reads the lights' J0 as `gather.source` says.
     ScatterPassOptions::SourceRead source = ScatterPassOptions::SourceRead::FractionWeighted;
+    /// Warm start: the iteration starts from this estimate of the sum (a previous frame's
+    /// `scatter` on the same voxels), read where it is active, 0 elsewhere; null: from 0. Only
+    /// the number of iterations changes, the stopping rule is the same.
+    const openvdb::Vec3SGrid* initial = nullptr;
 };
 
 struct SweepSolveReport
