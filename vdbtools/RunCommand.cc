@@ -34,6 +34,8 @@ public:
             "Frames to render: N, A-B, A-B:STEP or a comma-separated list of those (1-240, 1-240:2, 1,5,10-20). Every "
             "frame's scene and input files are checked before the first is rendered. A still scene renders the same "
             "image at every frame (NAME.0001.exr ...)");
+        mApp->add_flag(
+            "--dry-run", mDryRun, "Check the scene (at every frame) and its input files and print each frame's image, rendering nothing");
         mApp->add_flag("--warm-start", mWarmStart,
             "With --frames: each frame's scatter solve starts from the frame before's where the medium lies on the same "
             "voxels (fewer sweeps; results then depend on the frame order, within the scene's tolerance)");
@@ -43,7 +45,13 @@ public:
     {
         if (mFrames.empty()) {
             if (mWarmStart) throw UsageError("--warm-start needs --frames");
-            runOne(loadScene(mScene), {});
+            const Scene scene = loadScene(mScene);
+            if (mDryRun) {
+                requireSceneInputs(scene);
+                std::cout << fmt::format("still: {}\n", sceneImagePath(scene, mOut));
+            } else {
+                runOne(scene, {});
+            }
             return;
         }
         const std::vector<int> frames = parseFrameRange(mFrames);
@@ -53,6 +61,10 @@ public:
         for (int frame : frames) {
             scenes.push_back(loadScene(mScene, frame));
             requireSceneInputs(scenes.back());
+        }
+        if (mDryRun) {
+            for (const Scene& scene : scenes) std::cout << fmt::format("frame {}: {}\n", *scene.frame, sceneImagePath(scene, mOut));
+            return;
         }
         PipelineOptions options;
         for (const Scene& scene : scenes) {
@@ -83,7 +95,7 @@ private:
     }
 
     std::string mScene, mOut = "out", mFrames;
-    bool mWarmStart = false;
+    bool mWarmStart = false, mDryRun = false;
     std::set<std::string> mToldMeshes;
 };
 

@@ -340,6 +340,12 @@ struct PipelineRun
     }
 };
 
+std::string sceneStem(const Scene& scene)
+{
+    const std::string stem = fs::path(scene.path).stem().string();
+    return stem.empty() ? "scene" : stem;
+}
+
 PipelineReport runPipelineOnce(const Scene& scene, const std::string& outDir, Interrupter* interrupter, const PipelineOptions& options)
 {
     PipelineReport report;
@@ -348,14 +354,14 @@ PipelineReport runPipelineOnce(const Scene& scene, const std::string& outDir, In
 
     const fs::path out(outDir), cache = out / "cache";
     fs::create_directories(cache);
-    const std::string stem = fs::path(scene.path).stem().string().empty() ? "scene" : fs::path(scene.path).stem().string();
+    const std::string stem = sceneStem(scene);
     if (std::find(s.outputs.begin(), s.outputs.end(), "image") != s.outputs.end() && !scene.path.empty())
         claimImageName(out, stem, scene.path);
     PipelineRun run{scene, s, material, out, cache, interrupter, options, report, std::nullopt};
     const PipelineRun::Entry lit = run.lightStage(run.voxelizeStage());
     const PipelineRun::Entry volume = run.scatterStage(lit);
     report.volume = volume.file.string();
-    run.renderStage(volume.file, scene.frame ? stem + "." + paddedFrame(*scene.frame) : stem);
+    run.renderStage(volume.file, fs::path(sceneImagePath(scene, outDir)).stem().string());
     return report;
 }
 
@@ -375,6 +381,11 @@ PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interr
             warnings.push_back(stale.warning);
         }
     }
+}
+
+std::string sceneImagePath(const Scene& scene, const std::string& outDir)
+{
+    return (fs::path(outDir) / (sceneStem(scene) + (scene.frame ? "." + paddedFrame(*scene.frame) : std::string()) + ".exr")).string();
 }
 
 void requireSceneInputs(const Scene& scene)

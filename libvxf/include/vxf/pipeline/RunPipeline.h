@@ -58,6 +58,10 @@ struct PipelineOptions
 PipelineReport runPipeline(
     const Scene& scene, const std::string& outDir, Interrupter* interrupter = nullptr, const PipelineOptions& options = {});
 
+/// The image runPipeline writes for @a scene into @a outDir: OUT/NAME.exr, NAME the scene
+/// file's stem ("scene" for none), OUT/NAME.0001.exr for a scene read at frame 1.
+std::string sceneImagePath(const Scene& scene, const std::string& outDir);
+
 /// Every input file @a scene reads exists (its meshes, volumes, coefficient grids, light files):
 /// InputError naming the scene, the object or light and the missing file otherwise (a sequence's
 /// missing frame is found before any frame is rendered).

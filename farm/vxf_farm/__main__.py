@@ -1,0 +1,5 @@
+import sys
+
+from vxf_farm.submit import main
+
+sys.exit(main())
