@@ -159,6 +159,20 @@ def main():
     r = farm(smoke, "--frames", "4-1", "--local", "1")
     check(r.returncode == 2 and "the range runs backwards" in r.stderr, "a bad range is a usage error")
 
+    # 5. The OpenCue job (built and checked without a Cuebot): its layer's command, run as RQD
+    # runs it with the frame put in, renders the frame vxf run renders.
+    r = farm("opencue", s, "--frames", "1-4:2", "--out", f"{WORK}/cue out")
+    check(r.returncode == 0, "vxf farm opencue prints a job specification " + r.stderr.strip()[-300:])
+    import xml.etree.ElementTree as ET
+    spec = ET.fromstring(r.stdout[r.stdout.index("<spec>"):])
+    layer = spec.find("job/layers/layer")
+    check(layer is not None and layer.findtext("range") == "1,3", "the job's range is OpenCue's form of 1-4:2")
+    command = layer.findtext("cmd") if layer is not None else ""
+    check("--frames #IFRAME#" in command, "the layer's command takes RQD's frame: " + command)
+    subprocess.run(command.replace("#IFRAME#", "3"), shell=True, check=True, stdout=subprocess.DEVNULL)
+    check(open(f"{WORK}/cue out/s.0003.exr", "rb").read() == open(f"{WORK}/ref/s.0003.exr", "rb").read(),
+          "the OpenCue frame's command renders frame 3 as vxf run does")
+
     print(f"{len(failures)} failed" if failures else "all passed")
     return 1 if failures else 0
 
