@@ -41,7 +41,7 @@ public:
         const auto start = std::chrono::steady_clock::now();
         const ops::Args args = mParams->args();
         mScene = args.text("scene");
-        const Scene scene = loadScene(mScene);
+        const Scene scene = stageScene(args);
         const DirectLightOptions options = lightOptions(args, scene.settings);
         VoxelSet set = placedInput(scene, &progress);
         const DirectLightReport report = lightScene(set, scene, options, &progress);

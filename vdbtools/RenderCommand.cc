@@ -41,7 +41,7 @@ public:
         TerminalProgress progress;
         const auto start = std::chrono::steady_clock::now();
         const ops::Args args = mParams->args();
-        const Scene scene = loadScene(args.text("scene"));
+        const Scene scene = stageScene(args);
         const VoxelSet set = readVoxelSet(mVolume);
         Material material;
         if (set.metadata().getMetadata<openvdb::StringMetadata>(kMaterialMetaKey)) {

@@ -106,6 +106,17 @@ TEST_CASE("each frame re-runs only the stages whose inputs its animation changed
         REQUIRE(actions.size() == 3);
         CHECK(actions[1] == "frame 2: voxelize reused light ran scatter ran render ran");
         CHECK(actions[2] == "frame 3: voxelize reused light ran scatter ran render ran");
+        // The stage commands read an animated scene at --frame (and refuse it without one).
+        const std::string vxf = binary("vxf");
+        REQUIRE(run(fmt::format("{} voxelize builtin:sphere -o {} --dim 16", vxf, dir.path("v.vdb"))).status == 0);
+        const auto lit =
+            run(fmt::format("{} light {} --scene {} --frame 2 -o {}", vxf, dir.path("v.vdb"), dir.path("s.json"), dir.path("l.vdb")));
+        INFO(lit.err);
+        CHECK(lit.status == 0);
+        const auto unframed =
+            run(fmt::format("{} light {} --scene {} -o {}", vxf, dir.path("v.vdb"), dir.path("s.json"), dir.path("l2.vdb")));
+        CHECK(unframed.status == 1);
+        CHECK_THAT(unframed.err, Catch::Contains("the scene is animated (/lights/0/position)"));
         // Past the last key the light holds still: frame 4 reuses frame 3's lighting.
         const auto held = runFrames(dir, "4");
         CHECK(frameActions(held.out).at(0) == "frame 4: voxelize reused light reused scatter reused render ran");

@@ -53,10 +53,18 @@ Operator voxelizeOperator()
     return op;
 }
 
+/// The `frame` parameter of the stages that read a scene: an animated scene is read at it.
+Param sceneFrame()
+{
+    return integer("frame",
+        "(optional) the frame to read an animated scene at (keyframes, frame tokens; vxf run --frames renders them all)", nullptr, -999999,
+        9999999);
+}
+
 Operator lightOperator()
 {
     Operator op{"light", "the light stage: `direct` and `scatter_source` from a scene's lights, material and occluders",
-        {text("scene", "scene file (schemas/scene.schema.json): material and lights"),
+        {text("scene", "scene file (schemas/scene.schema.json): material and lights"), sceneFrame(),
             number("step", "(optional) march step in voxels (default: the scene's scatter.step, 1 unless set, as vxf run lights it)",
                 nullptr, 0.01, 64.0),
             number("cutoff", "stop marching below this transmittance", defaults::kLightCutoff, 0.0, 0.5),
@@ -66,7 +74,7 @@ Operator lightOperator()
                 "only along directions that graze it); point and spot lights from one sweep around the light, the voxels within "
                 "3 of the surface marched; area lights are marched either way")},
         [](OpContext& ctx) {
-            const Scene scene = loadScene(ctx.args.text("scene"));
+            const Scene scene = stageScene(ctx.args);
             const auto report = lightScene(ctx.set, scene, lightOptions(ctx.args, scene.settings), ctx.interrupter);
             return fmt::format("lit by {} lights", report.lights.size());
         }};
@@ -133,7 +141,7 @@ Operator renderOperator()
 {
     Operator op{"render",
         "the renderer: writes an OpenEXR image (and a PNG preview) of the voxel set with a scene's camera; the set passes on unchanged",
-        {text("scene", "scene file (camera, lights, objects, render settings)"), text("image", "the .exr to write"),
+        {text("scene", "scene file (camera, lights, objects, render settings)"), sceneFrame(), text("image", "the .exr to write"),
             text("png", "(optional) an sRGB PNG preview to write"), number("exposure", "the PNG's exposure in stops", 0.0, -64.0, 64.0),
             integer("width", "(optional) override the scene's width", nullptr, 1, 32768),
             integer("height", "(optional) override the scene's height", nullptr, 1, 32768),
@@ -154,7 +162,7 @@ Operator renderOperator()
                 "any voxel size, and the only way an anisotropic phase shows in single scattering: the scene's default when its "
                 "medium's phase g is not 0; edits of `direct` do not show)")},
         [](OpContext& ctx) {
-            const Scene scene = loadScene(ctx.args.text("scene"));
+            const Scene scene = stageScene(ctx.args);
             const RenderOptions o = renderOptions(ctx.args, scene.settings);
             const Medium medium(ctx.set, recordedMaterial(ctx.set));
             const RenderedImage image = renderScene(ctx.set, medium, scene, o, ctx.args.flag("level_set"), ctx.interrupter);
@@ -171,6 +179,11 @@ Operator renderOperator()
 }
 
 } // namespace
+
+Scene stageScene(const Args& args)
+{
+    return loadScene(args.text("scene"), args.has("frame") ? std::optional<int>(args.integer("frame")) : std::nullopt);
+}
 
 VoxelizeOptions voxelizeOptions(const Args& args)
 {

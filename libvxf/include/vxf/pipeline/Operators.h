@@ -29,6 +29,8 @@ const ops::Operator& findOperator(const std::string& name);
 /// whose options are those operators' parameters) both call these, so a stage's parameters,
 /// defaults (vxf/core/StageDefaults.h) and help are declared once, in its operator.
 VoxelizeOptions voxelizeOptions(const ops::Args& args);
+/// The scene of the light and render stages' arguments: `scene` read at `frame` when given.
+Scene stageScene(const ops::Args& args);
 /// The march step is the scene's (scatter.step) unless `step` is given.
 DirectLightOptions lightOptions(const ops::Args& args, const SceneSettings& settings);
 /// The kernel is defaultScatterKernel(material.phaseG) unless `kernel` is given.
