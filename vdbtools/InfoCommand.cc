@@ -4,6 +4,7 @@
 
 #include <vxf/core/GridRoles.h>
 #include <vxf/core/GridStats.h>
+#include <vxf/io/VoxelPlacement.h>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -94,6 +95,10 @@ public:
             for (const auto& grid : skipped) warn(fmt::format("{}: grid {} skipped: not a voxel grid vxf reads", path, grid));
             nlohmann::json info = describe(set);
             if (!skipped.empty()) info["skipped_grids"] = skipped;
+            // Where a scene's volume object would put these voxels by default (voxel_placement auto).
+            const PlacementChoice placement = resolvePlacement(VoxelPlacement::Auto, path, set.metadata());
+            info["voxel_placement"] = {
+                {"placement", placement.placement == VoxelPlacement::Cell ? "cell" : "centre"}, {"why", placement.why}};
             if (mJson) {
                 std::cout << info.dump(2) << "\n";
                 continue;
@@ -135,8 +140,9 @@ public:
                     formatBytes(g["memory_bytes"].get<std::uint64_t>()), range, g["metadata"].value(kUnitsMetaKey, std::string()),
                     g["shares_transform"].get<bool>() ? "" : "  (own transform)");
             }
-            std::cout << fmt::format(
-                "  voxel size {:.6g}, transform {}\n", set.transform().voxelSize()[0], set.transform().baseMap()->type());
+            std::cout << fmt::format("  voxel size {:.6g}, transform {}; voxels placed by {} as a volume object ({})\n",
+                set.transform().voxelSize()[0], set.transform().baseMap()->type(),
+                placement.placement == VoxelPlacement::Cell ? "cell (Blender, Cycles)" : "centre (OpenVDB, Houdini)", placement.why);
         }
     }
 

@@ -5,6 +5,7 @@
 #include "OperatorOptions.h"
 
 #include <vxf/core/GridStats.h>
+#include <vxf/io/VoxelPlacement.h>
 #include <vxf/light/DirectLight.h>
 #include <vxf/pipeline/LightScene.h>
 #include <vxf/pipeline/Operators.h>
@@ -67,7 +68,8 @@ public:
 
 private:
     /// The input set where the scene's medium lies. A volume object's own file is placed as
-    /// vxf run places it (moved by the object's transform); a set vxf run voxelized from the
+    /// vxf run places it (moved by the object's transform, its voxels where their writer puts
+    /// them: io/VoxelPlacement.h); a set vxf run voxelized from the
     /// scene already is; any other set is lit where its file places it, with a warning when the
     /// scene's medium has a transform that therefore does not apply.
     VoxelSet placedInput(const Scene& scene, Interrupter* interrupter) const
@@ -81,6 +83,12 @@ private:
             return voxelizeMedia(scene, VoxelizeOptions{}, interrupter); // reads the file once, placed
         }
         VoxelSet set = readVoxelSet(mInput);
+        for (const SceneObject& o : scene.objects) {
+            if (o.isVolume() && std::filesystem::equivalent(o.volume, mInput, error) &&
+                resolvePlacement(o.placement, o.volume, set.metadata()).placement == VoxelPlacement::Cell) {
+                return voxelizeMedia(scene, VoxelizeOptions{}, interrupter); // its voxels moved half a voxel, as vxf run places them
+            }
+        }
         if (!moved) return set;
         const std::string params = set.paramsJson();
         const bool fromRun = set.stage() == "voxelize" && params.find("\"media\"") != std::string::npos;

@@ -1,6 +1,7 @@
 #include <vxf/light/VolumeEmission.h>
 
 #include <vxf/core/Error.h>
+#include <vxf/io/VoxelPlacement.h>
 #include <vxf/io/VoxelSetFile.h>
 
 #include <fmt/format.h>
@@ -19,12 +20,11 @@ VolumeEmission::VolumeEmission(const Light& light)
         throw Error(fmt::format(
             "light '{}': no grid '{}' in {} (the file has: {})", light.name, light.grid, light.file, names.empty() ? "none" : names));
     }
-    if (light.gridToWorld != openvdb::Mat4d::identity()) {
-        // Moved as its object is (SceneMedium's volume object: the same product of transforms).
-        openvdb::math::Transform::Ptr moved = grid->transform().copy();
-        moved->postMult(light.gridToWorld);
-        grid->setTransform(moved);
-    }
+    // Placed and moved as its object is (SceneMedium's volume object: the same product of transforms).
+    openvdb::math::Transform::Ptr moved =
+        placedTransform(grid->transform(), resolvePlacement(light.placement, light.file, source.metadata()).placement);
+    if (light.gridToWorld != openvdb::Mat4d::identity()) moved->postMult(light.gridToWorld);
+    grid->setTransform(moved);
     mFloat = openvdb::gridConstPtrCast<openvdb::FloatGrid>(grid);
     mVec3 = openvdb::gridConstPtrCast<openvdb::Vec3SGrid>(grid);
     if (!mFloat && !mVec3) {

@@ -51,7 +51,7 @@ json lightJson(const Light& l)
     return {{"type", int(l.type)}, {"name", l.name}, {"color", vec(l.color)}, {"intensity", l.intensity}, {"falloff", int(l.falloff)},
         {"position", vec(l.position)}, {"direction", vec(l.direction)}, {"cone", {l.coneAngleDegrees, l.coneSoftnessDegrees}},
         {"shape", int(l.shape)}, {"size", {l.width, l.height, l.radius}}, {"samples", l.samples}, {"file", l.file}, {"grid", l.grid},
-        {"grid_to_world", matrix(l.gridToWorld)}};
+        {"grid_to_world", matrix(l.gridToWorld)}, {"placement", int(l.placement)}};
 }
 
 } // namespace
@@ -188,10 +188,11 @@ struct PipelineRun
             if (o.role != SceneObject::Role::Medium) continue;
             const Material& m = *o.material;
             const std::string& file = o.isVolume() ? o.volume : o.mesh;
-            media.push_back(
-                {{o.isVolume() ? "volume" : "mesh", file}, {"grid", o.isVolume() ? json(o.grid) : json()}, {"bytes", fileFingerprint(file)},
-                    {"transform", matrix(o.objectToWorld)}, {"sigma", mediaCount(scene) > 1 ? json{vec(m.sigmaA), vec(m.sigmaS)} : json()},
-                    {"grids", m.gridsFile.empty() ? json() : json{fileFingerprint(m.gridsFile), m.sigmaAGrid, m.sigmaSGrid}}});
+            media.push_back({{o.isVolume() ? "volume" : "mesh", file}, {"grid", o.isVolume() ? json(o.grid) : json()},
+                {"placement", o.isVolume() && o.placement != VoxelPlacement::Auto ? json(int(o.placement)) : json()},
+                {"bytes", fileFingerprint(file)}, {"transform", matrix(o.objectToWorld)},
+                {"sigma", mediaCount(scene) > 1 ? json{vec(m.sigmaA), vec(m.sigmaS)} : json()},
+                {"grids", m.gridsFile.empty() ? json() : json{fileFingerprint(m.gridsFile), m.sigmaAGrid, m.sigmaSGrid}}});
         }
         // The program too: the light and scatter stages' keys chain from this one.
         const json voxelInputs = {

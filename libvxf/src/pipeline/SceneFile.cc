@@ -163,6 +163,7 @@ public:
         l.samples = j.value("samples", l.type == Light::Type::Environment ? 64 : 16);
         if (j.contains("file")) l.file = resolvePath(j["file"].get<std::string>());
         l.grid = j.value("grid", std::string());
+        l.placement = placement(j);
         return l;
     }
 
@@ -179,7 +180,15 @@ public:
         l.intensity = j.value("intensity", 1.0);
         checkPower(l, "/objects/" + object.name + "/emission");
         l.gridToWorld = object.objectToWorld;
+        l.placement = object.placement;
         return l;
+    }
+
+    /// `voxel_placement` of a volume object or light: auto (the default), centre or cell.
+    static VoxelPlacement placement(const json& j)
+    {
+        const std::string p = j.value("voxel_placement", std::string("auto"));
+        return p == "centre" ? VoxelPlacement::Centre : p == "cell" ? VoxelPlacement::Cell : VoxelPlacement::Auto;
     }
 
     Camera camera(const json& j) const
@@ -301,6 +310,7 @@ Scene parseScene(const std::string& text, const std::string& path, std::optional
         } else {
             object.volume = reader.resolvePath(o["volume"].get<std::string>());
             object.grid = o.value("grid", object.grid);
+            object.placement = reader.placement(o);
         }
         object.objectToWorld = o.contains("transform") ? reader.transform(o["transform"]) : openvdb::Mat4d::identity();
         const std::string role = o.value("role", std::string("medium"));
@@ -309,6 +319,9 @@ Scene parseScene(const std::string& text, const std::string& path, std::optional
                                          : SceneObject::Role::Medium;
         if (object.isVolume() && object.role != SceneObject::Role::Medium) {
             reader.fail(where + "/role", "a volume object is a medium (its grid is the medium's density); an opaque object needs a mesh");
+        }
+        if (!object.isVolume() && o.contains("voxel_placement")) {
+            reader.fail(where + "/voxel_placement", "places a volume object's voxels; this object has a mesh");
         }
         if (!object.isVolume() && o.contains("grid")) {
             reader.fail(where + "/grid", "names the grid of a volume object; this object has a mesh");

@@ -1,6 +1,7 @@
 #include <vxf/pipeline/SceneMedium.h>
 
 #include <vxf/core/GridRoles.h>
+#include <vxf/io/VoxelPlacement.h>
 #include <vxf/io/VoxelSetFile.h>
 #include <vxf/pipeline/SceneGeometry.h>
 
@@ -104,7 +105,8 @@ VoxelSet volumeMedium(const SceneObject& object)
     }
     if (!finite) fail(fmt::format("grid '{}' holds a non-finite density", object.grid));
 
-    openvdb::math::Transform::Ptr moved = grid->transform().copy();
+    openvdb::math::Transform::Ptr moved =
+        placedTransform(grid->transform(), resolvePlacement(object.placement, object.volume, file.metadata()).placement);
     if (object.objectToWorld != openvdb::Mat4d::identity()) moved->postMult(object.objectToWorld);
     density->setTransform(moved);
     // Cubic, axis-aligned voxels, which the marches and sweeps take (one voxel size).

@@ -41,6 +41,13 @@ struct SurfaceShading
     bool reflects() const { return diffuse != openvdb::Vec3d(0.0) || specular != openvdb::Vec3d(0.0); }
 };
 
+/// Where a volume file's voxel (i, j, k) lies. OpenVDB and Houdini centre it on the grid's
+/// transform of (i, j, k); Blender and Cycles spread it over the cell from (i, j, k) to
+/// (i+1, j+1, k+1) (measured: Cycles renders a block of voxels 0..9 centred on 5, not 4.5, in
+/// voxel units), half a voxel further along each axis. Auto: as the file's writer does
+/// (io/VoxelPlacement.h).
+enum class VoxelPlacement { Auto, Centre, Cell };
+
 struct SceneObject
 {
     /// Medium: its interior is the participating medium. Occluder: opaque, casts shadows.
@@ -54,6 +61,7 @@ struct SceneObject
     /// density, σ = density × the material's coefficients, on the grid's own voxels; "" for a mesh.
     std::string volume;
     std::string grid = "density";
+    VoxelPlacement placement = VoxelPlacement::Auto; ///< a volume object's voxels (its emission's too)
     bool isVolume() const { return !volume.empty(); }
     openvdb::Mat4d objectToWorld; ///< scale, then rotate x, y, z (degrees), then translate
     Role role = Role::Medium;
@@ -86,6 +94,7 @@ struct Light
     /// Volume light: where its grid is placed, after the grid's own transform (a volume object's
     /// emission moves with the object: its objectToWorld; a `volume` light of the scene: identity).
     openvdb::Mat4d gridToWorld = openvdb::Mat4d::identity();
+    VoxelPlacement placement = VoxelPlacement::Auto; ///< volume light: where its grid's voxels lie
 
     /// Radiant colour: color × intensity.
     openvdb::Vec3d power() const { return color * intensity; }
