@@ -1,6 +1,7 @@
 #include <vxf/light/VolumeEmission.h>
 
 #include <vxf/core/Error.h>
+#include <vxf/light/Blackbody.h>
 #include <vxf/io/VoxelPlacement.h>
 #include <vxf/io/VoxelSetFile.h>
 
@@ -11,6 +12,7 @@ namespace vxf {
 
 VolumeEmission::VolumeEmission(const Light& light)
     : mPower(light.power())
+    , mKelvin(light.blackbodyKelvin)
 {
     const VoxelSet source = readVoxelSet(light.file);
     const openvdb::GridBase::Ptr grid = source.find(light.grid);
@@ -27,6 +29,10 @@ VolumeEmission::VolumeEmission(const Light& light)
     grid->setTransform(moved);
     mFloat = openvdb::gridConstPtrCast<openvdb::FloatGrid>(grid);
     mVec3 = openvdb::gridConstPtrCast<openvdb::Vec3SGrid>(grid);
+    if (mKelvin > 0.0 && !mFloat) {
+        throw Error(fmt::format("light '{}': a blackbody's grid '{}' in {} must be a float temperature, not {}", light.name, light.grid,
+            light.file, grid->valueType()));
+    }
     if (!mFloat && !mVec3) {
         throw Error(fmt::format(
             "light '{}': grid '{}' in {} must be float or vec3s, not {}", light.name, light.grid, light.file, grid->valueType()));
@@ -44,7 +50,9 @@ openvdb::Vec3d VolumeEmission::Sampler::at(const openvdb::Vec3d& world)
 {
     openvdb::Vec3d e(0.0);
     if (mFloat) {
-        e = openvdb::Vec3d(openvdb::tools::BoxSampler::sample(*mFloat, mEmission.mFloat->transform().worldToIndex(world)));
+        const double value = openvdb::tools::BoxSampler::sample(*mFloat, mEmission.mFloat->transform().worldToIndex(world));
+        // A temperature is interpolated, then made light (as Cycles does): T⁴ of the mean, not the mean of T⁴.
+        e = mEmission.mKelvin > 0.0 ? blackbodyEmission(value * mEmission.mKelvin) : openvdb::Vec3d(value);
     } else {
         e = openvdb::Vec3d(openvdb::tools::BoxSampler::sample(*mVec3, mEmission.mVec3->transform().worldToIndex(world)));
     }

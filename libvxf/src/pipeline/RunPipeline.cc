@@ -51,7 +51,7 @@ json lightJson(const Light& l)
     return {{"type", int(l.type)}, {"name", l.name}, {"color", vec(l.color)}, {"intensity", l.intensity}, {"falloff", int(l.falloff)},
         {"position", vec(l.position)}, {"direction", vec(l.direction)}, {"cone", {l.coneAngleDegrees, l.coneSoftnessDegrees}},
         {"shape", int(l.shape)}, {"size", {l.width, l.height, l.radius}}, {"samples", l.samples}, {"file", l.file}, {"grid", l.grid},
-        {"grid_to_world", matrix(l.gridToWorld)}, {"placement", int(l.placement)}};
+        {"grid_to_world", matrix(l.gridToWorld)}, {"placement", int(l.placement)}, {"blackbody", l.blackbodyKelvin}};
 }
 
 } // namespace

@@ -164,6 +164,7 @@ public:
         if (j.contains("file")) l.file = resolvePath(j["file"].get<std::string>());
         l.grid = j.value("grid", std::string());
         l.placement = placement(j);
+        blackbody(j, l);
         return l;
     }
 
@@ -181,7 +182,18 @@ public:
         checkPower(l, "/objects/" + object.name + "/emission");
         l.gridToWorld = object.objectToWorld;
         l.placement = object.placement;
+        blackbody(j, l);
         return l;
+    }
+
+    /// A `blackbody` block: the grid is a temperature of `temperature` Kelvin per unit, and the
+    /// light's intensity takes the block's `intensity` (Blender's Principled Volume Temperature and
+    /// Blackbody Intensity).
+    static void blackbody(const json& j, Light& l)
+    {
+        if (!j.contains("blackbody")) return;
+        l.blackbodyKelvin = j["blackbody"].value("temperature", 1.0);
+        l.intensity *= j["blackbody"].value("intensity", 1.0);
     }
 
     /// `voxel_placement` of a volume object or light: auto (the default), centre or cell.

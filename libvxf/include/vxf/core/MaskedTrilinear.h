@@ -1,8 +1,7 @@
 // vxf — trilinear interpolation over the corners a predicate accepts (the rest left out).
 #pragma once
 
-#include <openvdb/math/Coord.h>
-#include <openvdb/math/Vec3.h>
+#include <openvdb/Types.h> // openvdb::Vec3d, openvdb::Coord
 
 #include <cmath>
 

@@ -95,6 +95,10 @@ struct Light
     /// emission moves with the object: its objectToWorld; a `volume` light of the scene: identity).
     openvdb::Mat4d gridToWorld = openvdb::Mat4d::identity();
     VoxelPlacement placement = VoxelPlacement::Auto; ///< volume light: where its grid's voxels lie
+    /// Volume light: > 0 makes its float grid a temperature, Kelvin = value × this (Blender's
+    /// Principled Volume Temperature), emitting blackbody light (light/Blackbody.h) × colour ×
+    /// intensity; 0: the grid's values are the radiance per unit length.
+    double blackbodyKelvin = 0.0;
 
     /// Radiant colour: color × intensity.
     openvdb::Vec3d power() const { return color * intensity; }

@@ -39,6 +39,7 @@ private:
     openvdb::FloatGrid::ConstPtr mFloat;
     openvdb::Vec3SGrid::ConstPtr mVec3;
     openvdb::Vec3d mPower;
+    double mKelvin = 0.0; ///< Light::blackbodyKelvin: a temperature grid (float), sampled then made light
 };
 
 } // namespace vxf
