@@ -27,6 +27,7 @@ std::unique_ptr<Command> makeScatterCommand(CLI::App& parent);
 std::unique_ptr<Command> makeRenderCommand(CLI::App& parent);
 std::unique_ptr<Command> makeRunCommand(CLI::App& parent);
 std::unique_ptr<Command> makeFarmCommand(CLI::App& parent);
+std::unique_ptr<Command> makeBakeCommand(CLI::App& parent);
 std::unique_ptr<Command> makeOpCommand(CLI::App& parent);
 std::unique_ptr<Command> makeGraphCommand(CLI::App& parent);
 std::unique_ptr<Command> makeViewCommand(CLI::App& parent);

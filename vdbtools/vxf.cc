@@ -21,6 +21,7 @@ int main(int argc, char** argv)
     commands.push_back(makeRenderCommand(app));
     commands.push_back(makeRunCommand(app));
     commands.push_back(makeFarmCommand(app));
+    commands.push_back(makeBakeCommand(app));
     commands.push_back(makeOpCommand(app));
     commands.push_back(makeGraphCommand(app));
     commands.push_back(makeViewCommand(app));

@@ -1,5 +1,7 @@
 #include <vxf/pipeline/RunPipeline.h>
 
+#include "SceneJson.h"
+
 #include <vxf/core/Frames.h>
 #include <vxf/core/GridRoles.h>
 #include <vxf/io/AtomicFile.h>
@@ -36,22 +38,15 @@ namespace fs = std::filesystem;
 
 std::string hashOf(const json& inputs) { return hashHex(inputs.dump()); }
 
-json vec(const openvdb::Vec3d& v) { return json::array({v[0], v[1], v[2]}); }
-
-json matrix(const openvdb::Mat4d& m)
-{
-    json out = json::array();
-    for (int r = 0; r < 4; ++r)
-        for (int c = 0; c < 4; ++c) out.push_back(m(r, c));
-    return out;
-}
+using detail::matrixJson;
+using detail::vecJson;
 
 json lightJson(const Light& l)
 {
-    return {{"type", int(l.type)}, {"name", l.name}, {"color", vec(l.color)}, {"intensity", l.intensity}, {"falloff", int(l.falloff)},
-        {"position", vec(l.position)}, {"direction", vec(l.direction)}, {"cone", {l.coneAngleDegrees, l.coneSoftnessDegrees}},
+    return {{"type", int(l.type)}, {"name", l.name}, {"color", vecJson(l.color)}, {"intensity", l.intensity}, {"falloff", int(l.falloff)},
+        {"position", vecJson(l.position)}, {"direction", vecJson(l.direction)}, {"cone", {l.coneAngleDegrees, l.coneSoftnessDegrees}},
         {"shape", int(l.shape)}, {"size", {l.width, l.height, l.radius}}, {"samples", l.samples}, {"file", l.file}, {"grid", l.grid},
-        {"grid_to_world", matrix(l.gridToWorld)}, {"placement", int(l.placement)}, {"blackbody", l.blackbodyKelvin}};
+        {"grid_to_world", matrixJson(l.gridToWorld)}, {"placement", int(l.placement)}, {"blackbody", l.blackbodyKelvin}};
 }
 
 } // namespace
@@ -190,8 +185,8 @@ struct PipelineRun
             const std::string& file = o.isVolume() ? o.volume : o.mesh;
             media.push_back({{o.isVolume() ? "volume" : "mesh", file}, {"grid", o.isVolume() ? json(o.grid) : json()},
                 {"placement", o.isVolume() && o.placement != VoxelPlacement::Auto ? json(int(o.placement)) : json()},
-                {"bytes", fileFingerprint(file)}, {"transform", matrix(o.objectToWorld)},
-                {"sigma", mediaCount(scene) > 1 ? json{vec(m.sigmaA), vec(m.sigmaS)} : json()},
+                {"bytes", fileFingerprint(file)}, {"transform", matrixJson(o.objectToWorld)},
+                {"sigma", mediaCount(scene) > 1 ? json{vecJson(m.sigmaA), vecJson(m.sigmaS)} : json()},
                 {"grids", m.gridsFile.empty() ? json() : json{fileFingerprint(m.gridsFile), m.sigmaAGrid, m.sigmaSGrid}}});
         }
         // The program too: the light and scatter stages' keys chain from this one.
@@ -229,13 +224,13 @@ struct PipelineRun
         for (const auto& l : scene.lights) lights.push_back(lightJson(l));
         json occluders = json::array();
         for (const auto& o : scene.objects) {
-            if (o.role == SceneObject::Role::Occluder) occluders.push_back({fileFingerprint(o.mesh), matrix(o.objectToWorld)});
+            if (o.role == SceneObject::Role::Occluder) occluders.push_back({fileFingerprint(o.mesh), matrixJson(o.objectToWorld)});
         }
         for (const auto& l : scene.lights) {
             if (!l.file.empty()) lights.push_back(fileFingerprint(l.file)); // environment map, emission grid: their bytes
         }
-        json lightInputs = {{"voxels", voxelHash}, {"sigma_a", vec(material.sigmaA)}, {"sigma_s", vec(material.sigmaS)}, {"lights", lights},
-            {"occluders", occluders}, {"step", s.step}, {"sweep", true}};
+        json lightInputs = {{"voxels", voxelHash}, {"sigma_a", vecJson(material.sigmaA)}, {"sigma_s", vecJson(material.sigmaS)},
+            {"lights", lights}, {"occluders", occluders}, {"step", s.step}, {"sweep", true}};
         // A forward phase's first moment is carried by the accelerated sweeps alone (Scatter.h);
         // for any other scatter the light stage lights the similarity relation's medium too.
         const bool carriesMoment = s.kernel == "sweep" && s.accelerate && !wants("scatter_passes") && s.finePasses == 0;
