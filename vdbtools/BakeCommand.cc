@@ -38,8 +38,9 @@ public:
                 "all: every order of scattering as emission over a medium that only absorbs (an emission-absorption shader "
                 "reproduces vxf's image in any renderer; the default); multiple: multiple scattering only, the renderer adding "
                 "single scattering from the same lights (Cycles at volume bounces 0 does not attenuate emission by the scattering "
-                "part of the medium: use all there)")
-            ->check(CLI::IsMember({"all", "multiple"}));
+                "part of the medium: use all there); none: the volumes' own emission alone, for a renderer that scatters all "
+                "the light itself")
+            ->check(CLI::IsMember({"all", "multiple", "none"}));
     }
 
     void run() override
@@ -47,7 +48,10 @@ public:
         const auto start = std::chrono::steady_clock::now();
         TerminalProgress progress;
         const Scene scene = loadScene(mScene, mFrame);
-        BakedVolume baked = bakeScene(scene, mOut, mScattering == "multiple" ? BakedScattering::Multiple : BakedScattering::All, &progress);
+        const BakedScattering scattering = mScattering == "multiple" ? BakedScattering::Multiple
+            : mScattering == "none"                                  ? BakedScattering::None
+                                                                     : BakedScattering::All;
+        BakedVolume baked = bakeScene(scene, mOut, scattering, &progress);
         const std::string manifestPath = std::filesystem::path(mOutput).replace_extension(".json").string();
         baked.manifest["vdb"] = std::filesystem::path(mOutput).filename().string();
         writeVoxelSet(mOutput, baked.set);

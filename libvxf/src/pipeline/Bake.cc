@@ -72,7 +72,8 @@ BakedVolume bakeScene(const Scene& scene, const std::string& outDir, BakedScatte
     const Material material = sceneMaterial(scene);
     const Medium medium(set, material);
     auto density = openvdb::gridPtrCast<openvdb::FloatGrid>(set.find(grids::kDensity)->deepCopyGrid());
-    const auto scatter = set.find(grids::kScatter) ? set.get<openvdb::Vec3SGrid>(grids::kScatter) : openvdb::Vec3SGrid::Ptr();
+    const auto scatter = scattering != BakedScattering::None && set.find(grids::kScatter) ? set.get<openvdb::Vec3SGrid>(grids::kScatter)
+                                                                                          : openvdb::Vec3SGrid::Ptr();
     const auto direct = scattering == BakedScattering::All && set.find(grids::kDirect) ? set.get<openvdb::Vec3SGrid>(grids::kDirect)
                                                                                        : openvdb::Vec3SGrid::Ptr();
 
@@ -116,7 +117,9 @@ BakedVolume bakeScene(const Scene& scene, const std::string& outDir, BakedScatte
     density->setName(grids::kDensity);
 
     BakedVolume baked{VoxelSet(density->transformPtr()), manifestOf(scene, material, material.phaseG)};
-    baked.manifest["scattering"] = scattering == BakedScattering::All ? "all" : "multiple";
+    baked.manifest["scattering"] = scattering == BakedScattering::All ? "all"
+        : scattering == BakedScattering::Multiple                     ? "multiple"
+                                                                      : "none";
     // The grids keep OpenVDB's placement (voxel centres on the transform's points: Houdini, Karma,
     // Arnold); a renderer that spreads voxel i over [i, i+1] (Blender's Cycles) moves the volume
     // back by this half voxel (io/VoxelPlacement.h).

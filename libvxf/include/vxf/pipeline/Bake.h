@@ -23,6 +23,9 @@ enum class BakedScattering {
     /// emission by the whole σt; Cycles at volume bounces 0 attenuates it by σa alone (measured:
     /// docs/accuracy-notes.md, "Baked light in Cycles").
     Multiple,
+    /// None: the volumes' own emission alone (flames, blackbody), for a renderer that scatters
+    /// all of the light itself (a reference: bench/interchange/cycles).
+    None,
 };
 
 /// What bakeScene made: the baked set and a manifest of what a renderer needs besides its grids.
