@@ -106,3 +106,31 @@ TEST_CASE("a volume object and its emission lie where voxel_placement puts them"
                           "s.json"),
         Catch::Contains("/objects/0/voxel_placement: places a volume object's voxels; this object has a mesh"));
 }
+
+TEST_CASE("a file Blender wrote lies where Blender puts it: a baked unit cube centred on the origin", "[placement][volume][interop]")
+{
+    // tests/data/blender-bake: bpy 4.5.15's geometry-nodes bake of Mesh to Volume of a unit cube
+    // (scripts/make-blender-bake), voxels -2..1 of 0.217: no writer metadata, known by its folders.
+    const std::string file = vxf::test::source("tests/data/blender-bake/blobs/00001_00000_file_1.vdb");
+    const auto centroid = [&](const std::string& placement) {
+        const vxf::Scene scene = vxf::parseScene(R"({"objects": [{"volume": ")" + file + R"(", "voxel_placement": ")" + placement +
+                R"(", "material": {"albedo": 0.5, "mean_free_path": 1}}], "lights": [], "camera": {"position": [0, -5, 0], "look_at": [0, 0, 0]}})",
+            "s.json");
+        const vxf::VoxelSet set = vxf::voxelizeMedia(scene, vxf::VoxelizeOptions{});
+        const auto density = set.get<openvdb::FloatGrid>("density");
+        openvdb::Vec3d sum(0.0);
+        double weight = 0.0;
+        for (auto it = density->cbeginValueOn(); it; ++it) {
+            sum += density->transform().indexToWorld(it.getCoord()) * double(*it);
+            weight += double(*it);
+        }
+        return sum / weight;
+    };
+    const openvdb::Vec3d blender = centroid("auto"), openvdbCentres = centroid("centre");
+    for (int i = 0; i < 3; ++i) {
+        CHECK(blender[i] == Approx(0.0).margin(1e-6)); // the cube's centre, as Cycles renders it
+        CHECK(openvdbCentres[i] == Approx(-0.5 * 0.2165).margin(1e-3)); // half a voxel off under OpenVDB's convention
+    }
+    openvdb::MetaMap none;
+    CHECK(vxf::resolvePlacement(VoxelPlacement::Auto, file, none).why.find("geometry-nodes bake") != std::string::npos);
+}
