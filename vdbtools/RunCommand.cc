@@ -10,6 +10,7 @@
 
 #include <fmt/format.h>
 
+#include <filesystem>
 #include <iostream>
 #include <optional>
 #include <set>
@@ -34,6 +35,9 @@ public:
             "Frames to render: N, A-B, A-B:STEP or a comma-separated list of those (1-240, 1-240:2, 1,5,10-20). Every "
             "frame's scene and input files are checked before the first is rendered. A still scene renders the same "
             "image at every frame (NAME.0001.exr ...)");
+        mApp->add_flag("--prune-cache", mPrune,
+            "With --frames: after each frame, remove the cache entries the frame before used and this one did not (a shot's "
+            "cache then holds one frame's stages, not every frame's; a rerun recomputes them)");
         mApp->add_flag(
             "--dry-run", mDryRun, "Check the scene (at every frame) and its input files and print each frame's image, rendering nothing");
         mApp->add_flag("--warm-start", mWarmStart,
@@ -67,14 +71,41 @@ public:
             return;
         }
         PipelineOptions options;
+        std::set<std::string> previous; // the cache entries the frame before used
         for (const Scene& scene : scenes) {
             std::cout << fmt::format("frame {}\n", *scene.frame);
             const PipelineReport report = runOne(scene, options);
             if (mWarmStart && !report.volume.empty()) options.warmStart = report.volume;
+            if (mPrune) previous = pruned(previous, report);
         }
     }
 
 private:
+    /// Remove the entries of @a previous that @a report's frame did not use; the entries it used.
+    static std::set<std::string> pruned(const std::set<std::string>& previous, const PipelineReport& report)
+    {
+        std::set<std::string> used;
+        for (const StageRecord& stage : report.stages) {
+            if (stage.action != "skipped" && stage.stage != "render" && !stage.file.empty()) used.insert(stage.file);
+        }
+        std::uintmax_t bytes = 0;
+        int removed = 0;
+        for (const std::string& file : previous) {
+            if (used.count(file)) continue;
+            std::error_code error;
+            const std::uintmax_t size = std::filesystem::file_size(file, error);
+            if (std::filesystem::remove(file, error)) {
+                bytes += error ? 0 : size;
+                ++removed;
+            }
+            const std::filesystem::path entry(file);
+            std::filesystem::remove(entry.parent_path() / ("." + entry.filename().string() + ".lock"), error);
+        }
+        if (removed > 0)
+            std::cout << fmt::format("  pruned {} cache entries of the frame before ({:.1f} MB)\n", removed, double(bytes) / 1e6);
+        return used;
+    }
+
     PipelineReport runOne(const Scene& scene, const PipelineOptions& options)
     {
         TerminalProgress progress;
@@ -95,7 +126,7 @@ private:
     }
 
     std::string mScene, mOut = "out", mFrames;
-    bool mWarmStart = false, mDryRun = false;
+    bool mWarmStart = false, mDryRun = false, mPrune = false;
     std::set<std::string> mToldMeshes;
 };
 

@@ -117,6 +117,15 @@ TEST_CASE("each frame re-runs only the stages whose inputs its animation changed
             run(fmt::format("{} light {} --scene {} -o {}", vxf, dir.path("v.vdb"), dir.path("s.json"), dir.path("l2.vdb")));
         CHECK(unframed.status == 1);
         CHECK_THAT(unframed.err, Catch::Contains("the scene is animated (/lights/0/position)"));
+        // --prune-cache: the shot's cache keeps one frame's entries (the shared voxel set, frame 3's light and scatter).
+        const auto prunedRun =
+            run(fmt::format("{} run {} --out {} --frames 1-3 --prune-cache", binary("vxf"), dir.path("s.json"), dir.path("pruned")));
+        INFO(prunedRun.out);
+        REQUIRE(prunedRun.status == 0);
+        CHECK(prunedRun.out.find("pruned 2 cache entries of the frame before") != std::string::npos);
+        int entries = 0;
+        for (const auto& e : fs::directory_iterator(dir.path("pruned/cache"))) entries += e.path().extension() == ".vdb" ? 1 : 0;
+        CHECK(entries == 3);
         // Past the last key the light holds still: frame 4 reuses frame 3's lighting.
         const auto held = runFrames(dir, "4");
         CHECK(frameActions(held.out).at(0) == "frame 4: voxelize reused light reused scatter reused render ran");
