@@ -9,6 +9,7 @@
 #include <vxf/pipeline/Graph.h>
 
 #include <catch2/catch.hpp>
+#include <fmt/format.h>
 
 #include <cmath>
 
@@ -102,8 +103,9 @@ TEST_CASE("view: edits are the registry's operators, undoable, and the pipeline 
     writeSphere(dir.path("s.vdb"));
     view::ViewSession session(dir.path("s.vdb"));
     const nlohmann::json select = {{"grid", "direct"}, {"shape", "box"}, {"min", {-1, -1, -1}}, {"max", {0, 1, 1}}};
-    CHECK_THAT(session.apply("select", select), Catch::Contains("into 'mask'"));
-    session.apply("edit", {{"grid", "direct"}, {"selection", "mask"}, {"hue_shift", 120.0}});
+    const std::string selected = session.apply("select", select);
+    CHECK_THAT(selected, Catch::Contains("into 'mask'"));
+    const std::string edited = session.apply("edit", {{"grid", "direct"}, {"selection", "mask"}, {"hue_shift", 120.0}});
 
     // What the operators give when called directly.
     VoxelSet expected = readVoxelSet(dir.path("s.vdb"));
@@ -111,7 +113,15 @@ TEST_CASE("view: edits are the registry's operators, undoable, and the pipeline 
     const auto mask = ops::selectBox(*direct, openvdb::BBoxd(openvdb::Vec3d(-1.0), openvdb::Vec3d(0.0, 1.0, 1.0)));
     ops::EditOptions hue;
     hue.hueShift = 120.0;
+    // The reports count the voxels each step changed: the new mask's, then the hue-shifted ones (all of the mask's
+    // voxels whose colour is not grey: a hue shift leaves grey as it is).
+    const openvdb::Vec3SGrid::Ptr original = direct->deepCopy();
     ops::edit(*direct, mask.get(), hue);
+    CHECK_THAT(selected, Catch::Contains(fmt::format("; changed {} voxels of 'mask'", mask->activeVoxelCount())));
+    std::uint64_t shifted = 0;
+    for (auto it = direct->cbeginValueOn(); it; ++it) shifted += *it != original->tree().getValue(it.getCoord()) ? 1 : 0;
+    CHECK(shifted > 0);
+    CHECK_THAT(edited, Catch::Contains(fmt::format("; changed {} voxels of 'direct'", shifted)));
 
     std::filesystem::create_directory(dir.path("out")); // exports create no folders
     const std::string whole = session.exportTo("out/whole.vdb", view::ExportMode::Whole, "", 0);

@@ -18,6 +18,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <set>
 #include <unordered_map>
 
@@ -356,10 +357,71 @@ VoxelSet ViewSession::replay(const std::vector<Step>& steps) const
     return set;
 }
 
+namespace {
+
+/// The grids an edit step writes, as its operator declares them (ops::gridUse).
+std::set<std::string> writtenGrids(const std::string& op, const nlohmann::json& params)
+{
+    const ops::Operator& declared = findOperator(op);
+    return ops::gridUse(declared, ops::checkArgs(declared, params)).writes;
+}
+
+/// Voxels of @a after active where @a before is not, or of another value, and voxels of @a before
+/// no longer active in @a after (tiles counted voxel by voxel).
+template <typename GridT>
+std::uint64_t changedVoxels(const GridT& before, const GridT& after)
+{
+    std::uint64_t changed = 0;
+    const auto countAgainst = [&changed](const GridT& a, const GridT& b, bool compareValues) {
+        auto other = b.getConstAccessor();
+        for (auto it = a.cbeginValueOn(); it; ++it) {
+            openvdb::CoordBBox box;
+            it.getBoundingBox(box);
+            for (auto c = box.begin(); c; ++c) {
+                if (!other.isValueOn(*c) || (compareValues && !openvdb::math::isExactlyEqual(other.getValue(*c), *it))) ++changed;
+            }
+        }
+    };
+    countAgainst(after, before, true);
+    countAgainst(before, after, false);
+    return changed;
+}
+
+/// "; changed N voxels of 'G'" for each grid of @a before (copies taken before the edit) as @a set holds it now.
+std::string changedSummary(const std::map<std::string, openvdb::GridBase::Ptr>& before, const VoxelSet& set)
+{
+    std::string out;
+    for (const auto& [name, old] : before) {
+        const openvdb::GridBase::Ptr now = set.find(name);
+        std::uint64_t changed = 0;
+        if (!old || !now) {
+            changed = old ? old->activeVoxelCount() : now ? now->activeVoxelCount() : 0;
+        } else if (auto a = openvdb::gridPtrCast<openvdb::Vec3SGrid>(old)) {
+            changed = changedVoxels(*a, *openvdb::gridPtrCast<openvdb::Vec3SGrid>(now));
+        } else if (auto f = openvdb::gridPtrCast<openvdb::FloatGrid>(old)) {
+            changed = changedVoxels(*f, *openvdb::gridPtrCast<openvdb::FloatGrid>(now));
+        } else if (auto m = openvdb::gridPtrCast<openvdb::BoolGrid>(old)) {
+            changed = changedVoxels(*m, *openvdb::gridPtrCast<openvdb::BoolGrid>(now));
+        } else {
+            continue; // a grid type no edit writes
+        }
+        out += fmt::format("; changed {} voxels of '{}'", changed, name);
+    }
+    return out;
+}
+
+} // namespace
+
 std::string ViewSession::apply(const std::string& op, const nlohmann::json& params)
 {
     std::lock_guard<std::mutex> lock(mMutex);
     checkEdit(op, params);
+    // The grids the step writes, as they were: the report says how many voxels it changed.
+    std::map<std::string, openvdb::GridBase::Ptr> before;
+    for (const std::string& name : writtenGrids(op, params)) {
+        const openvdb::GridBase::Ptr grid = mCurrent.find(name);
+        before[name] = grid ? grid->deepCopyGrid() : nullptr;
+    }
     std::string report;
     try {
         run(mCurrent, op, params, &report);
@@ -368,7 +430,7 @@ std::string ViewSession::apply(const std::string& op, const nlohmann::json& para
         throw;
     }
     mSteps.push_back({op, params});
-    return report;
+    return report + changedSummary(before, mCurrent);
 }
 
 bool ViewSession::undo()
@@ -393,17 +455,6 @@ nlohmann::json ViewSession::pipeline(const std::string& output) const
     }
     return {{"nodes", nodes}, {"outputs", {{last, output}}}};
 }
-
-namespace {
-
-/// The grids an edit step writes, as its operator declares them (ops::gridUse).
-std::set<std::string> writtenGrids(const std::string& op, const nlohmann::json& params)
-{
-    const ops::Operator& declared = findOperator(op);
-    return ops::gridUse(declared, ops::checkArgs(declared, params)).writes;
-}
-
-} // namespace
 
 ViewSession::Rendered ViewSession::render(const std::string& scenePath, int width, int height, const std::string& folder)
 {
