@@ -47,12 +47,19 @@ public:
     {
         const auto start = std::chrono::steady_clock::now();
         TerminalProgress progress;
+        const std::string manifestPath = std::filesystem::path(mOutput).replace_extension(".json").string();
+        std::error_code error;
+        if (std::filesystem::equivalent(mScene, manifestPath, error)) {
+            throw UsageError(fmt::format("the bake's manifest {} would replace the scene {}: give the bake another name (-o {})",
+                manifestPath, mScene,
+                (std::filesystem::path(mOutput).parent_path() / (std::filesystem::path(mOutput).stem().string() + "-baked.vdb")).string()));
+        }
+        refuseOutputOverInput(mScene, mOutput);
         const Scene scene = loadScene(mScene, mFrame);
         const BakedScattering scattering = mScattering == "multiple" ? BakedScattering::Multiple
             : mScattering == "none"                                  ? BakedScattering::None
                                                                      : BakedScattering::All;
         BakedVolume baked = bakeScene(scene, mOut, scattering, &progress);
-        const std::string manifestPath = std::filesystem::path(mOutput).replace_extension(".json").string();
         baked.manifest["vdb"] = std::filesystem::path(mOutput).filename().string();
         writeVoxelSet(mOutput, baked.set);
         writeAtomically(manifestPath, [&](const std::string& tmp) {

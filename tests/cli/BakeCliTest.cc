@@ -112,4 +112,9 @@ TEST_CASE("vxf bake writes density and emission whose emission-absorption render
     const openvdb::Vec3f multiple = vxf::readVoxelSet(dir.path("ms.vdb")).get<openvdb::Vec3SGrid>("emission")->tree().getValue(voxel);
     CHECK(multiple[0] == Approx(4.0 * solved.get<openvdb::Vec3SGrid>("scatter")->tree().getValue(voxel)[0] / (4.0 * M_PI)).epsilon(1e-5));
     CHECK(run(fmt::format("{} bake {} -o {} --scattering some", vxf, dir.path("s.json"), dir.path("x.vdb"))).status == 2);
+    // s.json baked to s.vdb would write its manifest, s.json, over the scene: refused, the scene kept.
+    const auto over = run(fmt::format("{} bake {} -o {} --out {}", vxf, dir.path("s.json"), dir.path("s.vdb"), dir.path("out")));
+    CHECK(over.status == 2);
+    CHECK_THAT(over.err, Catch::Contains("would replace the scene") && Catch::Contains("s-baked.vdb"));
+    CHECK(slurp(dir.path("s.json")) == scene);
 }
