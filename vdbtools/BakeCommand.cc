@@ -27,9 +27,9 @@ public:
         mApp = parent.add_subcommand("bake",
             "Hand vxf's light to another renderer (Cycles, Karma, Arnold): run the scene up to the scatter stage (cached in "
             "OUT/cache as vxf run) and write a .vdb of `density` (the medium, placed in the world) and `emission` (vec3s, "
-            "radiance per unit length: vxf's multiple scattering, edits and all, plus the volumes' own emission), and beside "
-            "it a manifest (.json) of the coefficients per unit density, the phase, the lights and the camera. The renderer "
-            "adds its own single scattering from the same lights; scripts/blender-load-bake builds that scene in Blender.");
+            "radiance per unit length: vxf's scattered light, edits and all, plus the volumes' own emission; --scattering "
+            "says which orders), and beside it a manifest (.json) of the coefficients per unit density, the phase, the "
+            "lights and the camera. scripts/blender-load-bake builds that scene in Blender.");
         mApp->add_option("scene", mScene, "Scene file")->required();
         mApp->add_option("-o,--output", mOutput, "The baked .vdb (its manifest: the same name, .json)")->required()->check(OutputFile);
         mApp->add_option("--out", mOut, "Folder of the stage cache (default: out)");

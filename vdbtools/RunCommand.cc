@@ -48,7 +48,7 @@ public:
     void run() override
     {
         if (mFrames.empty()) {
-            if (mWarmStart) throw UsageError("--warm-start needs --frames");
+            if (mWarmStart || mPrune) throw UsageError(fmt::format("{} needs --frames", mWarmStart ? "--warm-start" : "--prune-cache"));
             const Scene scene = loadScene(mScene);
             if (mDryRun) {
                 requireSceneInputs(scene);
@@ -72,9 +72,19 @@ public:
         }
         PipelineOptions options;
         std::set<std::string> previous; // the cache entries the frame before used
+        std::size_t done = 0;
         for (const Scene& scene : scenes) {
             std::cout << fmt::format("frame {}\n", *scene.frame);
-            const PipelineReport report = runOne(scene, options);
+            PipelineReport report;
+            try {
+                report = runOne(scene, options);
+            } catch (const Interrupted&) {
+                // The frames before are whole files; "no output written" is the interrupted frame's.
+                if (done > 0)
+                    warn(fmt::format("{} of {} frames written before frame {} was interrupted", done, scenes.size(), *scene.frame));
+                throw;
+            }
+            ++done;
             if (mWarmStart && !report.volume.empty()) options.warmStart = report.volume;
             if (mPrune) previous = pruned(previous, report);
         }

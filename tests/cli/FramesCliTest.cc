@@ -157,6 +157,7 @@ TEST_CASE("each frame re-runs only the stages whose inputs its animation changed
         CHECK(frame2.find("from the frame before") != std::string::npos);
         CHECK(std::stoi(w[1].str()) < std::stoi(c[1].str()));
         CHECK(run(fmt::format("{} run {} --out {} --warm-start", binary("vxf"), dir.path("s.json"), dir.path("o"))).status == 2);
+        CHECK(run(fmt::format("{} run {} --out {} --prune-cache", binary("vxf"), dir.path("s.json"), dir.path("o"))).status == 2);
     }
 }
 

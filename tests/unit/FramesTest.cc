@@ -60,6 +60,9 @@ TEST_CASE("frame tokens of Houdini and Blender expand to the frame", "[frames]")
     CHECK(expandFrameTokens("cost$.vdb", 3) == "cost$.vdb");
     CHECK(vxf::hasFrameTokens("s.$F4.vdb"));
     CHECK_FALSE(vxf::hasFrameTokens("s.vdb"));
+    CHECK_FALSE(vxf::hasFrameTokens("$HIP/cost$_$FF.vdb")); // other variables: a still path, as it is
+    CHECK(vxf::hasFrameTokens("${F}.vdb"));
+    CHECK(vxf::hasFrameTokens("a_$F3"));
     CHECK(vxf::paddedFrame(1) == "0001");
     CHECK(vxf::paddedFrame(-3) == "-003");
     CHECK_THROWS_WITH(expandFrameTokens("$HIP/smoke.vdb", 1), Catch::Contains("$HIP is a variable vxf cannot expand"));

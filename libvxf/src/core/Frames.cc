@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cstdlib>
+#include <regex>
 #include <set>
 
 namespace vxf {
@@ -132,6 +133,11 @@ std::string expandFrameTokens(const std::string& path, int frame)
     return out;
 }
 
-bool hasFrameTokens(const std::string& path) { return expandFrameTokens(path, 0) != expandFrameTokens(path, 1); }
+bool hasFrameTokens(const std::string& path)
+{
+    // (without expanding: a still path may hold a '$' of its own, `cost$.vdb` or `$HOME`, taken as it is)
+    static const std::regex token(R"(#|\$\{F[1-9]?\}|\$F[1-9]?(?![A-Za-z0-9_]))");
+    return std::regex_search(path, token);
+}
 
 } // namespace vxf

@@ -302,8 +302,6 @@ struct PipelineRun
                     fmt::format("{} passes{}: {}", scattered.passes.size(), scattered.warmStarted ? " from the frame before" : "",
                         scattered.stopReason),
                     volumeFile, seconds);
-                report.scatterIterations = int(scattered.passes.size());
-                report.warmStarted = scattered.warmStarted;
             }
             lock.reset();
         }

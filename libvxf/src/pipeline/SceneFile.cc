@@ -296,13 +296,6 @@ json sceneDocument(const std::string& text, const std::string& path, std::option
 
 } // namespace
 
-std::vector<std::string> sceneAnimation(const std::string& path)
-{
-    const json raw = parseJsonText(readBoundedFile(path, kMaxSceneBytes, "a scene file"), path);
-    sceneSchema().check(raw, path);
-    return detail::animatedValues(raw);
-}
-
 Scene parseScene(const std::string& text, const std::string& path, std::optional<int> frame)
 {
     const json document = sceneDocument(text, path, frame);

@@ -20,7 +20,8 @@ std::vector<int> parseFrameRange(const std::string& spec);
 /// Houdini variables (`$FF`, `$FSTART`, `$HIP`) are refused by name: vxf cannot expand them.
 std::string expandFrameTokens(const std::string& path, int frame);
 
-/// Whether @a path holds a frame token (expandFrameTokens would change it).
+/// Whether @a path holds a frame token. Never throws: a path without one (`$HOME/smoke.vdb`) is
+/// a still path, taken as it is; expanding one that has both refuses the other variable.
 bool hasFrameTokens(const std::string& path);
 
 /// @a frame zero-padded to 4 digits as output names carry it (`NAME.0001.exr`; `-001` below zero).

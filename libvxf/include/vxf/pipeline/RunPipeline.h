@@ -26,8 +26,6 @@ struct PipelineReport
     /// Cache entries that could not be read (removed and recomputed), and the light stage's
     /// warnings when it ran (a medium with no positive density).
     std::vector<std::string> warnings;
-    int scatterIterations = 0; ///< when scatter ran: its passes (or accelerated iterations)
-    bool warmStarted = false; ///< when scatter ran: it started from PipelineOptions::warmStart
 };
 
 struct PipelineOptions

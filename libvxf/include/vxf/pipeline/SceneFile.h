@@ -23,10 +23,6 @@ Scene loadScene(const std::string& path, std::optional<int> frame = std::nullopt
 /// Parse scene JSON text; @a path names it in messages and anchors relative paths.
 Scene parseScene(const std::string& text, const std::string& path, std::optional<int> frame = std::nullopt);
 
-/// Whether the scene file at @a path is animated (keyframes or frame tokens): the JSON
-/// pointers of what is, empty for a still scene. Checks the file as loadScene does.
-std::vector<std::string> sceneAnimation(const std::string& path);
-
 /// The JSON Schema scenes are checked against (schemas/scene.schema.json, embedded).
 const std::string& sceneSchemaText();
 
