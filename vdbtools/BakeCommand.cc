@@ -41,6 +41,11 @@ public:
                 "part of the medium: use all there); none: the volumes' own emission alone, for a renderer that scatters all "
                 "the light itself")
             ->check(CLI::IsMember({"all", "multiple", "none"}));
+        mApp->add_option("--supersample", mOptions.supersample,
+                fmt::format("Baked voxels a side to each of the medium's, 1 to {}: a renderer reads a grid's edge as a ramp a voxel "
+                            "wide where a mesh medium ends at its surface (default: {} for a mesh medium, 1 for a volume)",
+                    kBakeMaxSupersampling, kBakeSurfaceSupersampling))
+            ->check(CLI::Range(1, kBakeMaxSupersampling));
     }
 
     void run() override
@@ -56,10 +61,10 @@ public:
         }
         refuseOutputOverInput(mScene, mOutput);
         const Scene scene = loadScene(mScene, mFrame);
-        const BakedScattering scattering = mScattering == "multiple" ? BakedScattering::Multiple
-            : mScattering == "none"                                  ? BakedScattering::None
-                                                                     : BakedScattering::All;
-        BakedVolume baked = bakeScene(scene, mOut, scattering, &progress);
+        mOptions.scattering = mScattering == "multiple" ? BakedScattering::Multiple
+            : mScattering == "none"                     ? BakedScattering::None
+                                                        : BakedScattering::All;
+        BakedVolume baked = bakeScene(scene, mOut, mOptions, &progress);
         baked.manifest["vdb"] = std::filesystem::path(mOutput).filename().string();
         writeVoxelSet(mOutput, baked.set);
         writeAtomically(manifestPath, [&](const std::string& tmp) {
@@ -73,6 +78,7 @@ public:
 private:
     std::string mScene, mOutput, mOut = "out", mScattering = "all";
     std::optional<int> mFrame;
+    BakeOptions mOptions;
 };
 
 } // namespace

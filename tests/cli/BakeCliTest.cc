@@ -57,6 +57,15 @@ void writeFog(const std::string& path)
     vxf::writeVoxelSet(path, set);
 }
 
+/// The stage cache's entry in @a cache whose name starts with @a stage ("" for none).
+std::string cacheEntry(const std::string& cache, const std::string& stage)
+{
+    for (const auto& e : std::filesystem::directory_iterator(cache)) {
+        if (e.path().filename().string().rfind(stage, 0) == 0 && e.path().extension() == ".vdb") return e.path().string();
+    }
+    return "";
+}
+
 } // namespace
 
 TEST_CASE("vxf bake writes density and emission whose emission-absorption render is vxf's image", "[cli][bake]")
@@ -82,10 +91,7 @@ TEST_CASE("vxf bake writes density and emission whose emission-absorption render
 
     // Emission = σs (direct + scatter) / 4π at a voxel, from the stage cache's grids.
     const vxf::VoxelSet set = vxf::readVoxelSet(dir.path("bake.vdb"));
-    std::string scatterEntry;
-    for (const auto& e : std::filesystem::directory_iterator(dir.path("out/cache"))) {
-        if (e.path().filename().string().rfind("scatter-", 0) == 0 && e.path().extension() == ".vdb") scatterEntry = e.path().string();
-    }
+    const std::string scatterEntry = cacheEntry(dir.path("out/cache"), "scatter-");
     REQUIRE_FALSE(scatterEntry.empty());
     const vxf::VoxelSet solved = vxf::readVoxelSet(scatterEntry);
     const openvdb::Coord voxel(3, -2, 5);
@@ -117,4 +123,67 @@ TEST_CASE("vxf bake writes density and emission whose emission-absorption render
     CHECK(over.status == 2);
     CHECK_THAT(over.err, Catch::Contains("would replace the scene") && Catch::Contains("s-baked.vdb"));
     CHECK(slurp(dir.path("s.json")) == scene);
+}
+
+TEST_CASE("vxf bake of a mesh medium holds the surface on finer voxels", "[cli][bake]")
+{
+    // A sphere of radius 1 at 32 voxels across, light a mean free path deep (the glow near the
+    // surface, where a grid's one-voxel edge ramp shows most), rendered back by vxf from the bake as
+    // an emission-absorption volume: what Cycles sees of it (bench/interchange/bake).
+    TempDir dir;
+    const std::string camera = R"("camera": {"position": [0, -4.5, 1.2], "look_at": [0, 0, 0], "up": [0, 0, 1], "fov": 32},
+      "render": {"width": 48, "height": 40, "samples": 4, "direct": "grid"}, "outputs": ["image"])";
+    spit(dir.path("s.json"),
+        R"({"objects": [{"mesh": "builtin:sphere", "material": {"albedo": 0.95, "mean_free_path": 0.08}}],
+      "lights": [{"type": "point", "position": [1.5, -2, 2], "intensity": 4}, {"type": "environment", "color": 0.05, "samples": 16}],
+      "voxelize": {"dim": 32}, "scatter": {"kernel": "sweep", "directions": 16}, )" +
+            camera + "}");
+    const std::string vxf = binary("vxf");
+    REQUIRE(run(fmt::format("{} run {} --out {}", vxf, dir.path("s.json"), dir.path("out"))).status == 0);
+    const double original = meanOf(dir.path("out/s.exr"));
+    const auto renderedBack = [&](const std::string& name, const std::string& flags) {
+        const auto baked =
+            run(fmt::format("{} bake {} -o {} --out {} {}", vxf, dir.path("s.json"), dir.path(name + ".vdb"), dir.path("out"), flags));
+        INFO(baked.out << baked.err);
+        REQUIRE(baked.status == 0);
+        const nlohmann::json manifest = nlohmann::json::parse(slurp(dir.path(name + ".json")));
+        const double sigmaT = manifest["medium"]["sigma_a"][0].get<double>() + manifest["medium"]["sigma_s"][0].get<double>();
+        spit(dir.path(name + "-ea.json"),
+            fmt::format(R"({{"objects": [{{"volume": "{}.vdb", "emission": {{"grid": "emission"}},
+          "material": {{"sigma_a": {}, "sigma_s": 0}}}}], "lights": [], {}}})",
+                name, sigmaT, camera));
+        REQUIRE(run(fmt::format("{} run {} --out {}", vxf, dir.path(name + "-ea.json"), dir.path("out"))).status == 0);
+        return std::make_pair(manifest, meanOf(dir.path("out/" + name + "-ea.exr")));
+    };
+
+    // By default a mesh medium is baked at two voxels a side to each of the medium's, centred in its cube.
+    const auto [manifest, fine] = renderedBack("fine", "");
+    CHECK(manifest["supersample"] == 2);
+    const vxf::VoxelSet set = vxf::readVoxelSet(dir.path("fine.vdb"));
+    const auto density = set.get<openvdb::FloatGrid>("density");
+    const std::string scatterEntry = cacheEntry(dir.path("out/cache"), "scatter-");
+    REQUIRE_FALSE(scatterEntry.empty());
+    const vxf::VoxelSet medium = vxf::readVoxelSet(scatterEntry);
+    const double dx = medium.transformPtr()->voxelSize()[0];
+    CHECK(density->voxelSize()[0] == Approx(dx / 2));
+    const openvdb::Vec3d first = density->transform().indexToWorld(openvdb::Vec3d(0.0)),
+                         cornerOfCube = medium.transformPtr()->indexToWorld(openvdb::Vec3d(-0.5));
+    CHECK((first - cornerOfCube - openvdb::Vec3d(dx / 4)).length() < 1e-9);
+    CHECK(manifest["half_voxel"][0].get<double>() == Approx(dx / 4));
+    // Its mass is the sphere's volume, and the emission lies where the density does.
+    double mass = 0.0;
+    for (auto it = density->cbeginValueOn(); it; ++it) mass += double(*it) * std::pow(dx / 2, 3);
+    CHECK(mass == Approx(4.0 / 3.0 * M_PI).epsilon(0.01));
+    const auto emission = set.get<openvdb::Vec3SGrid>("emission");
+    const auto densityAt = density->getConstAccessor();
+    std::size_t glowingOutside = 0;
+    for (auto it = emission->cbeginValueOn(); it; ++it) glowingOutside += (*it)[0] > 0.0f && densityAt.getValue(it.getCoord()) == 0.0f;
+    CHECK(glowingOutside == 0);
+    INFO(original << " vs " << fine);
+    CHECK(fine == Approx(original).epsilon(0.03));
+    // The medium's own voxels: the edge ramp a voxel wide brightens the rim.
+    const auto [coarseManifest, coarse] = renderedBack("coarse", "--supersample 1");
+    CHECK(coarseManifest["supersample"] == 1);
+    CHECK(std::abs(coarse - original) > std::abs(fine - original));
+    CHECK(run(fmt::format("{} bake {} -o {} --supersample 5", vxf, dir.path("s.json"), dir.path("x.vdb"))).status == 2);
 }

@@ -42,13 +42,30 @@ struct BakedVolume
     nlohmann::json manifest;
 };
 
+/// How to bake.
+struct BakeOptions
+{
+    BakedScattering scattering = BakedScattering::All;
+    /// Baked voxels a side to each of the medium's (1 to kBakeMaxSupersampling), or 0:
+    /// bakeSupersampling's choice. A renderer reads a voxel grid's boundary as a ramp a voxel
+    /// wide, where vxf's mesh medium ends at its surface: finer voxels hold the surface closer.
+    int supersample = 0;
+};
+
+/// The supersampling a mesh medium is baked at by default (a volume object's: 1, its own voxels).
+inline constexpr int kBakeSurfaceSupersampling = 2;
+inline constexpr int kBakeMaxSupersampling = 4;
+
+/// The supersampling of a bake of @a set (the scatter stage's): @a requested, or for 0
+/// kBakeSurfaceSupersampling where the set has a `surface` (a mesh medium), else 1.
+int bakeSupersampling(const VoxelSet& set, int requested);
+
 /// Run @a scene's pipeline (cached in @a outDir/cache, as vxf run) up to the scatter stage and
 /// bake it, as @a scattering says: all the scattered light as emission over an absorbing medium,
 /// or only the multiple scattering, the renderer adding its own single scattering from the same
 /// lights. For an isotropic medium either gives vxf's image. With a phase g ≠ 0 vxf solved the
 /// multiple scattering in the transport's reduced medium (Phase.h) and the emission is that
 /// light's isotropic part, an approximation the manifest names. Throws vxf::Error as runPipeline does.
-BakedVolume bakeScene(
-    const Scene& scene, const std::string& outDir, BakedScattering scattering = BakedScattering::All, Interrupter* interrupter = nullptr);
+BakedVolume bakeScene(const Scene& scene, const std::string& outDir, const BakeOptions& options = {}, Interrupter* interrupter = nullptr);
 
 } // namespace vxf
