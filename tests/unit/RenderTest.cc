@@ -674,18 +674,27 @@ TEST_CASE("a volume object's grid: camera rays march it from the camera, alpha 1
 TEST_CASE("a Henyey-Greenstein phase: a thin slab's single scattering in closed form for each g", "[render][phase]")
 {
     // A slab D thick seen along its normal from the side the sun leaves through, the sun
-    // crossing it at cosine μ0 to the normal: at depth z from the lit face the light has come
+    // crossing it at cosine μ0 to the normal. Single scattering is taken with the phase itself
+    // through the transport's scaled medium σt* = σt − f·σs (delta-M's single-scattering
+    // correction, Nakajima & Tanaka: the light kept in the beam is on its way), f = g⁴ where the
+    // solve carried the phase's first moment (a `scatter_anisotropy` grid), g (the similarity
+    // relation) where it did not, 0 for g ≤ 0. At depth z from the lit face the light has come
     // z/μ0 through the medium and the camera's ray D − z, so
-    // L = σs E p(θ) ∫_0^D e^{−σt z/μ0} e^{−σt (D − z)} dz = σs E p(θ) e^{−σt D} (1 − e^{−aD})/a,
-    // a = σt (1/μ0 − 1) (D as a → 0), θ the angle the light turns through: cosθ = μ0 here.
+    // L = σs E p(θ) ∫_0^D e^{−σt* z/μ0} e^{−σt* (D − z)} dz = σs E p(θ) e^{−σt* D} (1 − e^{−aD})/a,
+    // a = σt* (1/μ0 − 1) (D as a → 0), θ the angle the light turns through: cosθ = μ0 here.
     // p is Henyey-Greenstein's, written out here: 4πp = (1 − g²)/(1 + g² − 2gμ)^{3/2}.
     const double g = GENERATE(-0.5, 0.0, 0.5, 0.9);
     const double degrees = GENERATE(0.0, 40.0);
+    const bool firstMoment = GENERATE(false, true);
     const double sigmaT = 4.0, albedo = 0.8, irradiance = 2.0, depth = 0.2; // τ = 0.8 across
     vxf::VoxelizeOptions voxelize;
     voxelize.dim = 64; // 6.4 voxels across the slab
-    const vxf::VoxelSet set =
+    vxf::VoxelSet set =
         vxf::voxelize(vxf::makeBox(openvdb::Vec3d(-1.0, -0.5 * depth, -1.0), openvdb::Vec3d(1.0, 0.5 * depth, 1.0)), voxelize);
+    if (firstMoment) { // as the accelerated sweeps leave it: no light scattered, none of its direction
+        vxf::test::putConstantFluence(set, "scatter", 0.0);
+        vxf::test::putConstantFluence(set, "scatter_anisotropy", 0.0);
+    }
     vxf::Material m = vxf::test::albedoMaterial(sigmaT, albedo);
     m.phaseG = g;
     const vxf::Medium medium(set, m);
@@ -696,14 +705,16 @@ TEST_CASE("a Henyey-Greenstein phase: a thin slab's single scattering in closed 
     vxf::RenderOptions options = marchedToLights();
     options.background = openvdb::Vec3d(0.25);
     const vxf::RenderedImage image = vxf::render(set, medium, scene, options);
-    const double a = sigmaT * (1.0 / mu0 - 1.0);
+    const double f = g <= 0.0 ? 0.0 : firstMoment && g != 0.0 ? std::pow(g, 4.0) : g;
+    const double scaledT = sigmaT - f * albedo * sigmaT;
+    const double a = scaledT * (1.0 / mu0 - 1.0);
     const double along = a > 0.0 ? -std::expm1(-a * depth) / a : depth;
     const double phase = (1.0 - g * g) / std::pow(1.0 + g * g - 2.0 * g * mu0, 1.5);
-    const double expected = albedo * sigmaT * irradiance * phase / (4.0 * M_PI) * std::exp(-sigmaT * depth) * along;
+    const double expected = albedo * sigmaT * irradiance * phase / (4.0 * M_PI) * std::exp(-scaledT * depth) * along;
     for (int x = 13; x <= 17; x += 2) {
-        INFO("g " << g << ", " << degrees << " degrees, pixel " << x);
+        INFO("g " << g << ", " << degrees << " degrees, first moment " << firstMoment << ", pixel " << x);
         CHECK(image.direct[15 * 31 + std::size_t(x)].x() == Approx(expected).epsilon(0.01));
-        // The background behind it through the slab's own transmittance e^{−σt D}, not the reduced medium's.
+        // The background behind it through the slab's own transmittance e^{−σt D}, not the scaled medium's.
         const std::size_t i = 15 * 31 + std::size_t(x);
         CHECK(image.combined[i].x() - image.direct[i].x() == Approx(0.25 * std::exp(-sigmaT * depth)).epsilon(0.01));
     }

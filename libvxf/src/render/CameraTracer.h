@@ -236,6 +236,7 @@ private:
         in.boundary = context.meshes.media;
         in.emitters = &context.emitters;
         in.gridForward = context.firstMoment ? transportScaling(context.medium.phaseG()).forward : context.medium.phaseG();
+        in.scaled = &context.grids;
         in.scatterAnisotropy = context.scatterAnisotropy.get();
         in.rest = context.firstMoment ? RestPhase(transportScaling(context.medium.phaseG())) : RestPhase();
         in.directAnisotropy = context.directField ? context.sourceAnisotropy.get() : nullptr;

@@ -53,6 +53,14 @@ struct MarcherInputs
     /// medium's σt − gridForward·σs (the share of σs kept in the beam: g⁴ by delta-M, g by the
     /// similarity relation; Phase.h).
     double gridForward = 0.0;
+    /// That scaled medium (σt − gridForward·σs), or null. With `lights` and gridForward > 0,
+    /// single scattering is marched through it, to the lights and to the camera, with the phase
+    /// itself, σs·p(θ): delta-M's single-scattering correction (Nakajima & Tanaka 1988, "TMS").
+    /// The light the transport keeps in the beam (the phase's forward peak) is light on its way
+    /// in the scaled medium, which the grids' orders beyond the first take as such: single
+    /// scattering through the medium's own σt left out every path that crossed the peak before
+    /// its one wide scattering (a front-lit smoke at g 0.8 came out 17–26% below Cycles).
+    const Medium* scaled = nullptr;
     /// `scatter_anisotropy` (the mean direction of travel a): the scattered light's J toward the
     /// camera is J·rest(a, ω), the rest of the phase; `directAnisotropy`
     /// (`scatter_source_anisotropy`) the `direct` grid's J alike.
@@ -69,8 +77,10 @@ public:
     /// medium's own σt; the grids' J as MarcherInputs says.
     Marcher(const Medium& medium, const RenderOptions& options, const MarcherInputs& in)
         : mMedium(medium)
+        , mMarchedScaled(in.lights && in.scaled && in.gridForward > 0.0)
+        , mShadowMedium(mMarchedScaled ? *in.scaled : medium)
         , mSampler(medium)
-        , mShadowSampler(medium)
+        , mShadowSampler(mShadowMedium)
         , mOptions(options)
         , mLights(in.lights)
         , mOccluders(in.occluders)
@@ -233,10 +243,11 @@ private:
         std::array<EmissionWeights, 3> reducedWeights;
         if (reducedSigmaT) reducedWeights = emissionWeights(*reducedSigmaT, s.length);
         const std::array<EmissionWeights, 3>& wReduced = reducedSigmaT ? reducedWeights : w;
-        const bool directMarched = mLights != nullptr; // else read from the grid, solved in the reduced medium
+        // The marched light through σt, or the scaled medium's (mMarchedScaled); the grid's as the grids'.
+        const bool directTrue = mLights != nullptr && !mMarchedScaled;
         for (int c = 0; c < 3; ++c) {
-            const EmissionWeights& wDirect = directMarched ? w[c] : wReduced[c];
-            const double directWeight = directMarched ? g.transmittance[c] : g.reducedTransmittance[c];
+            const EmissionWeights& wDirect = directTrue ? w[c] : wReduced[c];
+            const double directWeight = directTrue ? g.transmittance[c] : g.reducedTransmittance[c];
             g.direct[c] += directWeight * emissionIntegral(wDirect, s.eStart.direct[c], s.eMiddle.direct[c], s.eEnd.direct[c]);
             g.scatter[c] +=
                 g.reducedTransmittance[c] * emissionIntegral(wReduced[c], s.eStart.scatter[c], s.eMiddle.scatter[c], s.eEnd.scatter[c]);
@@ -331,7 +342,7 @@ private:
             // The phase scatters the light's direction of travel (−s.direction) toward the camera (−mRayDirection).
             const double phase = henyeyGreenstein4Pi(mPhaseG, s.direction.dot(mRayDirection));
             const openvdb::Vec3d f =
-                s.fluence * (double(n) * phase) * sampleTransmittance(s, mShadowSampler, mMedium, x, mShadowMarch, mOccluders);
+                s.fluence * (double(n) * phase) * sampleTransmittance(s, mShadowSampler, mShadowMedium, x, mShadowMarch, mOccluders);
             phi += f;
             if (n == 1) exact += f;
         }
@@ -339,6 +350,9 @@ private:
     }
 
     const Medium& mMedium;
+    /// Single scattering marched through the scaled medium (MarcherInputs::scaled).
+    const bool mMarchedScaled;
+    const Medium& mShadowMedium; ///< what the marches to the lights cross: mMedium, or the scaled medium
     Medium::Sampler mSampler, mShadowSampler;
     const RenderOptions& mOptions;
     const std::vector<LightSampler>* mLights;

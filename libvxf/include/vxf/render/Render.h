@@ -32,7 +32,9 @@ struct RenderOptions
     /// through the medium and occluders), instead of interpolated from the `direct` grid:
     /// exact where the direct light falls off within a voxel (dense media, coarse voxels),
     /// at the cost of one shadow march per light and step (a light of many samples gives one,
-    /// chosen at random and weighted by their count); ignores edits of `direct`.
+    /// chosen at random and weighted by their count); ignores edits of `direct`. With a forward
+    /// phase, through the transport's scaled medium, the phase itself toward the camera
+    /// (MarcherInputs::scaled: delta-M's single-scattering correction).
     bool directFromLights = false;
     openvdb::Vec3d background{0.0};
     double step = defaults::kStep; ///< march step, voxels
