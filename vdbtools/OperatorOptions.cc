@@ -22,6 +22,7 @@ const char* typeName(ops::ParamType type)
     case ops::ParamType::Vector: return "X,Y,Z";
     case ops::ParamType::ColorList: return "COLOURS";
     case ops::ParamType::NumberList: return "NUMBERS";
+    case ops::ParamType::PointList: return "X,Y,Z;…";
     }
     return "";
 }

@@ -39,12 +39,14 @@ TEST_CASE("the registry: every operator named, summarized and typed once", "[ops
                 sample[p.name] = 1.0;
             } else if (p.type == vxf::ops::ParamType::Text) {
                 sample[p.name] = "density";
+            } else if (p.type == vxf::ops::ParamType::PointList) {
+                sample[p.name] = json::array({json::array({0, 0, 0})});
             }
         }
         CHECK_NOTHROW(vxf::ops::checkArgs(op, sample));
     }
     for (const char* expected : {"add", "sub", "mul", "div", "pow", "blend", "blur", "blur_special", "normalize", "denormalize", "gradient",
-             "remove", "include", "select", "edit", "diff", "apply_diff", "split", "merge", "rename", "copy"}) {
+             "remove", "include", "select", "edit", "diff", "apply_diff", "split", "merge", "rename", "copy", "delete", "paint", "noise"}) {
         INFO(expected);
         CHECK(names.count(expected));
     }
@@ -182,7 +184,9 @@ TEST_CASE("every operator writes exactly the grids it declares, and reads only g
         {"edit", {{"grid", "color"}, {"selection", "mask_in"}, {"hue_shift", 40}}}, {"diff", {{"grid", "color"}, {"with", "color2"}}},
         {"apply_diff", {{"grid", "color"}, {"with", "color2"}}}, {"split", {{"grid", "color"}}},
         {"merge", {{"x", "density"}, {"y", "density"}, {"z", "density"}, {"out", "merged"}}},
-        {"rename", {{"grid", "color2"}, {"to", "other"}}}, {"copy", {{"grid", "density"}, {"to", "copied"}}}};
+        {"rename", {{"grid", "color2"}, {"to", "other"}}}, {"copy", {{"grid", "density"}, {"to", "copied"}}},
+        {"delete", {{"grid", "color2"}}}, {"noise", {{"grid", "color"}, {"selection", "mask_in"}}},
+        {"paint", {{"grid", "density"}, {"points", json::array({json::array({0, 0, 0})})}, {"radius", 2.0}, {"out", "painted"}}}};
     for (const auto& op : vxf::ops::artistOperators()) {
         CAPTURE(op.name);
         const auto sample = samples.find(op.name);

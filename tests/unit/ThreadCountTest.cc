@@ -48,6 +48,10 @@ std::vector<std::pair<std::string, json>> everyOperator(const std::string& scene
         {"merge", {{"x", "s3.z"}, {"y", "s3.x"}, {"z", "s3.y"}, {"out", "s5"}}},
         {"rename", {{"grid", "s5"}, {"to", "s6"}}},
         {"copy", {{"grid", "density"}, {"from_file", other}, {"to", "copied"}, {"resample", true}}},
+        {"noise", {{"grid", "s6"}, {"selection", "core"}, {"frequency", 3.0}, {"per_channel", true}, {"out", "s7"}}},
+        {"noise", {{"grid", "d1"}, {"mode", "multiply"}, {"offset", 1.0}, {"amplitude", 0.3}}},
+        {"paint", {{"grid", "s7"}, {"points", json::array({json::array({0, 0, 0}), json::array({0.3, 0.1, 0})})}, {"radius", 0.3}}},
+        {"delete", {{"grid", "s6"}}},
     };
 }
 

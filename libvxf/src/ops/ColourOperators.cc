@@ -1,4 +1,4 @@
-// vxf — the operators that make colours: gradient.
+// vxf — the operators that make colours and patterns: gradient, noise.
 #include "OperatorGroups.h"
 
 #include <vxf/core/GridRoles.h>
@@ -11,6 +11,7 @@
 #include <vxf/ops/Edit.h>
 #include <vxf/ops/Fill.h>
 #include <vxf/ops/Gradient.h>
+#include <vxf/ops/Noise.h>
 #include <vxf/ops/Normalize.h>
 #include <vxf/ops/Select.h>
 
@@ -79,6 +80,43 @@ std::vector<Operator> colourOperators()
         if (a.text("kind") == "surface_distance") use.reads.insert(grids::kSurface);
         return use;
     };
+    ops.push_back({"noise",
+        "fractal gradient noise (Perlin) over a grid's active voxels: set, added or multiplied, to break up a flat colour or density",
+        {gridParam("a vec3s or float grid"), text("selection", "(optional) bool grid (vxf op select); default: every active voxel"),
+            number("frequency", "cycles per world unit (first octave)", 4.0, 1e-30),
+            integer("octaves", "octaves, each twice the frequency", 4, 1, 12),
+            number("lacunarity", "frequency ratio between octaves", 2.0, 1.0, 8.0),
+            number("gain", "amplitude ratio between octaves", 0.5, 0.0, 1.0), number("amplitude", "the noise's scale (|noise| <= 1)", 1.0),
+            number("offset", "added to the scaled noise", 0.0), integer("seed", "the pattern", 0, 0, 1000000),
+            typed("shift", ParamType::Vector, "where the pattern starts (world)", json::array({0, 0, 0})),
+            choice("mode", "set: v = offset + amplitude·n; add: v + that; multiply: v·that", {"set", "add", "multiply"}, "add"),
+            flag("per_channel", "vec3s: an independent noise per channel"), outParam()},
+        [](OpContext& ctx) {
+            const auto grid = target(ctx, "noise");
+            NoiseOptions o;
+            o.frequency = ctx.args.number("frequency");
+            o.octaves = int(ctx.args.integer("octaves"));
+            o.lacunarity = ctx.args.number("lacunarity");
+            o.gain = ctx.args.number("gain");
+            o.amplitude = ctx.args.number("amplitude");
+            o.offset = ctx.args.number("offset");
+            o.seed = std::uint32_t(ctx.args.integer("seed"));
+            o.shift = ctx.args.color("shift");
+            const std::string mode = ctx.args.text("mode");
+            o.mode = mode == "set" ? NoiseMode::Set : mode == "multiply" ? NoiseMode::Multiply : NoiseMode::Add;
+            o.perChannel = ctx.args.flag("per_channel");
+            openvdb::BoolGrid::Ptr keep;
+            const openvdb::BoolGrid* selection = optionalSelection(ctx, "noise", "selection", keep);
+            if (auto colour = openvdb::gridPtrCast<openvdb::Vec3SGrid>(grid)) {
+                ops::noise(*colour, o, selection);
+            } else if (auto number = openvdb::gridPtrCast<openvdb::FloatGrid>(grid)) {
+                ops::noise(*number, o, selection);
+            } else {
+                throw UsageError(
+                    fmt::format("noise: grid '{}' is a {} grid; noise takes vec3s or float grids", grid->getName(), grid->valueType()));
+            }
+            return fmt::format("{} noise on '{}' ({})", mode, grid->getName(), count(*grid));
+        }});
     return ops;
 }
 

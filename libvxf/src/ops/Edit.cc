@@ -43,9 +43,13 @@ openvdb::Vec3d hsvToRgb(const openvdb::Vec3d& hsv)
     return rgb + openvdb::Vec3d(m);
 }
 
-void edit(openvdb::Vec3SGrid& grid, const openvdb::BoolGrid* selection, const EditOptions& o)
+namespace {
+
+/// Apply @a change to the voxels of @a grid that @a selection holds (every active voxel without
+/// one), or add or remove them, as EditOptions says; @a changes: whether change alters a value.
+template <typename GridT, typename Change>
+void editVoxels(GridT& grid, const openvdb::BoolGrid* selection, const EditOptions& o, bool changes, const Change& change)
 {
-    if (o.saturation < 0.0 || o.value < 0.0) throw UsageError("edit: saturation and value scales must be >= 0");
     if (selection && selection->transform() != grid.transform()) {
         throw UsageError(fmt::format("edit: the selection does not share grid '{}''s transform", grid.getName()));
     }
@@ -63,20 +67,8 @@ void edit(openvdb::Vec3SGrid& grid, const openvdb::BoolGrid* selection, const Ed
         for (const auto& c : voxels) values.setValueOff(c);
         return;
     }
-    const bool recolour = o.set || o.hueShift != 0.0 || o.saturation != 1.0 || o.value != 1.0;
-    const auto change = [&](const openvdb::Vec3f& in) {
-        openvdb::Vec3d c = o.set ? *o.set : openvdb::Vec3d(in);
-        if (o.hueShift != 0.0 || o.saturation != 1.0 || o.value != 1.0) {
-            openvdb::Vec3d hsv = rgbToHsv(c);
-            hsv[0] += o.hueShift;
-            hsv[1] = std::min(1.0, hsv[1] * o.saturation);
-            hsv[2] *= o.value;
-            c = hsvToRgb(hsv);
-        }
-        return openvdb::Vec3f(detail::finite(c[0]), detail::finite(c[1]), detail::finite(c[2]));
-    };
     if (!selection) {
-        if (recolour) {
+        if (changes) {
             for (auto it = grid.beginValueOn(); it; ++it) it.setValue(change(*it));
         }
         return;
@@ -84,8 +76,47 @@ void edit(openvdb::Vec3SGrid& grid, const openvdb::BoolGrid* selection, const Ed
     for (const auto& c : voxels) {
         const bool on = values.isValueOn(c);
         if (!on && !o.add) continue;
-        values.setValueOn(c, recolour ? change(values.getValue(c)) : values.getValue(c));
+        values.setValueOn(c, changes ? change(values.getValue(c)) : values.getValue(c));
     }
+}
+
+} // namespace
+
+void edit(openvdb::Vec3SGrid& grid, const openvdb::BoolGrid* selection, const EditOptions& o)
+{
+    if (o.saturation < 0.0 || o.value < 0.0) throw UsageError("edit: saturation and value scales must be >= 0");
+    const bool hsv = o.hueShift != 0.0 || o.saturation != 1.0 || o.value != 1.0;
+    const auto change = [&](const openvdb::Vec3f& in) {
+        openvdb::Vec3d c = o.set ? *o.set : openvdb::Vec3d(in);
+        if (hsv) {
+            openvdb::Vec3d h = rgbToHsv(c);
+            h[0] += o.hueShift;
+            h[1] = std::min(1.0, h[1] * o.saturation);
+            h[2] *= o.value;
+            c = hsvToRgb(h);
+        }
+        c += openvdb::Vec3d(o.offset);
+        return openvdb::Vec3f(detail::finite(c[0]), detail::finite(c[1]), detail::finite(c[2]));
+    };
+    editVoxels(grid, selection, o, o.set || hsv || o.offset != 0.0, change);
+}
+
+void edit(openvdb::FloatGrid& grid, const openvdb::BoolGrid* selection, const EditOptions& o)
+{
+    if (o.hueShift != 0.0 || o.saturation != 1.0) {
+        throw UsageError(fmt::format("edit: grid '{}' holds numbers, not colours: hue_shift and saturation are for vec3s grids "
+                                     "(a float grid takes set, value as a scale, and offset)",
+            grid.getName()));
+    }
+    if (o.value < 0.0) throw UsageError("edit: the value scale must be >= 0");
+    if (o.set && !((*o.set)[0] == (*o.set)[1] && (*o.set)[1] == (*o.set)[2])) {
+        throw UsageError(fmt::format("edit: grid '{}' holds one number a voxel: set takes one number, not a colour", grid.getName()));
+    }
+    const auto change = [&](float in) {
+        const double v = (o.set ? (*o.set)[0] : double(in)) * o.value + o.offset;
+        return detail::finite(v);
+    };
+    editVoxels(grid, selection, o, o.set || o.value != 1.0 || o.offset != 0.0, change);
 }
 
 } // namespace vxf::ops

@@ -93,6 +93,13 @@ std::vector<Operator> gridOperators()
                    }});
 
     ops.back().grids = [](const Args& a) { return GridUse{{a.text("grid")}, {a.text("grid"), a.text("to")}}; };
+    ops.push_back(
+        {"delete", "delete a grid from the set (a helper mask, a grid not to ship)", {gridParam("the grid deleted")}, [](OpContext& ctx) {
+             requireGrid(ctx.set, "delete", ctx.args.text("grid"));
+             ctx.set.remove(ctx.args.text("grid"));
+             return fmt::format("deleted '{}'", ctx.args.text("grid"));
+         }});
+    ops.back().grids = [](const Args& a) { return GridUse{{}, {a.text("grid")}}; };
     ops.push_back({"copy", "copy a grid from another .vdb (or within the file) under a name",
         {gridParam("the grid to copy"), text("from_file", "(optional) the .vdb it comes from (default: this file)"),
             text("to", "(optional) its name here (default: the same)"),

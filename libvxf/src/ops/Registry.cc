@@ -74,6 +74,7 @@ std::string describeType(const Param& p)
     case ParamType::Vector: return "point (x,y,z)";
     case ParamType::ColorList: return "colours (r,g,b;r,g,b;…)";
     case ParamType::NumberList: return "numbers (a;b;…)";
+    case ParamType::PointList: return "points (x,y,z;x,y,z;…)";
     }
     return "";
 }
@@ -124,6 +125,9 @@ void checkValue(const Operator& op, const Param& p, const json& v, const ParamLa
         ok = v.is_array() && v.size() >= 2 && std::all_of(v.begin(), v.end(), [](const json& c) { return isColor(c); });
         break;
     case ParamType::NumberList: ok = v.is_array() && std::all_of(v.begin(), v.end(), [](const json& c) { return c.is_number(); }); break;
+    case ParamType::PointList:
+        ok = v.is_array() && !v.empty() && std::all_of(v.begin(), v.end(), [](const json& c) { return c.is_array() && isColor(c); });
+        break;
     }
     if (!ok) fail(fmt::format("is {}", v.dump()));
     if (!finiteNumbers(v)) fail("is not finite");
@@ -225,6 +229,15 @@ json parseParamText(const Operator& op, const Param& p, const std::string& text,
         for (const auto& c : split(text, ';')) list.push_back(number(c));
         return list;
     }
+    case ParamType::PointList: {
+        json list = json::array();
+        for (const auto& c : split(text, ';')) {
+            const json point = colour(c);
+            if (!point.is_array()) return fail();
+            list.push_back(point);
+        }
+        return list;
+    }
     }
     return fail();
 }
@@ -318,6 +331,10 @@ json paramSchema(const Param& p)
     case ParamType::Vector: s = {{"type", "array"}, {"items", {{"type", "number"}}}, {"minItems", 3}, {"maxItems", 3}}; break;
     case ParamType::ColorList: s = {{"type", "array"}, {"items", color}, {"minItems", 2}}; break;
     case ParamType::NumberList: s = {{"type", "array"}, {"items", {{"type", "number"}}}}; break;
+    case ParamType::PointList:
+        s = {{"type", "array"}, {"items", {{"type", "array"}, {"items", {{"type", "number"}}}, {"minItems", 3}, {"maxItems", 3}}},
+            {"minItems", 1}};
+        break;
     }
     if (std::isfinite(p.min)) s["minimum"] = p.min;
     if (std::isfinite(p.max)) s["maximum"] = p.max;

@@ -12,6 +12,7 @@
 #include <vxf/ops/Fill.h>
 #include <vxf/ops/Gradient.h>
 #include <vxf/ops/Normalize.h>
+#include <vxf/ops/Paint.h>
 #include <vxf/ops/Select.h>
 
 #include <fmt/format.h>
@@ -65,14 +66,23 @@ std::vector<Operator> selectionOperators()
         }});
 
     ops.back().grids = [](const Args& a) { return GridUse{{a.text("grid")}, {a.text("out")}}; };
-    ops.push_back({"edit", "on a selection: set RGB, shift hue, scale saturation and value, add or remove voxels",
-        {gridParam("a vec3s grid"), text("selection", "(optional) bool grid (vxf op select); default: every active voxel"),
-            typed("set", ParamType::Color, "(optional) the new colour"), number("hue_shift", "degrees", 0.0, -360.0, 360.0),
-            number("saturation", "saturation scale", 1.0, 0.0), number("value", "value scale", 1.0, 0.0),
+    ops.push_back({"edit",
+        "on a selection: set a colour or value, shift hue, scale saturation and value, add an offset, add or remove voxels (a "
+        "vec3s grid; a float grid: set, value, offset, add, remove)",
+        {gridParam("a vec3s or float grid"), text("selection", "(optional) bool grid (vxf op select); default: every active voxel"),
+            typed("set", ParamType::Color, "(optional) the new colour (a float grid: one number)"),
+            number("hue_shift", "degrees (vec3s)", 0.0, -360.0, 360.0), number("saturation", "saturation scale (vec3s)", 1.0, 0.0),
+            number("value", "value scale (a float grid: its values')", 1.0, 0.0),
+            number("offset", "added after the rest (to each channel of a colour)", 0.0),
             flag("add", "activate selected voxels that are inactive"), flag("remove", "deactivate the selected voxels"), outParam()},
         [](OpContext& ctx) {
-            auto g = openvdb::gridPtrCast<openvdb::Vec3SGrid>(target(ctx, "edit"));
-            if (!g) throw UsageError(fmt::format("edit: grid '{}' is not a vec3s grid", ctx.args.text("grid")));
+            const auto grid = target(ctx, "edit");
+            auto g = openvdb::gridPtrCast<openvdb::Vec3SGrid>(grid);
+            auto scalar = openvdb::gridPtrCast<openvdb::FloatGrid>(grid);
+            if (!g && !scalar) {
+                throw UsageError(
+                    fmt::format("edit: grid '{}' is a {} grid; edit takes vec3s or float grids", ctx.args.text("grid"), grid->valueType()));
+            }
             openvdb::BoolGrid::Ptr keep;
             const openvdb::BoolGrid* selection = optionalSelection(ctx, "edit", "selection", keep);
             EditOptions o;
@@ -80,10 +90,44 @@ std::vector<Operator> selectionOperators()
             o.hueShift = ctx.args.number("hue_shift");
             o.saturation = ctx.args.number("saturation");
             o.value = ctx.args.number("value");
+            o.offset = ctx.args.number("offset");
             o.add = ctx.args.flag("add");
             o.remove = ctx.args.flag("remove");
+            if (scalar) {
+                ops::edit(*scalar, selection, o);
+                return fmt::format("edited '{}' ({})", scalar->getName(), count(*scalar));
+            }
             ops::edit(*g, selection, o);
             return fmt::format("edited '{}' ({})", g->getName(), count(*g));
+        }});
+
+    ops.push_back({"paint",
+        "a brush stroke: paint a colour (a float grid: a number) onto the active voxels within a radius of its points, mixed "
+        "toward it or added, by strength and a soft edge",
+        {gridParam("a vec3s or float grid"), typed("points", ParamType::PointList, "the stroke: the brush's centres (world)"),
+            number("radius", "the brush's radius (world)", 0.1, 1e-30),
+            number("falloff", "the edge: (1 - (d/r)^2)^falloff; 0 hard", 1.0, 0.0, 64.0),
+            number("strength", "at the brush's centre", 1.0, 0.0, 1.0), typed("value", ParamType::Color, "the colour or number", 1.0),
+            choice("mode", "mix: toward the value; add: plus it", {"mix", "add"}, "mix"), outParam()},
+        [](OpContext& ctx) {
+            const auto grid = target(ctx, "paint");
+            PaintOptions o;
+            o.points = ctx.args.points("points");
+            o.radius = ctx.args.number("radius");
+            o.falloff = ctx.args.number("falloff");
+            o.strength = ctx.args.number("strength");
+            o.value = ctx.args.color("value");
+            o.mode = ctx.args.text("mode") == "add" ? PaintMode::Add : PaintMode::Mix;
+            std::uint64_t painted = 0;
+            if (auto colour = openvdb::gridPtrCast<openvdb::Vec3SGrid>(grid)) {
+                painted = ops::paint(*colour, o);
+            } else if (auto number = openvdb::gridPtrCast<openvdb::FloatGrid>(grid)) {
+                painted = ops::paint(*number, o);
+            } else {
+                throw UsageError(
+                    fmt::format("paint: grid '{}' is a {} grid; paint takes vec3s or float grids", grid->getName(), grid->valueType()));
+            }
+            return fmt::format("painted {} voxels of '{}' ({} points)", painted, grid->getName(), o.points.size());
         }});
 
     return ops;

@@ -24,7 +24,8 @@ enum class ParamType {
     Color, ///< linear RGB: one number (grey) or three
     Vector, ///< three numbers (a world-space point)
     ColorList, ///< two or more colours (a ramp)
-    NumberList ///< numbers (ramp positions)
+    NumberList, ///< numbers (ramp positions)
+    PointList ///< one or more world-space points (a brush stroke)
 };
 
 /// One typed parameter: its JSON/CLI name (snake_case), type, one-line summary, default
@@ -59,6 +60,7 @@ public:
     openvdb::Vec3d color(const std::string& name) const; ///< Color or Vector
     std::vector<openvdb::Vec3d> colors(const std::string& name) const;
     std::vector<double> numbers(const std::string& name) const;
+    std::vector<openvdb::Vec3d> points(const std::string& name) const { return colors(name); }
     const nlohmann::json& json() const { return mValues; }
 
 private:
