@@ -24,9 +24,11 @@ public:
     {
         mApp = parent.add_subcommand("view",
             "The voxel editor in a browser: any grid of a .vdb as points (level of detail on the server), the surface as a mesh, "
-            "slices with a value readout; select by box, sphere, value range or brushing, then set RGB, shift hue, scale "
-            "saturation and value, add or remove voxels, undo; export the whole set, the difference, or the difference with "
-            "smoothed edges. Every edit is the libvxf operator `vxf op` runs, recorded as a pipeline `vxf graph` replays. "
+            "slices with a value readout; select by box, sphere, value range or brushing, then set a colour or a value, shift "
+            "hue, scale saturation and value, add noise, add or remove voxels, or paint with a brush on the first visible voxels; "
+            "a history of steps to switch off, move or remove, undo and redo; export the whole set (the grids ticked), the "
+            "difference, or the difference with smoothed edges. Every edit is the libvxf operator `vxf op` runs, recorded as a "
+            "pipeline `vxf graph` replays. "
             "Serves on 127.0.0.1 until Ctrl-C (or SIGTERM, SIGHUP). Only the printed address opens the editor: it carries "
             "the session's secret, and requests from other web pages or other host names are refused.");
         mApp->add_option("input", mInput, "The .vdb to view and edit (never written: exports go beside it)")->required();

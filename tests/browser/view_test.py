@@ -72,6 +72,99 @@ def hostile_page(browser, url, work):
         sys.exit("view_test: a page from another origin wrote a file through vxf view")
 
 
+def recorded_ops(page):
+    pipeline = page.evaluate("window.vxfView.call('GET', '/api/pipeline?output=x.vdb').then(r => r.json())")
+    return [node["op"] for node in pipeline["nodes"].values() if "op" in node]
+
+
+def wait_status(page, prefix):
+    page.wait_for_function(f"document.querySelector('#status').textContent.startsWith({json.dumps(prefix)})", timeout=30000)
+
+
+def check_layout(page):
+    """At 1280x800 every control lies inside the window: nothing clipped, nothing below the fold."""
+    outside = page.evaluate("""() => [...document.querySelectorAll('button, input, select, #steps')]
+        .filter((e) => e.offsetParent !== null && getComputedStyle(e).visibility !== 'hidden')
+        .map((e) => [e.id || e.className || e.tagName, e.getBoundingClientRect()])
+        .filter(([, r]) => r.left < 0 || r.top < 0 || r.right > innerWidth || r.bottom > innerHeight || r.width < 8)
+        .map(([name, r]) => `${name} at ${Math.round(r.left)},${Math.round(r.top)} to ${Math.round(r.right)},${Math.round(r.bottom)}`)""")
+    if outside:
+        sys.exit(f"view_test: at 1280x800 these controls are not wholly in the window: {outside}")
+
+
+def history(page):
+    """The history panel: a step switched off is the pipeline without it, on again with it; Ctrl-Z
+    undoes the last step and Ctrl-Shift-Z redoes it."""
+    if recorded_ops(page) != ["select", "edit"]:
+        sys.exit(f"view_test: before the history checks the page recorded {recorded_ops(page)}")
+    toggles = page.locator("#steps input[type=checkbox]")
+    toggles.nth(1).uncheck()
+    wait_status(page, "history: step switched")
+    if recorded_ops(page) != ["select"]:
+        sys.exit(f"view_test: the hue edit switched off, the pipeline still holds {recorded_ops(page)}")
+    page.locator("#steps input[type=checkbox]").nth(1).check()
+    wait_status(page, "history: step switched")
+    page.locator("#view canvas").click(position={"x": 5, "y": 5})  # the focus off any field
+    page.keyboard.press("Control+z")
+    wait_status(page, "undone")
+    if recorded_ops(page) != ["select"]:
+        sys.exit(f"view_test: Ctrl-Z left {recorded_ops(page)}")
+    page.keyboard.press("Control+Shift+z")
+    wait_status(page, "redone")
+    if recorded_ops(page) != ["select", "edit"]:
+        sys.exit(f"view_test: Ctrl-Shift-Z left {recorded_ops(page)}")
+
+
+def paint_stroke(page, work):
+    """Paint on: a drag over the bunny lays one `paint` step on the first visible voxels under the
+    cursor (not through the object); the set exported whole after it, and the pipeline then."""
+    page.select_option("#grid", "colour")
+    page.wait_for_function("window.vxfView.ready && window.vxfView.cloud && window.vxfView.cloud.count > 0")
+    voxel = page.evaluate("window.vxfView.info.grids.find((g) => g.name === 'colour').voxel_size")
+    page.check("#paintMode")
+    page.fill("#paintRadius", str(2 * voxel))  # two voxels
+    box = page.locator("#view canvas").bounding_box()
+    cx, cy = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+    page.mouse.move(cx - 40, cy)
+    page.mouse.down()
+    page.mouse.move(cx + 40, cy, steps=12)
+    page.mouse.up()
+    wait_status(page, "paint:")
+    report = page.text_content("#status")
+    match = re.search(r"painted (\d+) voxels of 'colour' \((\d+) points\)", report)
+    if not match:
+        sys.exit(f"view_test: the stroke reported {report!r}")
+    voxels, points = int(match.group(1)), int(match.group(2))
+    # Each point's brush holds at most (4/3)π·2³ ≈ 34 voxels: a stroke through the whole object
+    # (the old brush selected 1,859 voxels for 101 points) would paint far more.
+    if voxels == 0 or voxels > points * 34:
+        sys.exit(f"view_test: {points} brush points painted {voxels} voxels")
+    page.uncheck("#paintMode")
+    page.fill("#exportPath", "painted.vdb")
+    page.select_option("#exportMode", "whole")
+    page.click("#export")
+    wait_status(page, "wrote")
+    pipeline = page.evaluate("window.vxfView.call('GET', '/api/pipeline?output=x.vdb').then(r => r.json())")
+    page.click("#undo")
+    wait_status(page, "undone")
+    return os.path.join(work, "painted.vdb"), pipeline
+
+
+def float_edit(page):
+    """A float grid (the bunny's density) set on the selection, then undone."""
+    page.select_option("#grid", "density")
+    if page.is_visible("#hue") or not page.is_visible("#setValue"):
+        sys.exit("view_test: a float grid shown, the edit panel still offers colours")
+    page.check("#doSetValue")
+    page.fill("#setValue", "0.5")
+    page.click("#apply")
+    wait_status(page, "edit:")
+    if "changed" not in page.text_content("#status"):
+        sys.exit(f"view_test: the density edit reported {page.text_content('#status')}")
+    page.click("#undo")
+    wait_status(page, "undone")
+
+
 def main():
     vxf, work = sys.argv[1], sys.argv[2]
     screenshot = sys.argv[sys.argv.index("--screenshot") + 1] if "--screenshot" in sys.argv else None
@@ -98,7 +191,7 @@ def main():
         with sync_playwright() as p:
             browser = p.chromium.launch(executable_path=CHROMIUM,
                                         args=["--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader"])
-            page = browser.new_page(viewport={"width": 1200, "height": 760})
+            page = browser.new_page(viewport={"width": 1280, "height": 800})
             errors = []
             page.on("pageerror", lambda e: errors.append(str(e)))
             started = time.perf_counter()
@@ -134,6 +227,23 @@ def main():
             page.keyboard.up("Shift")
             if page.input_value("#minX") == before:
                 sys.exit(f"view_test: brushing set no box ({page.text_content('#status')})")
+            check_layout(page)
+            # A brush released over the panel ends there (it stuck to the mouse).
+            page.keyboard.down("Shift")
+            page.mouse.move(cx - 60, cy - 40)
+            page.mouse.down()
+            page.mouse.move(box["x"] - 100, cy, steps=4)
+            page.mouse.up()
+            page.keyboard.up("Shift")
+            page.mouse.move(cx, cy + 50)
+            if page.evaluate("getComputedStyle(document.getElementById('brush')).display") != "none":
+                sys.exit("view_test: a brush released over the panel is still drawn")
+            page.keyboard.down("Shift")  # the box the test selects, again
+            page.mouse.move(cx - 90, cy - 70)
+            page.mouse.down()
+            page.mouse.move(cx + 10, cy + 60, steps=5)
+            page.mouse.up()
+            page.keyboard.up("Shift")
             page.click("#select")
             page.wait_for_function("document.querySelector('#status').textContent.startsWith('select:')")
             selected = int(re.search(r"selected (\d+) voxels", page.text_content("#status")).group(1))
@@ -149,12 +259,15 @@ def main():
             if screenshot:
                 page.evaluate("document.getElementById('panel').scrollTop = 0")
                 page.screenshot(path=screenshot)
+            history(page)
             pipeline = page.evaluate("window.vxfView.call('GET', '/api/pipeline?output=replayed.vdb').then(r => r.json())")
             steps_before = len(pipeline["nodes"])
             hostile_page(browser, url, work)
             after = page.evaluate("window.vxfView.call('GET', '/api/pipeline?output=replayed.vdb').then(r => r.json())")
             if len(after["nodes"]) != steps_before:
                 sys.exit("view_test: a page from another origin changed the edit history")
+            float_edit(page)
+            painted, paint_pipeline = paint_stroke(page, work)
             if errors:
                 sys.exit(f"view_test: the page raised: {errors}")
             browser.close()
@@ -177,6 +290,14 @@ def main():
     if ops != ["select", "edit"]:
         sys.exit(f"view_test: the page recorded {ops}, expected select then edit")
     run(vxf, "graph", os.path.join(work, "pipeline.json"))
+    # The stroke replayed by the operator itself (vxf graph runs `paint`): the same voxels and values.
+    repainted = os.path.join(work, "repainted.vdb")
+    paint_pipeline["outputs"] = {name: repainted for name in paint_pipeline["outputs"]}
+    with open(os.path.join(work, "paint_pipeline.json"), "w") as out:
+        json.dump(paint_pipeline, out)
+    run(vxf, "graph", os.path.join(work, "paint_pipeline.json"))
+    if grid_values(painted, "colour") != grid_values(repainted, "colour"):
+        sys.exit("view_test: the page's painted colour differs from what the paint operator makes of its stroke")
     expected = os.path.join(work, "op_diff.vdb")
     run(vxf, "op", "diff", voxels, "-o", expected, "--grid", "colour", "--with", "colour", "--with_file", replayed)
     exported, wanted = grid_values(os.path.join(work, "page_diff.vdb"), "colour_diff"), grid_values(expected, "colour_diff")

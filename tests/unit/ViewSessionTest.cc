@@ -8,6 +8,8 @@
 #include <vxf/ops/Select.h>
 #include <vxf/pipeline/Graph.h>
 
+#include <openvdb/tools/Composite.h>
+
 #include <catch2/catch.hpp>
 #include <fmt/format.h>
 
@@ -28,6 +30,33 @@ void writeSphere(const std::string& path)
         it.setValue(openvdb::Vec3f(float(1.0 + x), 0.5f, float(1.0 - x)));
     }
     writeVoxelSet(path, set);
+}
+
+/// The session's current set (a whole export) as a set.
+VoxelSet currentOf(view::ViewSession& session, const std::string& name)
+{
+    return readVoxelSet(session.exportTo(name, view::ExportMode::Whole, "", 0));
+}
+
+/// Whether every grid of @a a is in @a b, bit for bit, and the other way round.
+bool sameSets(const VoxelSet& a, const VoxelSet& b, std::string* why)
+{
+    if (a.grids().size() != b.grids().size()) {
+        *why = fmt::format("{} grids against {}", a.grids().size(), b.grids().size());
+        return false;
+    }
+    for (const auto& g : a.grids()) {
+        const auto other = b.find(g->getName());
+        if (!other) {
+            *why = fmt::format("no grid '{}'", g->getName());
+            return false;
+        }
+        if (!test::identicalGrids(*g, *other, why)) {
+            *why = g->getName() + ": " + *why;
+            return false;
+        }
+    }
+    return true;
 }
 
 } // namespace
@@ -176,7 +205,8 @@ TEST_CASE("view: bad edits and exports are refused with a message and change not
     CHECK_THROWS_WITH(session.apply("edit", {{"grid", "direct"}, {"hue_shift", 999}}), Catch::Contains("hue_shift"));
     CHECK_THROWS_WITH(
         session.apply("copy", {{"grid", "direct"}, {"from_file", "/etc/passwd"}, {"out", "x"}}), Catch::Contains("from_file"));
-    CHECK_THROWS_WITH(session.apply("edit", {{"grid", "density"}}), Catch::Contains("density"));
+    CHECK_THROWS_WITH(session.apply("edit", {{"grid", "density"}, {"hue_shift", 30}}), Catch::Contains("'density' holds numbers"));
+    CHECK_THROWS_WITH(session.apply("edit", {{"grid", "density"}, {"set", {1, 0, 0}}}), Catch::Contains("one number"));
     CHECK(session.describe()["steps"].empty());
     CHECK_THROWS_WITH(session.exportTo("../x.vdb", view::ExportMode::Whole, "", 0), Catch::Contains("'..'"));
     CHECK_THROWS_WITH(session.exportTo("/tmp/x.vdb", view::ExportMode::Whole, "", 0), Catch::Contains("relative"));
@@ -247,4 +277,132 @@ TEST_CASE("view: a render re-runs the scatter stage only after an edit of what i
     const auto selected = session.render(dir.path("s.json"), 24, 18, dir.path("r6"));
     CHECK(selected.ran == std::vector<std::string>{"render"});
     CHECK(brightness("r6") < before);
+}
+
+TEST_CASE("view: the history: undo, redo, steps switched off, moved and removed, each what its steps make", "[view]")
+{
+    test::TempDir dir;
+    writeSphere(dir.path("s.vdb"));
+    view::ViewSession session(dir.path("s.vdb"));
+    const nlohmann::json select = {{"grid", "direct"}, {"shape", "box"}, {"min", {-1, -1, -1}}, {"max", {0, 1, 1}}};
+    const nlohmann::json hue = {{"grid", "direct"}, {"selection", "mask"}, {"hue_shift", 120.0}};
+    const nlohmann::json twice = {{"grid", "direct"}, {"value", 2.0}};
+    const nlohmann::json thinner = {{"grid", "density"}, {"selection", "mask"}, {"value", 0.5}, {"offset", 0.25}};
+    session.apply("select", select);
+    session.apply("edit", hue);
+    session.apply("mul", twice);
+    const std::string thinned = session.apply("edit", thinner);
+    CHECK_THAT(thinned, Catch::Contains("voxels of 'density'"));
+    const VoxelSet all = currentOf(session, "all.vdb");
+    // A float grid's edit: v·value + offset on the selection, the rest as it was.
+    const auto mask = all.get<openvdb::BoolGrid>("mask");
+    const auto density = all.get<openvdb::FloatGrid>("density");
+    for (auto it = density->cbeginValueOn(); it; ++it) {
+        REQUIRE(*it == (mask->tree().isValueOn(it.getCoord()) ? 0.75f : 1.0f));
+    }
+    std::string why;
+
+    // What a fresh session makes of the given steps, in order.
+    const auto madeBy = [&](const std::vector<std::pair<std::string, nlohmann::json>>& steps, const std::string& name) {
+        view::ViewSession fresh(dir.path("s.vdb"));
+        for (const auto& [op, params] : steps) fresh.apply(op, params);
+        return currentOf(fresh, name);
+    };
+    const auto history = [&](std::vector<nlohmann::json> steps) {
+        session.setSteps(nlohmann::json(steps));
+        return currentOf(session, "now.vdb");
+    };
+    const nlohmann::json a = {{"op", "select"}, {"params", select}}, b = {{"op", "edit"}, {"params", hue}},
+                         c = {{"op", "mul"}, {"params", twice}}, d = {{"op", "edit"}, {"params", thinner}};
+    nlohmann::json bOff = b;
+    bOff["enabled"] = false;
+
+    // Switched off: the set as if the step were not there, and the pipeline leaves it out.
+    CHECK(sameSets(history({a, bOff, c, d}), madeBy({{"select", select}, {"mul", twice}, {"edit", thinner}}, "acd.vdb"), &why));
+    INFO(why);
+    CHECK(session.steps()[1]["enabled"] == false);
+    nlohmann::json graph = session.pipeline(dir.path("replayed.vdb"));
+    test::spit(dir.path("p.json"), graph.dump());
+    runGraph(dir.path("p.json"), dir.path("cache"));
+    CHECK(sameSets(readVoxelSet(dir.path("replayed.vdb")), currentOf(session, "now.vdb"), &why));
+    // On again, moved, removed.
+    CHECK(sameSets(history({a, b, c, d}), all, &why));
+    CHECK(
+        sameSets(history({a, c, b, d}), madeBy({{"select", select}, {"mul", twice}, {"edit", hue}, {"edit", thinner}}, "acbd.vdb"), &why));
+    CHECK(sameSets(history({a, c}), madeBy({{"select", select}, {"mul", twice}}, "ac.vdb"), &why));
+    // A history whose step fails (the hue edit before the select that makes its mask) is refused
+    // naming the step, the session as it was.
+    const VoxelSet before = currentOf(session, "before.vdb");
+    CHECK_THROWS_WITH(history({b, a}), Catch::Contains("step 1") && Catch::Contains("mask"));
+    CHECK_THROWS_WITH(session.setSteps(nlohmann::json::array({{{"op", "scatter"}}})), Catch::Contains("step 1"));
+    CHECK(session.steps().size() == 2);
+    CHECK(sameSets(currentOf(session, "after.vdb"), before, &why));
+
+    // Undo and redo: each state exactly, past the states kept (replayed from the file as read).
+    history({a, b, c, d});
+    std::vector<VoxelSet> states{currentOf(session, "state0.vdb")};
+    const std::size_t more = view::ViewSession::kKeptStates + 3;
+    for (std::size_t i = 0; i < more; ++i) {
+        session.apply("add", {{"grid", "direct"}, {"value", 0.125}});
+        states.push_back(currentOf(session, fmt::format("state{}.vdb", i + 1)));
+    }
+    for (std::size_t i = more + 4; i-- > 0;) {
+        REQUIRE(session.undo());
+        if (i >= 4) CHECK(sameSets(currentOf(session, "undone.vdb"), states[i - 4], &why));
+    }
+    CHECK_FALSE(session.undo());
+    CHECK(sameSets(currentOf(session, "original.vdb"), readVoxelSet(dir.path("s.vdb")), &why));
+    CHECK(session.redoable() == more + 4);
+    for (std::size_t i = 0; i < more + 4; ++i) REQUIRE(session.redo());
+    CHECK_FALSE(session.redo());
+    CHECK(sameSets(currentOf(session, "redone.vdb"), states.back(), &why));
+    session.undo();
+    session.apply("mul", twice); // a new step: nothing left to redo
+    CHECK(session.redoable() == 0);
+}
+
+TEST_CASE("view: an edit of direct or scatter recomputes illumination, and an export keeps the grids asked for", "[view]")
+{
+    test::TempDir dir;
+    {
+        VoxelSet set = test::uniformSphere(test::albedoMaterial(4.0, 0.9), 1.0);
+        test::putConstantFluence(set, "scatter", 0.5);
+        auto illumination = set.get<openvdb::Vec3SGrid>("direct")->deepCopy();
+        auto scatter = set.get<openvdb::Vec3SGrid>("scatter")->deepCopy();
+        openvdb::tools::compSum(*illumination, *scatter);
+        illumination->setName("illumination");
+        set.put(illumination);
+        writeVoxelSet(dir.path("s.vdb"), set);
+    }
+    view::ViewSession session(dir.path("s.vdb"));
+    const std::string report = session.apply("mul", {{"grid", "direct"}, {"value", 3.0}});
+    CHECK_THAT(report, Catch::Contains("recomputed 'illumination' = direct + scatter"));
+    CHECK(session.steps()[0]["refreshes"] == nlohmann::json::array({"illumination"}));
+    const VoxelSet now = currentOf(session, "now.vdb");
+    auto sum = now.get<openvdb::Vec3SGrid>("direct")->deepCopy();
+    auto scatter = now.get<openvdb::Vec3SGrid>("scatter")->deepCopy();
+    openvdb::tools::compSum(*sum, *scatter);
+    std::string why;
+    CHECK(test::identicalGrids(*now.find("illumination"), *sum, &why));
+    INFO(why);
+    // An edit of another grid leaves it alone.
+    CHECK_THAT(session.apply("mul", {{"grid", "density"}, {"value", 2.0}}), !Catch::Contains("recomputed"));
+    // The pipeline recomputes it as the session did.
+    test::spit(dir.path("p.json"), session.pipeline(dir.path("replayed.vdb")).dump());
+    runGraph(dir.path("p.json"), dir.path("cache"));
+    CHECK(test::identicalGrids(*readVoxelSet(dir.path("replayed.vdb")).find("illumination"), *sum, &why));
+
+    // A whole export of the grids picked (the helper mask left out), its pipeline the same.
+    session.apply("select", {{"grid", "density"}, {"shape", "box"}, {"min", {-1, -1, -1}}, {"max", {0, 1, 1}}});
+    const VoxelSet picked = readVoxelSet(session.exportTo("picked.vdb", view::ExportMode::Whole, "", 0, {"density", "illumination"}));
+    std::vector<std::string> names;
+    for (const auto& g : picked.grids()) names.push_back(g->getName());
+    CHECK(names == std::vector<std::string>{"density", "illumination"});
+    nlohmann::json graph = nlohmann::json::parse(test::slurp(dir.path("picked.pipeline.json")));
+    graph["outputs"] = {{graph["outputs"].begin().key(), dir.path("picked-replayed.vdb")}};
+    test::spit(dir.path("q.json"), graph.dump());
+    runGraph(dir.path("q.json"), dir.path("cache"));
+    CHECK(sameSets(readVoxelSet(dir.path("picked-replayed.vdb")), picked, &why));
+    CHECK_THROWS_WITH(session.exportTo("x.vdb", view::ExportMode::Whole, "", 0, {"nope"}), Catch::Contains("no grid 'nope'"));
+    CHECK_FALSE(std::filesystem::exists(dir.path("x.vdb")));
 }

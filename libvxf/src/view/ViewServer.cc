@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <chrono>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -124,13 +125,61 @@ std::string mediaType(const std::string& contentType)
 
 } // namespace
 
+/// A render's progress as the stages report it (OpenVDB's interrupter interface): the stage and
+/// its percent, read by GET /api/progress while the render runs on its own request's thread.
+class RenderProgress : public Interrupter
+{
+public:
+    void begin()
+    {
+        std::lock_guard<std::mutex> lock(mMutex);
+        mRunning = true;
+        mStep = "starting";
+        mPercent = 0;
+        mStart = std::chrono::steady_clock::now();
+    }
+    void finish()
+    {
+        std::lock_guard<std::mutex> lock(mMutex);
+        mRunning = false;
+    }
+    void start(const char* name) override
+    {
+        std::lock_guard<std::mutex> lock(mMutex);
+        if (name) mStep = name;
+        mPercent = 0;
+    }
+    bool wasInterrupted(int percent) override
+    {
+        if (percent >= 0) {
+            std::lock_guard<std::mutex> lock(mMutex);
+            mPercent = std::max(mPercent, std::min(percent, 100));
+        }
+        return false;
+    }
+    nlohmann::json state() const
+    {
+        std::lock_guard<std::mutex> lock(mMutex);
+        return {{"rendering", mRunning}, {"step", mStep}, {"percent", mPercent},
+            {"seconds", mRunning ? std::chrono::duration<double>(std::chrono::steady_clock::now() - mStart).count() : 0.0}};
+    }
+
+private:
+    mutable std::mutex mMutex;
+    bool mRunning = false;
+    std::string mStep;
+    int mPercent = 0;
+    std::chrono::steady_clock::time_point mStart;
+};
+
 struct ViewServer::Impl
 {
     ViewSession& session;
     ViewServerOptions options;
     bool ownFolder = false;
     httplib::Server server;
-    std::mutex renderMutex;
+    std::mutex renderMutex; ///< one render at a time, and the last one's image
+    RenderProgress progress;
     std::string lastPng;
     std::string host; ///< the bound address and port
     int port = 0;
@@ -252,10 +301,18 @@ struct ViewServer::Impl
             };
             const int width = dimension("width", 480), height = dimension("height", 360);
             std::lock_guard<std::mutex> lock(impl.renderMutex);
-            const ViewSession::Rendered r = s.render(impl.options.scene, width, height, impl.options.renderFolder);
-            impl.lastPng = r.png;
-            sendJson(res, {{"ran", r.ran}, {"seconds", r.seconds}});
+            impl.progress.begin();
+            try {
+                const ViewSession::Rendered r = s.render(impl.options.scene, width, height, impl.options.renderFolder, &impl.progress);
+                impl.progress.finish();
+                impl.lastPng = r.png;
+                sendJson(res, {{"ran", r.ran}, {"seconds", r.seconds}});
+            } catch (...) {
+                impl.progress.finish();
+                throw;
+            }
         });
+        server.Get("/api/progress", [&impl](const httplib::Request&, httplib::Response& res) { sendJson(res, impl.progress.state()); });
         server.Get("/api/image", [&impl](const httplib::Request&, httplib::Response& res) {
             std::lock_guard<std::mutex> lock(impl.renderMutex);
             std::ifstream file(impl.lastPng, std::ios::binary);
@@ -326,7 +383,18 @@ struct ViewServer::Impl
         });
         server.Post("/api/undo", [&s](const httplib::Request&, httplib::Response& res) {
             const bool undone = s.undo();
-            sendJson(res, {{"undone", undone}, {"steps", s.steps()}});
+            sendJson(res, {{"undone", undone}, {"steps", s.steps()}, {"redo", s.redoable()}});
+        });
+        server.Post("/api/redo", [&s](const httplib::Request&, httplib::Response& res) {
+            const bool redone = s.redo();
+            sendJson(res, {{"redone", redone}, {"steps", s.steps()}, {"redo", s.redoable()}});
+        });
+        // The history changed as a whole: steps switched off or on, removed, reordered.
+        server.Post("/api/steps", [&s](const httplib::Request& req, httplib::Response& res) {
+            const nlohmann::json body = bodyJson(req);
+            if (!body.contains("steps")) throw UsageError("expected {\"steps\": [{\"op\", \"params\", \"enabled\"}…]}");
+            s.setSteps(body["steps"]);
+            sendJson(res, {{"steps", s.steps()}, {"redo", s.redoable()}});
         });
         server.Post("/api/export", [&s](const httplib::Request& req, httplib::Response& res) {
             const nlohmann::json body = bodyJson(req);
@@ -345,8 +413,17 @@ struct ViewServer::Impl
                 if (!body["smooth"].is_number_integer()) throw UsageError("'smooth' must be a whole number of voxels");
                 smooth = body["smooth"].get<int>();
             }
+            std::vector<std::string> keep; // whole: the grids written (none named: every grid)
+            if (body.contains("grids")) {
+                if (!body["grids"].is_array()) throw UsageError("'grids' must be a list of grid names");
+                for (const auto& g : body["grids"]) {
+                    if (!g.is_string()) throw UsageError("'grids' must be a list of grid names");
+                    keep.push_back(g.get<std::string>());
+                }
+                if (keep.empty()) throw UsageError("'grids' names no grid: the export would hold nothing");
+            }
             const std::string written =
-                s.exportTo(stringField(body, "path"), m, stringField(body, "grid", "", m != ExportMode::Whole), smooth);
+                s.exportTo(stringField(body, "path"), m, stringField(body, "grid", "", m != ExportMode::Whole), smooth, keep);
             sendJson(res, {{"written", written}});
         });
         server.set_error_handler([](const httplib::Request& req, httplib::Response& res) {

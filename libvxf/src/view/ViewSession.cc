@@ -105,7 +105,8 @@ VoxelSet deepCopy(const VoxelSet& set)
 const std::vector<std::string>& ViewSession::editOperators()
 {
     static const std::vector<std::string> names = {"add", "sub", "mul", "div", "pow", "blend", "blur", "blur_special", "normalize",
-        "denormalize", "gradient", "remove", "include", "select", "edit", "diff", "apply_diff", "split", "merge", "rename", "copy"};
+        "denormalize", "gradient", "remove", "include", "select", "edit", "diff", "apply_diff", "split", "merge", "rename", "copy",
+        "delete", "paint", "noise"};
     return names;
 }
 
@@ -155,8 +156,11 @@ nlohmann::json ViewSession::describe() const
     for (const auto& grid : mCurrent.grids()) {
         if (shown.empty() && channelsOf(*grid) > 0) shown = grid->getName();
     }
-    return {{"file", mPath}, {"grids", grids}, {"steps", stepsLocked()}, {"operators", editOperators()},
-        {"default_grid", shown.empty() ? nlohmann::json(nullptr) : nlohmann::json(shown)}};
+    // The up axis the file's writer uses: Houdini's is Y; Blender's and vxf's scenes Z.
+    const auto creator = mOriginal.metadata().getMetadata<openvdb::StringMetadata>("creator");
+    const std::string up = creator && creator->value().find("Houdini") != std::string::npos ? "y" : "z";
+    return {{"file", mPath}, {"grids", grids}, {"steps", stepsLocked()}, {"redo", mRedo.size()}, {"operators", editOperators()},
+        {"up_axis", up}, {"default_grid", shown.empty() ? nlohmann::json(nullptr) : nlohmann::json(shown)}};
 }
 
 nlohmann::json ViewSession::steps() const
@@ -168,7 +172,9 @@ nlohmann::json ViewSession::steps() const
 nlohmann::json ViewSession::stepsLocked() const
 {
     nlohmann::json steps = nlohmann::json::array();
-    for (const Step& s : mSteps) steps.push_back({{"op", s.op}, {"params", s.params}});
+    for (const Step& s : mSteps) {
+        steps.push_back({{"op", s.op}, {"params", s.params}, {"enabled", s.enabled}, {"refreshes", s.refreshes}});
+    }
     return steps;
 }
 
@@ -296,9 +302,23 @@ Slice ViewSession::slice(const std::string& name, int axis, int index) const
 
 SurfaceMesh ViewSession::surfaceMesh(std::size_t triangleBudget) const
 {
+    // Made without the lock from the grid as it is now (an edit of it copies it first), and kept
+    // for that grid and budget: the page asks again after every edit.
+    openvdb::FloatGrid::ConstPtr surface;
+    {
+        std::lock_guard<std::mutex> lock(mMutex);
+        surface = openvdb::gridPtrCast<openvdb::FloatGrid>(mCurrent.find(grids::kSurface));
+        if (mMeshCache && mMeshCache->surface == surface && mMeshCache->budget == triangleBudget) return mMeshCache->mesh;
+    }
+    SurfaceMesh mesh = meshOf(surface, triangleBudget);
     std::lock_guard<std::mutex> lock(mMutex);
+    mMeshCache = MeshCache{surface, triangleBudget, mesh};
+    return mesh;
+}
+
+SurfaceMesh ViewSession::meshOf(const openvdb::FloatGrid::ConstPtr& surface, std::size_t triangleBudget)
+{
     SurfaceMesh mesh;
-    const auto surface = openvdb::gridPtrCast<openvdb::FloatGrid>(mCurrent.find(grids::kSurface));
     if (!surface || surface->getGridClass() != openvdb::GRID_LEVEL_SET) return mesh;
     std::vector<openvdb::Vec3s> points;
     std::vector<openvdb::Vec3I> triangles;
@@ -341,20 +361,13 @@ void ViewSession::checkEdit(const std::string& name, const nlohmann::json& param
     }
 }
 
-void ViewSession::run(VoxelSet& set, const std::string& name, const nlohmann::json& params, std::string* report)
+void ViewSession::run(VoxelSet& set, const std::string& name, const nlohmann::json& params, std::string* report, Interrupter* progress)
 {
     const ops::Operator& op = findOperator(name);
     const ops::Args args = ops::checkArgs(op, params);
-    ops::OpContext context{set, args, nullptr};
+    ops::OpContext context{set, args, progress};
     const std::string r = op.run(context);
     if (report) *report = r;
-}
-
-VoxelSet ViewSession::replay(const std::vector<Step>& steps) const
-{
-    VoxelSet set = deepCopy(mOriginal);
-    for (const Step& s : steps) run(set, s.op, s.params, nullptr);
-    return set;
 }
 
 namespace {
@@ -365,6 +378,81 @@ std::set<std::string> writtenGrids(const std::string& op, const nlohmann::json& 
     const ops::Operator& declared = findOperator(op);
     return ops::gridUse(declared, ops::checkArgs(declared, params)).writes;
 }
+
+/// The step that makes `illumination` again from `direct` and `scatter`, as the scatter stage does.
+const nlohmann::json& illuminationRefresh()
+{
+    static const nlohmann::json params{{"grid", grids::kDirect}, {"with", grids::kScatter}, {"mode", "add"}, {"out", grids::kIllumination}};
+    return params;
+}
+
+} // namespace
+
+void ViewSession::runStep(VoxelSet& set, Step& step, std::string* report)
+{
+    step.refreshes.clear();
+    if (!step.enabled) {
+        if (report) *report = "switched off";
+        return;
+    }
+    run(set, step.op, step.params, report);
+    const std::set<std::string> written = writtenGrids(step.op, step.params);
+    if ((written.count(grids::kDirect) || written.count(grids::kScatter)) && !written.count(grids::kIllumination) &&
+        set.find(grids::kIllumination) && set.find(grids::kDirect) && set.find(grids::kScatter)) {
+        run(set, "blend", illuminationRefresh(), nullptr);
+        step.refreshes.push_back(grids::kIllumination);
+        if (report) *report += fmt::format("; recomputed '{}' = {} + {}", grids::kIllumination, grids::kDirect, grids::kScatter);
+    }
+}
+
+VoxelSet ViewSession::replay(std::vector<Step> steps) const
+{
+    VoxelSet set = deepCopy(mOriginal);
+    for (Step& s : steps) runStep(set, s, nullptr);
+    return set;
+}
+
+void ViewSession::advance(Step& step, std::string* report)
+{
+    // The state before: the set's grids as they are; those the step (and a refresh) may write
+    // are replaced in mCurrent by copies first, so the operator leaves the kept ones alone.
+    const VoxelSet before = mCurrent;
+    if (step.enabled) {
+        std::set<std::string> written = writtenGrids(step.op, step.params);
+        if (written.count(grids::kDirect) || written.count(grids::kScatter)) written.insert(grids::kIllumination); // a refresh
+        for (const std::string& name : written) {
+            if (const openvdb::GridBase::Ptr grid = mCurrent.find(name)) mCurrent.putAsIs(grid->deepCopyGrid());
+        }
+    }
+    try {
+        runStep(mCurrent, step, report);
+    } catch (...) {
+        mCurrent = before;
+        throw;
+    }
+    mBefore.push_back(before);
+    if (mBefore.size() > kKeptStates) mBefore[mBefore.size() - kKeptStates - 1].reset();
+}
+
+void ViewSession::rebuildFrom(std::size_t first)
+{
+    // From the nearest kept state at or before step `first`, else the file as read; past the
+    // kept states mCurrent is the state before `first` already.
+    if (first < mBefore.size()) {
+        std::size_t from = first;
+        while (from > 0 && !mBefore[from]) --from;
+        if (mBefore[from]) {
+            mCurrent = *mBefore[from];
+        } else {
+            mCurrent = deepCopy(mOriginal);
+        }
+        mBefore.resize(from);
+        first = from;
+    }
+    for (std::size_t i = first; i < mSteps.size(); ++i) advance(mSteps[i], nullptr);
+}
+
+namespace {
 
 /// Voxels of @a after active where @a before is not, or of another value, and voxels of @a before
 /// no longer active in @a after (tiles counted voxel by voxel).
@@ -416,20 +504,15 @@ std::string ViewSession::apply(const std::string& op, const nlohmann::json& para
 {
     std::lock_guard<std::mutex> lock(mMutex);
     checkEdit(op, params);
-    // The grids the step writes, as they were: the report says how many voxels it changed.
-    std::map<std::string, openvdb::GridBase::Ptr> before;
-    for (const std::string& name : writtenGrids(op, params)) {
-        const openvdb::GridBase::Ptr grid = mCurrent.find(name);
-        before[name] = grid ? grid->deepCopyGrid() : nullptr;
-    }
+    // The grids the step writes, as they were (advance keeps them): the report says how many
+    // voxels it changed.
+    Step step{op, params, true, {}};
     std::string report;
-    try {
-        run(mCurrent, op, params, &report);
-    } catch (...) {
-        mCurrent = replay(mSteps); // an operator may have changed part of the set before it failed
-        throw;
-    }
-    mSteps.push_back({op, params});
+    advance(step, &report);
+    std::map<std::string, openvdb::GridBase::Ptr> before;
+    for (const std::string& name : writtenGrids(op, params)) before[name] = mBefore.back()->find(name);
+    mSteps.push_back(step);
+    mRedo.clear();
     return report + changedSummary(before, mCurrent);
 }
 
@@ -437,29 +520,117 @@ bool ViewSession::undo()
 {
     std::lock_guard<std::mutex> lock(mMutex);
     if (mSteps.empty()) return false;
-    std::vector<Step> kept(mSteps.begin(), mSteps.end() - 1);
-    mCurrent = replay(kept);
-    mSteps = std::move(kept);
+    mRedo.push_back(mSteps.back());
+    mSteps.pop_back();
+    if (mBefore.back()) {
+        mCurrent = *mBefore.back();
+        mBefore.pop_back();
+    } else {
+        rebuildFrom(mSteps.size());
+    }
     return true;
+}
+
+bool ViewSession::redo()
+{
+    std::lock_guard<std::mutex> lock(mMutex);
+    if (mRedo.empty()) return false;
+    Step step = mRedo.back();
+    advance(step, nullptr);
+    mSteps.push_back(step);
+    mRedo.pop_back();
+    return true;
+}
+
+std::size_t ViewSession::redoable() const
+{
+    std::lock_guard<std::mutex> lock(mMutex);
+    return mRedo.size();
+}
+
+void ViewSession::setSteps(const nlohmann::json& list)
+{
+    std::lock_guard<std::mutex> lock(mMutex);
+    if (!list.is_array()) throw UsageError("steps: expected a JSON array of {\"op\", \"params\", \"enabled\"}");
+    std::vector<Step> steps;
+    for (std::size_t i = 0; i < list.size(); ++i) {
+        const nlohmann::json& s = list[i];
+        const auto refuse = [&](const std::string& why) { throw UsageError(fmt::format("step {}: {}", i + 1, why)); };
+        if (!s.is_object() || !s.contains("op") || !s["op"].is_string()) refuse("expected {\"op\": NAME, \"params\": {…}}");
+        if (s.contains("enabled") && !s["enabled"].is_boolean()) refuse("'enabled' must be true or false");
+        Step step{s["op"].get<std::string>(), s.value("params", nlohmann::json::object()), s.value("enabled", true), {}};
+        try {
+            checkEdit(step.op, step.params);
+            if (step.enabled) writtenGrids(step.op, step.params); // the parameters checked as the operator checks them
+        } catch (const Error& e) {
+            refuse(e.what());
+        }
+        steps.push_back(std::move(step));
+    }
+    std::size_t first = 0;
+    while (first < steps.size() && first < mSteps.size() && steps[first].op == mSteps[first].op &&
+        steps[first].params == mSteps[first].params && steps[first].enabled == mSteps[first].enabled)
+        ++first;
+    if (first == steps.size() && first == mSteps.size()) return; // the same history
+    for (std::size_t i = first; i < steps.size(); ++i) steps[i].refreshes.clear();
+    std::vector<Step> oldSteps = mSteps;
+    std::vector<std::optional<VoxelSet>> oldBefore = mBefore;
+    const VoxelSet oldCurrent = mCurrent;
+    mSteps = std::move(steps);
+    try {
+        rebuildFrom(first);
+    } catch (const Error& e) {
+        // Which step failed: the first whose state was not reached.
+        const std::size_t failed = mBefore.size() + 1;
+        mSteps = std::move(oldSteps);
+        mBefore = std::move(oldBefore);
+        mCurrent = oldCurrent;
+        throw UsageError(fmt::format("step {}: {}", failed, e.what()));
+    }
+    mRedo.clear();
 }
 
 nlohmann::json ViewSession::pipeline(const std::string& output) const
 {
     std::lock_guard<std::mutex> lock(mMutex);
+    return pipelineLocked(output);
+}
+
+nlohmann::json ViewSession::pipelineLocked(const std::string& output) const
+{
     nlohmann::json nodes{{"source", {{"file", mPath}}}};
     std::string last = "source";
     for (std::size_t i = 0; i < mSteps.size(); ++i) {
+        if (!mSteps[i].enabled) continue;
         const std::string node = fmt::format("step{}_{}", i + 1, mSteps[i].op);
         nodes[node] = {{"op", mSteps[i].op}, {"input", last}, {"params", mSteps[i].params}};
         last = node;
+        for (const std::string& refreshed : mSteps[i].refreshes) { // the derived grid made again, as the session did
+            const std::string again = fmt::format("step{}_{}", i + 1, refreshed);
+            nodes[again] = {{"op", "blend"}, {"input", last}, {"params", illuminationRefresh()}};
+            last = again;
+        }
     }
     return {{"nodes", nodes}, {"outputs", {{last, output}}}};
 }
 
-ViewSession::Rendered ViewSession::render(const std::string& scenePath, int width, int height, const std::string& folder)
+ViewSession::Rendered ViewSession::render(
+    const std::string& scenePath, int width, int height, const std::string& folder, Interrupter* progress)
 {
-    std::lock_guard<std::mutex> lock(mMutex);
     const auto start = std::chrono::steady_clock::now();
+    // What to render, taken under the lock and rendered without it (edits, reads and exports go
+    // on meanwhile): the steps, the current set (its grids shared; a later edit copies what it
+    // writes) and the kept scatter.
+    std::vector<Step> steps;
+    VoxelSet current, scattered;
+    std::string scatteredFor;
+    {
+        std::lock_guard<std::mutex> lock(mMutex);
+        steps = mSteps;
+        current = mCurrent;
+        scattered = mScattered;
+        scatteredFor = mScatteredFor;
+    }
     Rendered result;
     // The recorded steps in order: the scatter stage re-runs after the last step that wrote what
     // it reads, and the steps after that one apply to its result (a hue edit of `scatter` after
@@ -469,16 +640,19 @@ ViewSession::Rendered ViewSession::render(const std::string& scenePath, int widt
         return ops::gridUse(stage, ops::checkArgs(stage, nlohmann::json::object())).reads;
     }();
     std::size_t rescatterAfter = 0; // steps [0, rescatterAfter) come before the scatter stage re-runs
-    for (std::size_t i = 0; i < mSteps.size(); ++i) {
-        for (const std::string& g : writtenGrids(mSteps[i].op, mSteps[i].params)) {
+    for (std::size_t i = 0; i < steps.size(); ++i) {
+        if (!steps[i].enabled) continue;
+        for (const std::string& g : writtenGrids(steps[i].op, steps[i].params)) {
             if (upstream.count(g)) rescatterAfter = i + 1;
         }
     }
-    VoxelSet set = mCurrent;
-    if (rescatterAfter > 0 && mCurrent.find(grids::kScatter)) {
+    VoxelSet set = current;
+    if (rescatterAfter > 0 && current.find(grids::kScatter)) {
         nlohmann::json before = nlohmann::json::array();
-        for (std::size_t i = 0; i < rescatterAfter; ++i) before.push_back({mSteps[i].op, mSteps[i].params});
-        if (mScatteredFor != before.dump()) {
+        for (std::size_t i = 0; i < rescatterAfter; ++i) {
+            if (steps[i].enabled) before.push_back({steps[i].op, steps[i].params});
+        }
+        if (scatteredFor != before.dump()) {
             // The file's own scatter parameters where it recorded them (`vxf scatter`), else sweeps.
             nlohmann::json params = nlohmann::json::object();
             const nlohmann::json recorded = nlohmann::json::parse(mOriginal.paramsJson(), nullptr, false);
@@ -490,31 +664,34 @@ ViewSession::Rendered ViewSession::render(const std::string& scenePath, int widt
                 if (recorded.value("accelerate", true) == false) params["no_accelerate"] = true; // written before 2026-12
             }
             if (params.empty()) params = {{"kernel", "sweep"}};
-            const VoxelSet edited = replay(std::vector<Step>(mSteps.begin(), mSteps.begin() + std::ptrdiff_t(rescatterAfter)));
-            VoxelSet scattered = deepCopy(edited);
+            const VoxelSet edited = replay(std::vector<Step>(steps.begin(), steps.begin() + std::ptrdiff_t(rescatterAfter)));
+            scattered = deepCopy(edited);
             try {
-                run(scattered, "scatter", params, nullptr);
+                run(scattered, "scatter", params, nullptr, progress);
             } catch (const UsageError&) { // recorded values this version no longer takes
                 scattered = deepCopy(edited);
-                run(scattered, "scatter", {{"kernel", "sweep"}}, nullptr);
+                run(scattered, "scatter", {{"kernel", "sweep"}}, nullptr, progress);
             }
-            mScattered = scattered;
-            mScatteredFor = before.dump();
+            {
+                std::lock_guard<std::mutex> lock(mMutex);
+                mScattered = scattered;
+                mScatteredFor = before.dump();
+            }
             result.ran.push_back("scatter");
         } else {
             result.ran.push_back("scatter (kept from the last render)");
         }
         // Later steps edit a copy (the kept scatter stays as the stage made it); none: read as it is.
-        set = rescatterAfter < mSteps.size() ? deepCopy(mScattered) : mScattered;
-        for (std::size_t i = rescatterAfter; i < mSteps.size(); ++i) run(set, mSteps[i].op, mSteps[i].params, nullptr);
-        if (rescatterAfter < mSteps.size()) result.ran.push_back(fmt::format("{} later steps", mSteps.size() - rescatterAfter));
+        set = rescatterAfter < steps.size() ? deepCopy(scattered) : scattered;
+        for (std::size_t i = rescatterAfter; i < steps.size(); ++i) runStep(set, steps[i], nullptr);
+        if (rescatterAfter < steps.size()) result.ran.push_back(fmt::format("{} later steps", steps.size() - rescatterAfter));
     }
     fs::create_directories(folder);
     result.png = (fs::path(folder) / "view.png").string();
     run(set, "render",
         {{"scene", scenePath}, {"image", (fs::path(folder) / "view.exr").string()}, {"png", result.png}, {"width", width},
             {"height", height}},
-        nullptr);
+        nullptr, progress);
     result.ran.push_back("render");
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return result;
@@ -564,7 +741,8 @@ std::string ViewSession::resolveInside(const std::string& relativePath) const
     return target.string();
 }
 
-std::string ViewSession::exportTo(const std::string& relativePath, ExportMode mode, const std::string& grid, int smooth)
+std::string ViewSession::exportTo(
+    const std::string& relativePath, ExportMode mode, const std::string& grid, int smooth, const std::vector<std::string>& keep)
 {
     const std::string path = resolveInside(relativePath);
     nlohmann::json graph;
@@ -572,7 +750,19 @@ std::string ViewSession::exportTo(const std::string& relativePath, ExportMode mo
     {
         std::lock_guard<std::mutex> lock(mMutex);
         if (mode == ExportMode::Whole) {
+            // The grids kept; the pipeline deletes the others at its end, as the export does.
+            for (const std::string& name : keep) gridNamed(name);
             out = mCurrent;
+            graph = pipelineLocked(path);
+            std::string last = graph["outputs"].begin().key();
+            for (const auto& g : mCurrent.grids()) {
+                if (keep.empty() || std::find(keep.begin(), keep.end(), g->getName()) != keep.end()) continue;
+                out.remove(g->getName());
+                const std::string node = fmt::format("export_delete_{}", graph["nodes"].size());
+                graph["nodes"][node] = {{"op", "delete"}, {"input", last}, {"params", {{"grid", g->getName()}}}};
+                last = node;
+            }
+            graph["outputs"] = {{last, path}};
         } else {
             if (!mCurrent.find(grid)) throw UsageError(fmt::format("export: no grid '{}' in the edited set", grid));
             if (!mOriginal.find(grid)) throw UsageError(fmt::format("export: grid '{}' is new (not in {}): export it whole", grid, mPath));
@@ -605,7 +795,7 @@ std::string ViewSession::exportTo(const std::string& relativePath, ExportMode mo
     writeVoxelSet(path, out);
     if (mode == ExportMode::Whole) {
         const std::string pipelinePath = (fs::path(path).parent_path() / (fs::path(path).stem().string() + kPipelineSuffix)).string();
-        const std::string text = pipeline(path).dump(2) + "\n";
+        const std::string text = graph.dump(2) + "\n";
         writeAtomically(pipelinePath, [&](const std::string& tmp) {
             std::ofstream file(tmp, std::ios::binary);
             file << text;

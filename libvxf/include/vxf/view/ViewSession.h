@@ -1,12 +1,14 @@
 // vxf — the state behind `vxf view`: one voxel set, its edits by the artist operators, undo, exports.
 #pragma once
 
+#include <vxf/core/Interrupter.h>
 #include <vxf/core/VoxelSet.h>
 
 #include <nlohmann/json.hpp>
 
 #include <cstdint>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -52,9 +54,16 @@ enum class ExportMode {
 };
 
 /// One .vdb open for viewing and editing. Every edit is one operator of the registry (as
-/// `vxf op` runs it, checked by ops::checkArgs) applied to the current set and recorded; undo
-/// replays the recorded steps on the file as read, so the current set is always exactly what
-/// `vxf graph` makes of pipeline(). Thread-safe: every call takes the session's lock.
+/// `vxf op` runs it, checked by ops::checkArgs) applied to the current set and recorded, so the
+/// current set is always exactly what `vxf graph` makes of pipeline(). The record is a history:
+/// steps can be undone and redone, switched off and on, removed and reordered (setSteps).
+/// A step that changes `direct` or `scatter` in a set holding `illumination` (their sum, which
+/// the scatter stage writes) recomputes it after it, said in its report and recorded in
+/// pipeline() as a node of its own: no derived grid goes stale.
+/// The state before each of the last kKeptStates steps is kept (the grids a step writes are
+/// copied before it runs, the others shared), so undo and a history change near the end take
+/// no replay; older states are replayed from the file as read. Thread-safe: every call takes
+/// the session's lock.
 class ViewSession
 {
 public:
@@ -71,7 +80,8 @@ public:
     /// or vec3 grid; null when there is none).
     nlohmann::json describe() const;
 
-    /// The recorded steps: [{"op", "params"}…], oldest first.
+    /// The recorded steps: [{"op", "params", "enabled", "refreshes"}…], oldest first
+    /// ("refreshes": the grids recomputed after it, such as illumination).
     nlohmann::json steps() const;
 
     /// Points for @a grid (float or Vec3 of any precision; vxf::UsageError for other types or an
@@ -82,7 +92,8 @@ public:
     Slice slice(const std::string& grid, int axis, int index) const;
 
     /// The `surface` grid's mesh (empty when the set has none) of at most about @a triangleBudget
-    /// triangles (from a coarser level set where the grid's own gives more).
+    /// triangles (from a coarser level set where the grid's own gives more); kept until the grid
+    /// or the budget changes.
     SurfaceMesh surfaceMesh(std::size_t triangleBudget) const;
 
     /// Apply operator @a op with @a params (a JSON object, as in a pipeline node) to the current
@@ -91,8 +102,22 @@ public:
     /// Errors leave the set and the record unchanged.
     std::string apply(const std::string& op, const nlohmann::json& params);
 
-    /// Drop the last recorded step (false when there is none) and rebuild the set without it.
+    /// Drop the last recorded step (false when there is none), the set as it was before it;
+    /// the step goes on the redo list.
     bool undo();
+
+    /// Apply again the step undone last (false when there is none). An apply() or setSteps()
+    /// empties the redo list.
+    bool redo();
+
+    /// How many undone steps redo() can apply again.
+    std::size_t redoable() const;
+
+    /// Replace the recorded steps by @a steps ([{"op", "params", "enabled"?}…]: the same steps
+    /// switched off or on, removed or reordered, or others) and rebuild the set from the first
+    /// one that differs. Each is checked as apply() checks it; on an error (vxf::UsageError
+    /// naming the step) the session is left as it was.
+    void setSteps(const nlohmann::json& steps);
 
     /// The recorded steps as a pipeline (schemas/pipeline.schema.json): the served file as the
     /// source node, one node per step, the last written to @a output (a path, stored as given).
@@ -100,9 +125,11 @@ public:
 
     /// Write @a mode's result for @a grid to @a relativePath, a .vdb path inside folder() (no
     /// absolute paths, no "..": vxf::UsageError), atomically; with Whole also the pipeline that
-    /// makes it beside it (NAME.pipeline.json). @a smooth: voxels blended (Smoothed). Returns
-    /// the absolute path written.
-    std::string exportTo(const std::string& relativePath, ExportMode mode, const std::string& grid, int smooth);
+    /// makes it beside it (NAME.pipeline.json). @a smooth: voxels blended (Smoothed). With
+    /// Whole, @a keep names the grids written (empty: every grid; an unknown name is an error),
+    /// the pipeline deleting the others at its end. Returns the absolute path written.
+    std::string exportTo(
+        const std::string& relativePath, ExportMode mode, const std::string& grid, int smooth, const std::vector<std::string>& keep = {});
 
     /// What render() did: the stages it ran ("scatter", or the scatter kept from the last render;
     /// "render") and the PNG it wrote.
@@ -118,33 +145,64 @@ public:
     /// recorded step edited a grid it reads (surface, density, direct, scatter_source, scatter_source_anisotropy) and the
     /// set holds a `scatter` to replace: with the parameters the file's scatter stage recorded,
     /// else accelerated sweeps. The re-scattered set is kept until the steps change, so renders
-    /// of the same edits scatter once (as `vxf run`'s cache reuses unchanged stages).
-    Rendered render(const std::string& scenePath, int width, int height, const std::string& folder);
+    /// of the same edits scatter once (as `vxf run`'s cache reuses unchanged stages). The set is
+    /// taken under the lock and rendered without it: the other calls answer meanwhile (renders
+    /// one at a time: the caller's to order). @a progress: the stages' progress (may be null).
+    Rendered render(const std::string& scenePath, int width, int height, const std::string& folder, Interrupter* progress = nullptr);
 
     /// The operators apply() accepts.
     static const std::vector<std::string>& editOperators();
+
+    /// How many of the latest states before a step are kept for undo and history changes.
+    static constexpr std::size_t kKeptStates = 8;
 
 private:
     struct Step
     {
         std::string op;
         nlohmann::json params;
+        bool enabled = true;
+        /// Set when the step runs: the derived grids it recomputed after it ("illumination").
+        std::vector<std::string> refreshes;
     };
-    VoxelSet replay(const std::vector<Step>& steps) const;
+    /// Run @a step on @a set (nothing when it is switched off), then recompute what it made stale
+    /// (Step::refreshes); the operator's report and what was recomputed in @a report.
+    static void runStep(VoxelSet& set, Step& step, std::string* report);
+    /// runStep on mCurrent, keeping the state before it (the grids it writes copied first).
+    void advance(Step& step, std::string* report);
+    /// mCurrent and the kept states for mSteps from step @a first on (its state before restored
+    /// or replayed from the file as read); the lock held.
+    void rebuildFrom(std::size_t first);
+    /// The file as read with @a steps applied (their refreshes too), from a copy of mOriginal.
+    VoxelSet replay(std::vector<Step> steps) const;
     /// vxf::UsageError unless @a op is one of editOperators() with @a params an object naming no other file.
     static void checkEdit(const std::string& op, const nlohmann::json& params);
     /// Operator @a op of the registry on @a set, its parameters checked as `vxf op` checks them.
-    static void run(VoxelSet& set, const std::string& op, const nlohmann::json& params, std::string* report);
+    static void run(
+        VoxelSet& set, const std::string& op, const nlohmann::json& params, std::string* report, Interrupter* progress = nullptr);
+    /// The mesh of level set @a surface (none: empty) within @a triangleBudget.
+    static SurfaceMesh meshOf(const openvdb::FloatGrid::ConstPtr& surface, std::size_t triangleBudget);
     openvdb::GridBase::ConstPtr gridNamed(const std::string& name) const;
     nlohmann::json stepsLocked() const; ///< steps(), the lock held
+    nlohmann::json pipelineLocked(const std::string& output) const; ///< pipeline(), the lock held
     std::string resolveInside(const std::string& relativePath) const;
 
     std::string mPath, mFolder;
     VoxelSet mOriginal; ///< as read (never edited: each replay starts from deep copies)
     VoxelSet mCurrent;
     std::vector<Step> mSteps;
+    std::vector<Step> mRedo; ///< undone steps, the last undone at the back
+    /// mBefore[i]: the set before step i (null where no longer kept); as many as mSteps.
+    std::vector<std::optional<VoxelSet>> mBefore;
     std::string mScatteredFor; ///< the steps (as JSON) mScattered was made for; "" none
     VoxelSet mScattered;
+    struct MeshCache
+    {
+        openvdb::FloatGrid::ConstPtr surface; ///< the grid it was made from (kept alive: the key)
+        std::size_t budget = 0;
+        SurfaceMesh mesh;
+    };
+    mutable std::optional<MeshCache> mMeshCache;
     mutable std::mutex mMutex;
 };
 

@@ -62,11 +62,32 @@ resize();
 // Dynamic resolution: below 30 frames a second (a software renderer, a big grid) the canvas is
 // drawn at fewer pixels, down to 0.4 of the screen's; above 50 at more, up to all of them.
 let frames = 0, since = performance.now(), pixelRatio = 1;
+// The axis triad: a small scene of the world axes (x red, y green, z blue) drawn in the view's
+// lower-left corner, seen from the main camera's direction.
+const triadScene = new THREE.Scene();
+triadScene.add(new THREE.AxesHelper(1));
+const triadCamera = new THREE.OrthographicCamera(-1.3, 1.3, 1.3, -1.3, 0.1, 10);
+function drawTriad() {
+  const size = 90;
+  triadCamera.position.copy(camera.position).sub(controls.target).normalize().multiplyScalar(4);
+  triadCamera.up.copy(camera.up);
+  triadCamera.lookAt(0, 0, 0);
+  renderer.setScissorTest(true);
+  renderer.setScissor(0, 0, size, size);
+  renderer.setViewport(0, 0, size, size);
+  renderer.autoClear = false;
+  renderer.clearDepth();
+  renderer.render(triadScene, triadCamera);
+  renderer.autoClear = true;
+  renderer.setScissorTest(false);
+  renderer.setViewport(0, 0, container.clientWidth, container.clientHeight);
+}
 function animate() {
   requestAnimationFrame(animate);
   sun.position.copy(camera.position);
   controls.update();
   renderer.render(scene, camera);
+  drawTriad();
   frames++;
   const now = performance.now();
   if (now - since > 1000) {
@@ -146,6 +167,7 @@ async function loadInfo() {
   state.info = firstInfo ? await firstInfo : await (await call('GET', '/api/info')).json();
   firstInfo = null;
   $('file').textContent = state.info.file.split('/').pop();
+  if (!state.upChosen && state.info.up_axis) { $('upAxis').value = state.info.up_axis; state.upChosen = true; }
   const select = $('grid');
   const previous = state.grid;
   select.innerHTML = '';
@@ -166,7 +188,73 @@ async function loadInfo() {
     state.info.grids.map((g) => `<option value="${g.name}">${g.name}</option>`).join('');
   from.value = state.info.grids.some((g) => g.name === chosen) ? chosen : '';
   $('renderFields').hidden = !state.info.scene;
-  $('steps').innerHTML = state.info.steps.map((s, i) => `${i + 1}. ${s.op} ${JSON.stringify(s.params)}`).join('<br>');
+  showEditFields();
+  showHistory(state.info.steps, state.info.redo);
+  showExportGrids();
+}
+
+// --- history: the recorded steps, each switched off or on, moved or removed ---------------------
+function showHistory(steps, redo) {
+  state.steps = steps;
+  const list = $('steps');
+  list.innerHTML = '';
+  steps.forEach((step, i) => {
+    const row = document.createElement('div');
+    row.className = 'step' + (step.enabled ? '' : ' off');
+    const toggle = document.createElement('input');
+    toggle.type = 'checkbox';
+    toggle.checked = step.enabled;
+    toggle.title = 'apply this step (off: the set as if it were not there)';
+    toggle.addEventListener('change', () => changeHistory((all) => { all[i].enabled = toggle.checked; }, 'switched'));
+    const text = document.createElement('span');
+    const refreshed = step.refreshes && step.refreshes.length ? ` (then ${step.refreshes.join(', ')} recomputed)` : '';
+    text.textContent = `${i + 1}. ${step.op} ${JSON.stringify(step.params)}${refreshed}`;
+    text.title = text.textContent;
+    row.append(toggle, text);
+    for (const [label, title, move] of [['▲', 'earlier', -1], ['▼', 'later', 1], ['✕', 'remove', 0]]) {
+      const button = document.createElement('button');
+      button.textContent = label;
+      button.title = title;
+      button.className = 'stepButton';
+      button.disabled = move !== 0 && (i + move < 0 || i + move >= steps.length);
+      button.addEventListener('click', () => changeHistory((all) => {
+        if (move === 0) all.splice(i, 1);
+        else [all[i], all[i + move]] = [all[i + move], all[i]];
+      }, move === 0 ? 'removed' : 'moved'));
+      row.appendChild(button);
+    }
+    list.appendChild(row);
+  });
+  $('undo').disabled = steps.length === 0;
+  $('redo').disabled = !redo;
+  state.selected = steps.some((s) => s.op === 'select' && s.enabled);
+  if (!state.selected) $('selected').textContent = '';
+}
+async function changeHistory(change, what) {
+  await guarded(async () => {
+    const steps = state.steps.map((s) => ({ op: s.op, params: s.params, enabled: s.enabled }));
+    change(steps);
+    await call('POST', '/api/steps', { steps });
+  });
+  await guarded(() => refresh(`history: step ${what}`)); // the server's record, changed or not
+}
+
+// A whole export's grids: every one but the selection masks, unless the user says otherwise.
+function showExportGrids() {
+  const box = $('exportGrids');
+  const chosen = new Map([...box.querySelectorAll('input')].map((i) => [i.value, i.checked]));
+  box.innerHTML = '';
+  for (const g of state.info.grids) {
+    const label = document.createElement('label');
+    const input = document.createElement('input');
+    input.type = 'checkbox';
+    input.value = g.name;
+    input.checked = chosen.has(g.name) ? chosen.get(g.name) : g.type !== 'bool';
+    label.append(input, ` ${g.name}`);
+    box.appendChild(label);
+  }
+  const whole = $('exportMode').value === 'whole';
+  box.hidden = !whole;
 }
 
 async function loadPoints(fitCamera) {
@@ -215,14 +303,24 @@ function updatePointSize() {
   points.material.size = state.cloud.cellSize * fit * (parseFloat($('pointScale').value) || 1);
 }
 
+// Frame a world box: the camera at 1.9 sizes off its centre, from the front and a little above
+// (front is −y with Z up, +z with Y up); zoom kept between a fiftieth and twenty sizes of it, so
+// the object cannot be lost.
 function fit(lo, hi) {
   const centre = new THREE.Vector3((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2);
   const size = Math.max(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1e-6);
   camera.near = size / 1000;
   camera.far = size * 100;
-  camera.position.set(centre.x + 0.2 * size, centre.y - 1.9 * size, centre.z + 0.6 * size);
-  camera.up.set(0, 0, 1);
+  if ($('upAxis').value === 'y') {
+    camera.up.set(0, 1, 0);
+    camera.position.set(centre.x + 0.2 * size, centre.y + 0.6 * size, centre.z + 1.9 * size);
+  } else {
+    camera.up.set(0, 0, 1);
+    camera.position.set(centre.x + 0.2 * size, centre.y - 1.9 * size, centre.z + 0.6 * size);
+  }
   controls.target.copy(centre);
+  controls.minDistance = size / 50;
+  controls.maxDistance = size * 20;
   camera.updateProjectionMatrix();
   for (const [id, v] of [['minX', lo[0]], ['minY', lo[1]], ['minZ', lo[2]], ['maxX', hi[0]], ['maxY', hi[1]], ['maxZ', hi[2]],
     ['cX', centre.x], ['cY', centre.y], ['cZ', centre.z], ['radius', size / 4]]) {
@@ -256,6 +354,7 @@ function setupSlice(g) {
   input.max = hi;
   input.value = keep >= lo && keep <= hi && input.dataset.grid === g.name ? keep : Math.round((lo + hi) / 2);
   input.dataset.grid = g.name;
+  showSlicePlane();
   loadSlice();
 }
 async function loadSlice() {
@@ -306,11 +405,93 @@ const local = (event) => {
   const rect = renderer.domElement.getBoundingClientRect();
   return [event.clientX - rect.left, event.clientY - rect.top];
 };
+// --- painting: a drag with Paint on lays a stroke on the first visible voxels under the cursor --
+// The point under the cursor is the nearest drawn point (voxel or cell) whose own disc covers
+// it; the brush's centre lies `depth` beyond it along the view ray. The stroke is one `paint`
+// step, sent when the drag ends.
+let stroke = null;
+const paintCursor = $('paintCursor');
+function pickFront(x, y) {
+  if (!state.cloud) return null;
+  const { data, channels, count, cellSize } = state.cloud;
+  const stride = 3 + channels;
+  const w = renderer.domElement.clientWidth, h = renderer.domElement.clientHeight;
+  const fit = (h / 2) / Math.tan(THREE.MathUtils.degToRad(camera.fov / 2));
+  const p = new THREE.Vector3(), q = new THREE.Vector3();
+  let best = -1, bestDistance = Infinity;
+  for (let i = 0; i < count; i++) {
+    q.set(data[i * stride], data[i * stride + 1], data[i * stride + 2]);
+    const distance = q.distanceTo(camera.position);
+    if (distance >= bestDistance) continue;
+    p.copy(q).project(camera);
+    if (p.z > 1) continue;
+    const sx = (p.x + 1) / 2 * w, sy = (1 - p.y) / 2 * h;
+    const reach = Math.max(0.5 * cellSize * fit / distance, 1.5);
+    if ((sx - x) ** 2 + (sy - y) ** 2 > reach * reach) continue;
+    best = i;
+    bestDistance = distance;
+  }
+  if (best < 0) return null;
+  const hit = new THREE.Vector3(data[best * stride], data[best * stride + 1], data[best * stride + 2]);
+  const depth = parseFloat($('paintDepth').value) || 0;
+  if (depth) hit.add(hit.clone().sub(camera.position).normalize().multiplyScalar(depth));
+  return hit;
+}
+function paintRadius() {
+  const r = parseFloat($('paintRadius').value);
+  return r > 0 ? r : 2 * (state.cloud ? state.cloud.cellSize : 0.01);
+}
+function showPaintCursor(x, y) {
+  if (!$('paintMode').checked || !state.cloud) { paintCursor.style.display = 'none'; return; }
+  const h = renderer.domElement.clientHeight;
+  const fit = (h / 2) / Math.tan(THREE.MathUtils.degToRad(camera.fov / 2));
+  const r = paintRadius() * fit / camera.position.distanceTo(controls.target);
+  Object.assign(paintCursor.style, { display: 'block', left: `${x - r}px`, top: `${y - r}px`, width: `${2 * r}px`, height: `${2 * r}px` });
+}
+function addStrokePoint(x, y) {
+  const hit = pickFront(x, y);
+  if (!hit) return;
+  const last = stroke.points[stroke.points.length - 1];
+  if (last && hit.distanceTo(new THREE.Vector3(...last)) < paintRadius() / 3) return; // spaced a third of the radius apart
+  if (stroke.points.length < 4000) stroke.points.push([hit.x, hit.y, hit.z]);
+}
+async function endStroke() {
+  const done = stroke;
+  stroke = null;
+  controls.enabled = true;
+  if (!done || !done.points.length) { status('nothing under the brush'); return; }
+  const params = { grid: state.grid, points: done.points, radius: paintRadius(), falloff: parseFloat($('paintFalloff').value) || 0,
+    strength: Math.min(Math.max(parseFloat($('paintStrength').value), 0), 1), mode: $('paintBlend').value };
+  if (shownIsColour()) {
+    const hex = $('paintColor').value;
+    params.value = [1, 3, 5].map((i) => Math.pow(parseInt(hex.substr(i, 2), 16) / 255, 2.2) * rampRange()[1]);
+  } else {
+    params.value = parseFloat($('paintValue').value) || 0;
+  }
+  await guarded(async () => refresh(`paint: ${await apply('paint', params)}`));
+}
+container.addEventListener('pointermove', (event) => {
+  const [x, y] = local(event);
+  showPaintCursor(x, y);
+  if (stroke) addStrokePoint(x, y);
+});
+container.addEventListener('pointerleave', () => { paintCursor.style.display = 'none'; });
+
 container.addEventListener('pointerdown', (event) => {
+  if ($('paintMode').checked && !event.shiftKey && points && event.button === 0) {
+    event.stopPropagation();
+    event.preventDefault();
+    container.setPointerCapture(event.pointerId);
+    controls.enabled = false;
+    stroke = { points: [] };
+    addStrokePoint(...local(event));
+    return;
+  }
   if (!event.shiftKey || !points) return;
   event.stopPropagation();
   event.preventDefault();
   brushStart = local(event);
+  container.setPointerCapture(event.pointerId); // released over the panel, the drag still ends here
   Object.assign(brush.style, { display: 'block', left: `${brushStart[0]}px`, top: `${brushStart[1]}px`, width: '0px', height: '0px' });
 }, { capture: true });
 container.addEventListener('pointermove', (event) => {
@@ -321,6 +502,7 @@ container.addEventListener('pointermove', (event) => {
     width: `${Math.abs(x - x0)}px`, height: `${Math.abs(y - y0)}px` });
 }, { capture: true });
 container.addEventListener('pointerup', (event) => {
+  if (stroke) { event.stopPropagation(); endStroke(); return; }
   if (!brushStart) return;
   event.stopPropagation();
   const [x0, y0] = brushStart, [x, y] = local(event);
@@ -354,6 +536,7 @@ function brushBox(x0, y0, x1, y1) {
   ['maxX', 'maxY', 'maxZ'].forEach((id, a) => { $(id).value = (hi[a] + margin).toPrecision(6); });
   $('shape').value = 'box';
   showShapeFields();
+  showOutline();
   status(`brushed ${n} points: the box around them is set; Select to select their voxels`);
 }
 
@@ -398,24 +581,59 @@ function editParams(extra) {
   if (state.selected) params.selection = 'mask';
   return params;
 }
+// The edit panel for the shown grid: colours (vec3) are set, hue-shifted and saturated; numbers
+// (float grids: density, temperature, a weight) set and scaled. Both take an offset.
+const shownIsColour = () => (gridInfo(state.grid)?.channels || 3) === 3;
+function showEditFields() {
+  const colour = shownIsColour();
+  for (const e of document.querySelectorAll('.colourOnly')) e.hidden = !colour;
+  for (const e of document.querySelectorAll('.numberOnly')) e.hidden = colour;
+  $('valLabel').textContent = colour ? 'value x' : 'scale x';
+}
 $('apply').addEventListener('click', () => guarded(async () => {
-  const extra = { hue_shift: parseFloat($('hue').value) || 0, saturation: parseFloat($('sat').value), value: parseFloat($('val').value) };
-  if ($('doSet').checked) {
-    const hex = $('color').value;
-    extra.set = [1, 3, 5].map((i) => Math.pow(parseInt(hex.substr(i, 2), 16) / 255, 2.2) * rampRange()[1]);
+  const extra = { value: parseFloat($('val').value), offset: parseFloat($('offset').value) || 0 };
+  if (shownIsColour()) {
+    extra.hue_shift = parseFloat($('hue').value) || 0;
+    extra.saturation = parseFloat($('sat').value);
+    if ($('doSet').checked) {
+      const hex = $('color').value;
+      extra.set = [1, 3, 5].map((i) => Math.pow(parseInt(hex.substr(i, 2), 16) / 255, 2.2) * rampRange()[1]);
+    }
+  } else if ($('doSetValue').checked) {
+    extra.set = parseFloat($('setValue').value);
   }
   const report = await apply('edit', editParams(extra));
   await refresh(`edit: ${report}`);
 }));
+// Noise breaks up the selection's values: each scaled by 1 ± amount (fractal Perlin noise).
+$('noise').addEventListener('click', () => guarded(async () => {
+  const params = editParams({ mode: 'multiply', offset: 1, amplitude: parseFloat($('noiseAmount').value) || 0,
+    frequency: parseFloat($('noiseFrequency').value) || 8 });
+  await refresh(`noise: ${await apply('noise', params)}`);
+}));
 $('add').addEventListener('click', () => guarded(async () => refresh(`edit: ${await apply('edit', editParams({ add: true }))}`)));
 $('remove').addEventListener('click', () => guarded(async () => refresh(`edit: ${await apply('edit', editParams({ remove: true }))}`)));
-$('undo').addEventListener('click', () => guarded(async () => {
+const undo = () => guarded(async () => {
   const result = await (await call('POST', '/api/undo')).json();
-  if (!result.steps.some((s) => s.op === 'select')) { state.selected = false; $('selected').textContent = ''; }
   await refresh(result.undone ? 'undone' : 'nothing to undo');
-}));
+});
+const redo = () => guarded(async () => {
+  const result = await (await call('POST', '/api/redo')).json();
+  await refresh(result.redone ? 'redone' : 'nothing to redo');
+});
+$('undo').addEventListener('click', undo);
+$('redo').addEventListener('click', redo);
+// Ctrl-Z and Ctrl-Shift-Z (Cmd on a Mac), Ctrl-Y, except while typing in a field.
+window.addEventListener('keydown', (event) => {
+  if (!(event.ctrlKey || event.metaKey) || ['INPUT', 'SELECT', 'TEXTAREA'].includes(event.target.tagName)) return;
+  const key = event.key.toLowerCase();
+  if (key === 'z' && !event.shiftKey) { event.preventDefault(); undo(); }
+  if ((key === 'z' && event.shiftKey) || key === 'y') { event.preventDefault(); redo(); }
+});
+$('exportMode').addEventListener('change', showExportGrids);
 $('export').addEventListener('click', () => guarded(async () => {
   const body = { path: $('exportPath').value, mode: $('exportMode').value, grid: state.grid, smooth: parseInt($('smooth').value) || 0 };
+  if (body.mode === 'whole') body.grids = [...$('exportGrids').querySelectorAll('input')].filter((i) => i.checked).map((i) => i.value);
   const result = await (await call('POST', '/api/export', body)).json();
   status(`wrote ${result.written}`);
   state.lastExport = result.written;
@@ -424,22 +642,94 @@ $('export').addEventListener('click', () => guarded(async () => {
 $('render').addEventListener('click', () => guarded(async () => {
   status('rendering…');
   const body = { width: parseInt($('renderWidth').value) || 480, height: parseInt($('renderHeight').value) || 360 };
-  const result = await (await call('POST', '/api/render', body)).json();
+  // The server renders on the request's own thread; meanwhile its progress, and the page stays live.
+  const poll = setInterval(async () => {
+    try {
+      const p = await (await call('GET', '/api/progress')).json();
+      if (p.rendering) status(`rendering: ${p.step} ${p.percent}% (${p.seconds.toFixed(1)} s)`);
+    } catch (e) { /* the next poll */ }
+  }, 300);
+  let result;
+  try { result = await (await call('POST', '/api/render', body)).json(); } finally { clearInterval(poll); }
   $('renderImage').src = `/api/image?token=${encodeURIComponent(token)}&t=${Date.now()}`;
   $('renderReport').textContent = `${result.ran.join(' + ')} in ${result.seconds.toFixed(1)} s`;
   status(`rendered: ran ${result.ran.join(', ')}`);
   state.rendered = result;
 }));
 
+// --- framing, the selection's outline and the slice plane ----------------------------------------
+function frameAll() {
+  const g = gridInfo(state.grid);
+  if (g && g.world_min) fit(g.world_min, g.world_max);
+}
+function frameSelected() {
+  const shape = $('shape').value;
+  if (shape === 'box') {
+    const v = numbers(['minX', 'minY', 'minZ', 'maxX', 'maxY', 'maxZ']);
+    if (v.every(isFinite)) { fit(v.slice(0, 3), v.slice(3)); return; }
+  } else if (shape === 'sphere') {
+    const c = numbers(['cX', 'cY', 'cZ']), r = parseFloat($('radius').value);
+    if (c.every(isFinite) && r > 0) { fit(c.map((x) => x - r), c.map((x) => x + r)); return; }
+  }
+  frameAll();
+}
+let outline = null, slicePlane = null;
+function showOutline() {
+  if (outline) { scene.remove(outline); outline.geometry.dispose(); outline = null; }
+  const shape = $('shape').value;
+  if (shape === 'box') {
+    const v = numbers(['minX', 'minY', 'minZ', 'maxX', 'maxY', 'maxZ']);
+    if (!v.every(isFinite)) return;
+    outline = new THREE.Box3Helper(new THREE.Box3(new THREE.Vector3(...v.slice(0, 3)), new THREE.Vector3(...v.slice(3))), 0xffdd44);
+  } else if (shape === 'sphere') {
+    const c = numbers(['cX', 'cY', 'cZ']), r = parseFloat($('radius').value);
+    if (!c.every(isFinite) || !(r > 0)) return;
+    outline = new THREE.LineSegments(new THREE.WireframeGeometry(new THREE.SphereGeometry(r, 16, 8)), new THREE.LineBasicMaterial({ color: 0xffdd44 }));
+    outline.position.set(...c);
+  }
+  if (outline) scene.add(outline);
+}
+function showSlicePlane() {
+  if (slicePlane) { scene.remove(slicePlane); slicePlane.geometry.dispose(); slicePlane = null; }
+  const g = gridInfo(state.grid);
+  if (!$('showSlicePlane').checked || !g || !g.world_min) return;
+  const axis = parseInt($('sliceAxis').value), index = parseInt($('sliceIndex').value);
+  const lo = g.world_min, hi = g.world_max;
+  // World bounds are the index bounds' voxel centres: linear between them.
+  const span = g.index_max[axis] - g.index_min[axis];
+  const position = span > 0 ? lo[axis] + (index - g.index_min[axis]) / span * (hi[axis] - lo[axis]) : lo[axis];
+  const size = [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]];
+  const u = axis === 0 ? 1 : 0, v = axis === 2 ? 1 : 2;
+  const geometry = new THREE.PlaneGeometry(size[u], size[v]);
+  slicePlane = new THREE.Mesh(geometry, new THREE.MeshBasicMaterial({ color: 0x66aaff, transparent: true, opacity: 0.15,
+    side: THREE.DoubleSide, depthWrite: false }));
+  const centre = [(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2];
+  centre[axis] = position;
+  slicePlane.position.set(...centre);
+  if (axis === 0) slicePlane.rotation.y = Math.PI / 2;
+  if (axis === 1) slicePlane.rotation.x = Math.PI / 2;
+  scene.add(slicePlane);
+}
+$('frameAll').addEventListener('click', frameAll);
+$('frameSelected').addEventListener('click', frameSelected);
+$('upAxis').addEventListener('change', frameAll);
+$('showSlicePlane').addEventListener('change', showSlicePlane);
+for (const id of ['minX', 'minY', 'minZ', 'maxX', 'maxY', 'maxZ', 'cX', 'cY', 'cZ', 'radius']) $(id).addEventListener('change', showOutline);
+window.addEventListener('keydown', (event) => {
+  if (event.ctrlKey || event.metaKey || event.altKey || ['INPUT', 'SELECT', 'TEXTAREA'].includes(event.target.tagName)) return;
+  if (event.key === 'Home') { event.preventDefault(); frameAll(); }
+  if (event.key === 'f' || event.key === 'F') { event.preventDefault(); frameSelected(); }
+});
+
 // --- wiring --------------------------------------------------------------------------------------
-$('grid').addEventListener('change', () => guarded(async () => { state.grid = $('grid').value; await loadPoints(false); }));
+$('grid').addEventListener('change', () => guarded(async () => { state.grid = $('grid').value; showEditFields(); await loadPoints(false); }));
 $('budget').addEventListener('change', () => guarded(() => loadPoints(false)));
 for (const id of ['rampMin', 'rampMax']) $(id).addEventListener('change', () => { colourPoints(); guarded(loadSlice); });
 $('pointScale').addEventListener('change', updatePointSize);
 $('showMesh').addEventListener('change', () => guarded(loadMesh));
 $('sliceAxis').addEventListener('change', () => { const g = gridInfo(state.grid); if (g && g.index_min) setupSlice(g); });
-$('sliceIndex').addEventListener('input', () => guarded(loadSlice));
-$('shape').addEventListener('change', () => { showShapeFields(); colourPoints(); });
+$('sliceIndex').addEventListener('input', () => { showSlicePlane(); guarded(loadSlice); });
+$('shape').addEventListener('change', () => { showShapeFields(); showOutline(); colourPoints(); });
 
 guarded(async () => {
   await loadInfo();
