@@ -92,6 +92,38 @@ def check_layout(page):
         sys.exit(f"view_test: at 1280x800 these controls are not wholly in the window: {outside}")
 
 
+def drawn_pixels(page):
+    """Pixels of the 3D view other than its background (0x1e1f22)."""
+    return page.evaluate("""() => {
+        const gl = document.querySelector('#view canvas');
+        const c = document.createElement('canvas');
+        c.width = gl.width; c.height = gl.height;
+        const ctx = c.getContext('2d');
+        ctx.drawImage(gl, 0, 0);
+        const d = ctx.getImageData(0, 0, c.width, c.height).data;
+        let n = 0;
+        for (let i = 0; i < d.length; i += 4) if (Math.abs(d[i] - 30) + Math.abs(d[i + 1] - 31) + Math.abs(d[i + 2] - 34) > 30) n++;
+        return n;
+    }""")
+
+
+def volume_view(page):
+    """The grid ray-marched as a volume (a 3D texture of its cells) instead of points, a legend
+    beside it; then points again."""
+    page.select_option("#viewMode", "volume")
+    wait_status(page, "colour: a volume of")
+    page.wait_for_timeout(1500)
+    drawn = drawn_pixels(page)
+    if drawn < 5000:
+        sys.exit(f"view_test: the ray-marched volume drew {drawn} pixels")
+    if not page.is_visible("#legend"):
+        sys.exit("view_test: no legend beside the volume")
+    fps = page.evaluate("window.vxfView.fps")
+    print(f"view_test: the volume drawn ({drawn} pixels, {fps:.0f} frames per second)")
+    page.select_option("#viewMode", "points")
+    page.wait_for_function("window.vxfView.ready")
+
+
 def history(page):
     """The history panel: a step switched off is the pipeline without it, on again with it; Ctrl-Z
     undoes the last step and Ctrl-Shift-Z redoes it."""
@@ -228,6 +260,7 @@ def main():
             if page.input_value("#minX") == before:
                 sys.exit(f"view_test: brushing set no box ({page.text_content('#status')})")
             check_layout(page)
+            volume_view(page)
             # A brush released over the panel ends there (it stuck to the mouse).
             page.keyboard.down("Shift")
             page.mouse.move(cx - 60, cy - 40)

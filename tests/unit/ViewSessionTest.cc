@@ -97,6 +97,42 @@ TEST_CASE("view: points per voxel within the budget, cells of 2, 3, 4, 6… voxe
     CHECK(session.describe()["default_grid"] == "direct"); // the light's result before the density
 }
 
+TEST_CASE("view: a volume brick holds each cell's mean and coverage, the smallest cells within the budget", "[view]")
+{
+    test::TempDir dir;
+    writeSphere(dir.path("s.vdb"));
+    const view::ViewSession session(dir.path("s.vdb"));
+    const auto density = readVoxelSet(dir.path("s.vdb")).get<openvdb::FloatGrid>("density");
+    const openvdb::CoordBBox bounds = density->evalActiveVoxelBoundingBox();
+    // A cell a voxel where the budget holds the whole box: each active voxel's value, coverage 1.
+    const view::VolumeBrick fine = session.brick("density", std::size_t(bounds.volume()));
+    CHECK(fine.cellVoxels == 1);
+    CHECK(fine.dims[0] == bounds.dim().x());
+    CHECK(fine.channels == 1);
+    double covered = 0.0;
+    for (std::size_t i = 0; i < fine.values.size(); i += 2) {
+        REQUIRE((fine.values[i + 1] == 0.0f || fine.values[i + 1] == 1.0f));
+        if (fine.values[i + 1] > 0.0f) REQUIRE(fine.values[i] == 1.0f);
+        covered += fine.values[i + 1];
+    }
+    CHECK(covered == double(density->activeVoxelCount()));
+    // Coarser within a budget: cells of k voxels, their coverage summing to the active voxels.
+    const view::VolumeBrick coarse = session.brick("density", 2000);
+    CHECK(coarse.cellVoxels > 1);
+    CHECK(std::size_t(coarse.dims[0]) * coarse.dims[1] * coarse.dims[2] <= 2000);
+    double voxels = 0.0;
+    for (std::size_t i = 0; i < coarse.values.size(); i += 2) voxels += coarse.values[i + 1] * std::pow(coarse.cellVoxels, 3);
+    CHECK(voxels == Approx(double(density->activeVoxelCount())).epsilon(1e-6));
+    // The brick's world box: the cells' outer faces, the bounds' first voxel's low face at its corner.
+    const openvdb::Vec3d corner = density->transform().indexToWorld(bounds.min().asVec3d() - openvdb::Vec3d(0.5));
+    CHECK((coarse.worldMin - corner).length() < 1e-9);
+    // A colour grid: three means a cell, then the coverage.
+    const view::VolumeBrick colour = session.brick("direct", 5000);
+    CHECK(colour.channels == 3);
+    CHECK(colour.values.size() == std::size_t(colour.dims[0]) * colour.dims[1] * colour.dims[2] * 4);
+    CHECK_THROWS_WITH(session.brick("nope", 10), Catch::Contains("no grid 'nope'"));
+}
+
 TEST_CASE("view: a slice holds the active voxels' values and NaN elsewhere", "[view]")
 {
     test::TempDir dir;

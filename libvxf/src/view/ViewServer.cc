@@ -38,6 +38,8 @@ constexpr std::size_t kWorkerThreads = 96;
 constexpr std::size_t kTokenBytes = 16;
 /// The most points one request may ask for.
 constexpr std::size_t kMaxPointBudget = 4'000'000;
+/// The largest brick /api/volume sends (cells): 256³, 256 MiB of a Vec3 grid's floats.
+constexpr long long kMaxVolumeCells = 256LL * 256 * 256;
 
 // Content types that cpp-httplib does not compress on the fly: with Brotli (Debian builds it so)
 // a 670 KB script took 1.9 s to send over the loopback, where it needs 2 ms as it is.
@@ -342,6 +344,23 @@ struct ViewServer::Impl
             res.set_header("X-Vxf-Min", fmt::format("{}", cloud.minValue));
             res.set_header("X-Vxf-Max", fmt::format("{}", cloud.maxValue));
             res.set_header("X-Vxf-Active", std::to_string(cloud.activeVoxels));
+            res.set_content(body, "application/octet-stream");
+        });
+        server.Get("/api/volume", [&s](const httplib::Request& req, httplib::Response& res) {
+            const long long cells = integerParam(req, "cells", 262144);
+            if (cells < 1 || cells > kMaxVolumeCells) {
+                throw UsageError(fmt::format("query parameter 'cells': {} is not in [1, {}]", cells, kMaxVolumeCells));
+            }
+            const VolumeBrick brick = s.brick(param(req, "grid"), std::size_t(cells));
+            std::string body;
+            append(body, brick.values.data(), brick.values.size());
+            res.set_header("X-Vxf-Dims", fmt::format("{},{},{}", brick.dims[0], brick.dims[1], brick.dims[2]));
+            res.set_header("X-Vxf-Channels", std::to_string(brick.channels));
+            res.set_header("X-Vxf-Cell-Voxels", std::to_string(brick.cellVoxels));
+            res.set_header("X-Vxf-World-Min", fmt::format("{},{},{}", brick.worldMin[0], brick.worldMin[1], brick.worldMin[2]));
+            res.set_header("X-Vxf-World-Max", fmt::format("{},{},{}", brick.worldMax[0], brick.worldMax[1], brick.worldMax[2]));
+            res.set_header("X-Vxf-Min", fmt::format("{}", brick.minValue));
+            res.set_header("X-Vxf-Max", fmt::format("{}", brick.maxValue));
             res.set_content(body, "application/octet-stream");
         });
         server.Get("/api/slice", [&s](const httplib::Request& req, httplib::Response& res) {

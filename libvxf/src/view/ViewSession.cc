@@ -262,6 +262,80 @@ PointCloud ViewSession::points(const std::string& name, std::size_t budget) cons
     return cloud;
 }
 
+VolumeBrick ViewSession::brick(const std::string& name, std::size_t maxCells) const
+{
+    std::lock_guard<std::mutex> lock(mMutex);
+    const auto grid = gridNamed(name);
+    VolumeBrick brick;
+    brick.channels = channelsOf(*grid);
+    if (brick.channels == 0) withTypedGrid(*grid, name, [](const auto&) {}); // the error
+    const openvdb::CoordBBox bounds = gridStats(*grid).activeBBox;
+    if (bounds.empty()) return brick;
+    maxCells = std::max<std::size_t>(maxCells, 1);
+    const openvdb::Coord size = bounds.dim();
+    const auto cellsOf = [&](int k) {
+        return std::size_t((size.x() + k - 1) / k) * std::size_t((size.y() + k - 1) / k) * std::size_t((size.z() + k - 1) / k);
+    };
+    int k = std::max(1, int(std::cbrt(double(size.x()) * size.y() * size.z() / double(maxCells))));
+    while (k > 1 && cellsOf(k - 1) <= maxCells) --k;
+    while (cellsOf(k) > maxCells) ++k;
+    brick.cellVoxels = k;
+    for (int a = 0; a < 3; ++a) brick.dims[a] = (size[a] + k - 1) / k;
+    const std::size_t cells = cellsOf(k), stride = std::size_t(brick.channels) + 1;
+    std::vector<double> sums(cells * stride, 0.0);
+    const openvdb::Coord corner = bounds.min();
+    const auto cellIndex = [&](int x, int y, int z) {
+        return (std::size_t(z) * std::size_t(brick.dims[1]) + std::size_t(y)) * std::size_t(brick.dims[0]) + std::size_t(x);
+    };
+    forEachActive(*grid, name, [&](const openvdb::CoordBBox& box, const float* v, int channels) {
+        for (int c = 0; c < channels; ++c) {
+            if (!std::isfinite(v[c])) return true; // a NaN or inf voxel is not drawn
+        }
+        const openvdb::Coord a = box.min() - corner, b = box.max() - corner;
+        for (int z = a.z() / k; z <= b.z() / k; ++z) {
+            for (int y = a.y() / k; y <= b.y() / k; ++y) {
+                for (int x = a.x() / k; x <= b.x() / k; ++x) {
+                    const openvdb::Coord first = corner.offsetBy(x * k, y * k, z * k);
+                    const openvdb::CoordBBox part(
+                        openvdb::Coord::maxComponent(box.min(), first), openvdb::Coord::minComponent(box.max(), first.offsetBy(k - 1)));
+                    const double w = double(part.volume());
+                    double* cell = &sums[cellIndex(x, y, z) * stride];
+                    for (int c = 0; c < channels; ++c) cell[c] += w * v[c];
+                    cell[channels] += w;
+                }
+            }
+        }
+        return true;
+    });
+    brick.values.resize(cells * stride);
+    double lo = std::numeric_limits<double>::max(), hi = -lo;
+    const double perCell = double(k) * k * k;
+    for (std::size_t i = 0; i < cells; ++i) {
+        const double* cell = &sums[i * stride];
+        const double active = cell[brick.channels];
+        for (int c = 0; c < brick.channels; ++c) {
+            const double v = active > 0.0 ? cell[c] / active : 0.0;
+            brick.values[i * stride + std::size_t(c)] = float(v);
+            if (active > 0.0) {
+                lo = std::min(lo, v);
+                hi = std::max(hi, v);
+            }
+        }
+        brick.values[i * stride + std::size_t(brick.channels)] = float(active / perCell);
+    }
+    if (lo <= hi) {
+        brick.minValue = lo;
+        brick.maxValue = hi;
+    }
+    const openvdb::math::Transform& xform = grid->transform();
+    const openvdb::Vec3d low = xform.indexToWorld(corner.asVec3d() - openvdb::Vec3d(0.5)),
+                         high = xform.indexToWorld(
+                             corner.asVec3d() + openvdb::Vec3d(brick.dims[0], brick.dims[1], brick.dims[2]) * k - openvdb::Vec3d(0.5));
+    brick.worldMin = openvdb::Vec3d(std::min(low[0], high[0]), std::min(low[1], high[1]), std::min(low[2], high[2]));
+    brick.worldMax = openvdb::Vec3d(std::max(low[0], high[0]), std::max(low[1], high[1]), std::max(low[2], high[2]));
+    return brick;
+}
+
 Slice ViewSession::slice(const std::string& name, int axis, int index) const
 {
     std::lock_guard<std::mutex> lock(mMutex);

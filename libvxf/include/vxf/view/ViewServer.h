@@ -15,6 +15,9 @@ namespace vxf::view {
 /// - GET /api/points?grid=G&budget=N: binary little-endian float32, per point x y z then 1 or 3
 ///   values; headers X-Vxf-Count, X-Vxf-Channels, X-Vxf-Cell-Voxels, X-Vxf-Cell-Size,
 ///   X-Vxf-Min, X-Vxf-Max, X-Vxf-Active
+/// - GET /api/volume?grid=G&cells=N: ViewSession::brick, binary float32 per cell its values then
+///   its coverage; headers X-Vxf-Dims, X-Vxf-Channels, X-Vxf-Cell-Voxels, X-Vxf-World-Min,
+///   X-Vxf-World-Max, X-Vxf-Min, X-Vxf-Max
 /// - GET /api/slice?grid=G&axis=A&index=I: JSON axis, index, origin, width, height, channels,
 ///   values (null where inactive)
 /// - GET /api/mesh?triangles=N: binary uint32 vertex count, uint32 triangle count, float32

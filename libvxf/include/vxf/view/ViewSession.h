@@ -39,6 +39,21 @@ struct Slice
     std::vector<float> values; ///< channels per cell
 };
 
+/// A grid as a dense brick of cells for the page's ray-marched view: cells of `cellVoxels`
+/// voxels a side over its active bounds, each holding the mean of its active voxels' values and
+/// the share of its voxels that are active (tiles counted voxel by voxel).
+struct VolumeBrick
+{
+    int cellVoxels = 1;
+    int dims[3] = {0, 0, 0}; ///< cells along x, y, z
+    int channels = 1; ///< 1 (float grids) or 3 (Vec3 grids)
+    /// World corners of the brick (its first cell's low corner, its last cell's high one): the
+    /// grid's index box through its transform (a rotated transform is drawn axis-aligned).
+    openvdb::Vec3d worldMin{0.0}, worldMax{0.0};
+    std::vector<float> values; ///< channels + 1 (coverage) per cell, x fastest, then y, then z
+    double minValue = 0.0, maxValue = 0.0; ///< over the active cells' channels (0, 0 when none)
+};
+
 /// A triangle mesh of the `surface` level set (OpenVDB's volumeToMesh), world space.
 struct SurfaceMesh
 {
@@ -87,6 +102,10 @@ public:
     /// Points for @a grid (float or Vec3 of any precision; vxf::UsageError for other types or an
     /// unknown name) within @a budget points (≥ 1).
     PointCloud points(const std::string& grid, std::size_t budget) const;
+
+    /// @a grid (float or Vec3) as a brick of at most @a maxCells cells (≥ 1), the smallest
+    /// cells that fit; vxf::UsageError as points() gives.
+    VolumeBrick brick(const std::string& grid, std::size_t maxCells) const;
 
     /// The slice of @a grid across @a axis (0, 1, 2) at index @a index (clamped into its bounds).
     Slice slice(const std::string& grid, int axis, int index) const;

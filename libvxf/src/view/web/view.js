@@ -45,6 +45,7 @@ const scene = new THREE.Scene();
 scene.background = new THREE.Color(0x1e1f22);
 const camera = new THREE.PerspectiveCamera(40, 1, 0.001, 1000);
 const controls = new OrbitControls(camera, renderer.domElement);
+state.camera = camera; // for the browser tests
 scene.add(new THREE.AmbientLight(0xffffff, 0.6));
 const sun = new THREE.DirectionalLight(0xffffff, 1.2);
 scene.add(sun);
@@ -285,6 +286,7 @@ async function loadPoints(fitCamera) {
   scene.add(points);
   updatePointSize();
   colourPoints();
+  showLegend();
   const g = gridInfo(state.grid);
   $('gridInfo').textContent = `${count.toLocaleString()} points for ${state.cloud.active.toLocaleString()} active voxels` +
     (state.cloud.cellVoxels > 1 ? ` (cells of ${state.cloud.cellVoxels}³ voxels)` : ' (one per voxel)') +
@@ -557,6 +559,8 @@ async function apply(op, params) {
 async function refresh(message) {
   await loadInfo();
   await loadPoints(false);
+  if ($('viewMode').value === 'volume') await loadVolume();
+  if (points) points.visible = $('viewMode').value !== 'volume';
   status(message);
 }
 
@@ -657,6 +661,142 @@ $('render').addEventListener('click', () => guarded(async () => {
   state.rendered = result;
 }));
 
+// --- the volume: a brick of cells ray-marched in the page ------------------------------------------
+// The server sends each cell's mean value and its coverage (the share of its voxels active);
+// the page makes them an RGBA 3D texture — the ramp's colour (a float grid) or the colour itself
+// (a vec3 grid), and as alpha the coverage times the value's place on the ramp — and marches it
+// front to back, a step a cell, each step's opacity 1 − exp(−opacity·alpha·step).
+const volumeVertex = `
+out vec3 vLocal;
+void main() {
+  vLocal = position + 0.5;
+  gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0);
+}`;
+const volumeFragment = `
+precision highp float;
+precision highp sampler3D;
+uniform sampler3D volume;
+uniform vec3 eye;       // the camera in the box's own [0, 1]³
+uniform vec3 cells;     // the brick's cells along each axis
+uniform float opacity;  // per cell at alpha 1
+in vec3 vLocal;
+out vec4 outColor;
+void main() {
+  vec3 d = normalize(vLocal - eye);
+  vec3 inv = 1.0 / d;
+  vec3 t0 = (vec3(0.0) - eye) * inv, t1 = (vec3(1.0) - eye) * inv;
+  vec3 lo = min(t0, t1), hi = max(t0, t1);
+  float near = max(max(max(lo.x, lo.y), lo.z), 0.0), far = min(min(hi.x, hi.y), hi.z);
+  if (near >= far) discard;
+  float step = 1.0 / max(max(cells.x, cells.y), cells.z);
+  float stepCells = length(d * cells) * step; // cells crossed per step
+  vec4 sum = vec4(0.0);
+  for (int i = 0; i < 1024; i++) {
+    float t = near + (float(i) + 0.5) * step;
+    if (t > far || sum.a > 0.99) break;
+    vec4 v = texture(volume, eye + d * t);
+    float a = 1.0 - exp(-opacity * v.a * stepCells);
+    sum.rgb += (1.0 - sum.a) * a * v.rgb;
+    sum.a += (1.0 - sum.a) * a;
+  }
+  outColor = sum;
+}`;
+let volume = null;
+state.volume = null;
+async function loadVolume() {
+  if (!state.grid) return;
+  const started = performance.now();
+  const cells = Math.max(4096, parseInt($('cells').value) || 262144);
+  const response = await call('GET', `/api/volume?grid=${encodeURIComponent(state.grid)}&cells=${cells}`);
+  const triple = (name) => response.headers.get(name).split(',').map(parseFloat);
+  const data = new Float32Array(await response.arrayBuffer());
+  state.volume = { data, dims: triple('X-Vxf-Dims'), channels: parseInt(response.headers.get('X-Vxf-Channels')),
+    lo: triple('X-Vxf-World-Min'), hi: triple('X-Vxf-World-Max'), min: parseFloat(response.headers.get('X-Vxf-Min')),
+    max: parseFloat(response.headers.get('X-Vxf-Max')), cellVoxels: parseInt(response.headers.get('X-Vxf-Cell-Voxels')) };
+  if ($('rampMax').value === '') {
+    $('rampMin').value = state.volume.channels === 1 ? state.volume.min.toPrecision(4) : 0;
+    $('rampMax').value = state.volume.max.toPrecision(4);
+  }
+  buildVolume();
+  const [nx, ny, nz] = state.volume.dims;
+  status(`${state.grid}: a volume of ${nx}x${ny}x${nz} cells of ${state.volume.cellVoxels}³ voxels in ` +
+    `${((performance.now() - started) / 1000).toFixed(2)} s`);
+  state.ready = true;
+}
+function volumeTexels() {
+  const { data, dims, channels } = state.volume;
+  const count = dims[0] * dims[1] * dims[2], stride = channels + 1;
+  const texels = new Uint8Array(4 * count);
+  const [lo, hi] = rampRange();
+  const rgb = [0, 0, 0];
+  for (let i = 0; i < count; i++) {
+    const coverage = data[i * stride + channels];
+    if (!(coverage > 0)) continue;
+    let alpha;
+    if (channels === 1) {
+      const t = Math.min(Math.max((data[i * stride] - lo) / (hi - lo), 0), 1);
+      ramp(t, rgb, 0);
+      alpha = coverage * t;
+    } else {
+      for (let c = 0; c < 3; c++) rgb[c] = Math.pow(Math.min(Math.max(data[i * stride + c], 0) / hi, 1), 1 / 2.2);
+      alpha = coverage * Math.max(rgb[0], rgb[1], rgb[2]);
+    }
+    for (let c = 0; c < 3; c++) texels[4 * i + c] = Math.round(255 * rgb[c]);
+    texels[4 * i + 3] = Math.round(255 * alpha);
+  }
+  return texels;
+}
+function buildVolume() {
+  if (volume) { scene.remove(volume); volume.geometry.dispose(); volume.material.uniforms.volume.value.dispose(); volume.material.dispose(); volume = null; }
+  if (!state.volume || $('viewMode').value !== 'volume') { showLegend(); return; }
+  const { dims, lo, hi } = state.volume;
+  const texture = new THREE.Data3DTexture(volumeTexels(), dims[0], dims[1], dims[2]);
+  texture.format = THREE.RGBAFormat;
+  texture.type = THREE.UnsignedByteType;
+  texture.minFilter = texture.magFilter = THREE.LinearFilter;
+  texture.unpackAlignment = 1;
+  texture.needsUpdate = true;
+  const material = new THREE.ShaderMaterial({
+    glslVersion: THREE.GLSL3, vertexShader: volumeVertex, fragmentShader: volumeFragment, side: THREE.BackSide,
+    transparent: true, premultipliedAlpha: true, depthWrite: false,
+    blending: THREE.CustomBlending, blendSrc: THREE.OneFactor, blendDst: THREE.OneMinusSrcAlphaFactor,
+    uniforms: { volume: { value: texture }, eye: { value: new THREE.Vector3() }, cells: { value: new THREE.Vector3(...dims) },
+      opacity: { value: parseFloat($('opacity').value) || 0.3 } } });
+  volume = new THREE.Mesh(new THREE.BoxGeometry(1, 1, 1), material);
+  volume.scale.set(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
+  volume.position.set((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2);
+  volume.onBeforeRender = () => { // the eye in the box's [0, 1]³
+    volume.updateMatrixWorld();
+    material.uniforms.eye.value.copy(camera.position).applyMatrix4(new THREE.Matrix4().copy(volume.matrixWorld).invert())
+      .addScalar(0.5);
+  };
+  scene.add(volume);
+  showLegend();
+}
+function showLegend() {
+  const legend = $('legend');
+  const shown = $('viewMode').value === 'volume' || (state.cloud && state.cloud.channels === 1);
+  legend.style.display = shown && state.grid ? 'block' : 'none';
+  const channels = $('viewMode').value === 'volume' ? state.volume?.channels : state.cloud?.channels;
+  const [lo, hi] = rampRange();
+  $('legendBar').style.background = channels === 3 ? 'linear-gradient(to right, #000, #fff)'
+    : `linear-gradient(to right, ${RAMP.map((c) => `rgb(${c.map((x) => Math.round(255 * x)).join(',')})`).join(', ')})`;
+  $('legendLo').textContent = channels === 3 ? '0' : lo.toPrecision(3);
+  $('legendHi').textContent = hi.toPrecision(3);
+  $('legendName').textContent = state.grid || '';
+}
+async function showGrid(fitCamera) {
+  const asVolume = $('viewMode').value === 'volume';
+  if (points) points.visible = !asVolume;
+  if (asVolume) await loadVolume(); else buildVolume();
+  if (!asVolume || !state.cloud || fitCamera) await loadPoints(fitCamera);
+  if (points) points.visible = !asVolume;
+  showLegend();
+}
+$('viewMode').addEventListener('change', () => guarded(() => showGrid(false)));
+$('opacity').addEventListener('change', () => { if (volume) volume.material.uniforms.opacity.value = parseFloat($('opacity').value) || 0; });
+$('cells').addEventListener('change', () => guarded(() => showGrid(false)));
+
 // --- framing, the selection's outline and the slice plane ----------------------------------------
 function frameAll() {
   const g = gridInfo(state.grid);
@@ -722,9 +862,17 @@ window.addEventListener('keydown', (event) => {
 });
 
 // --- wiring --------------------------------------------------------------------------------------
-$('grid').addEventListener('change', () => guarded(async () => { state.grid = $('grid').value; showEditFields(); await loadPoints(false); }));
+$('grid').addEventListener('change', () => guarded(async () => {
+  state.grid = $('grid').value;
+  showEditFields();
+  $('rampMax').value = ''; // the new grid's range
+  await loadPoints(false);
+  if ($('viewMode').value === 'volume') await loadVolume();
+  if (points) points.visible = $('viewMode').value !== 'volume';
+  showLegend();
+}));
 $('budget').addEventListener('change', () => guarded(() => loadPoints(false)));
-for (const id of ['rampMin', 'rampMax']) $(id).addEventListener('change', () => { colourPoints(); guarded(loadSlice); });
+for (const id of ['rampMin', 'rampMax']) $(id).addEventListener('change', () => { colourPoints(); buildVolume(); guarded(loadSlice); });
 $('pointScale').addEventListener('change', updatePointSize);
 $('showMesh').addEventListener('change', () => guarded(loadMesh));
 $('sliceAxis').addEventListener('change', () => { const g = gridInfo(state.grid); if (g && g.index_min) setupSlice(g); });
