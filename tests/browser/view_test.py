@@ -232,18 +232,7 @@ def main():
             opened = time.perf_counter() - started
             page.wait_for_timeout(2500)
             fps = page.evaluate("window.vxfView.fps")
-            # Points drawn: pixels of the 3D view other than its background (0x1e1f22).
-            drawn = page.evaluate("""() => {
-                const gl = document.querySelector('#view canvas');
-                const c = document.createElement('canvas');
-                c.width = gl.width; c.height = gl.height;
-                const ctx = c.getContext('2d');
-                ctx.drawImage(gl, 0, 0);
-                const d = ctx.getImageData(0, 0, c.width, c.height).data;
-                let n = 0;
-                for (let i = 0; i < d.length; i += 4) if (Math.abs(d[i] - 30) + Math.abs(d[i + 1] - 31) + Math.abs(d[i + 2] - 34) > 30) n++;
-                return n;
-            }""")
+            drawn = drawn_pixels(page)  # the points
             if drawn < 5000:
                 sys.exit(f"view_test: only {drawn} pixels of the view differ from its background: no points drawn")
 
