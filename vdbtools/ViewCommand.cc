@@ -23,7 +23,8 @@ public:
     explicit ViewCommand(CLI::App& parent)
     {
         mApp = parent.add_subcommand("view",
-            "The voxel editor in a browser: any grid of a .vdb as points (level of detail on the server), the surface as a mesh, "
+            "The voxel editor in a browser: any grid of a .vdb as points (level of detail on the server) or ray-marched as a "
+            "volume, the surface as a mesh, "
             "slices with a value readout; select by box, sphere, value range or brushing, then set a colour or a value, shift "
             "hue, scale saturation and value, add noise, add or remove voxels, or paint with a brush on the first visible voxels; "
             "a history of steps to switch off, move or remove, undo and redo; export the whole set (the grids ticked), the "
