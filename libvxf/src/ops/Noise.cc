@@ -7,7 +7,6 @@
 #include <array>
 #include <cmath>
 #include <numeric>
-#include <optional>
 #include <random>
 
 namespace vxf::ops {
@@ -82,22 +81,28 @@ double applied(NoiseMode mode, double v, double n)
     return v;
 }
 
-/// Visit every active voxel of @a grid (tiles voxelized first), in parallel over leaves.
+/// Set every active voxel of @a grid to fn(world centre, value): those @a selection holds (one by
+/// one: a tile splits only where it is selected), or all of them (tiles voxelized, in parallel
+/// over leaves).
 template <typename GridT, typename Fn>
 void forActiveVoxels(GridT& grid, const openvdb::BoolGrid* selection, const Fn& fn)
 {
-    if (selection && selection->transform() != grid.transform()) {
-        throw UsageError(fmt::format("noise: the selection does not share grid '{}''s transform", grid.getName()));
+    if (selection) {
+        if (selection->transform() != grid.transform()) {
+            throw UsageError(fmt::format("noise: the selection does not share grid '{}''s transform", grid.getName()));
+        }
+        auto values = grid.getAccessor();
+        for (auto it = selection->cbeginValueOn(); it; ++it) {
+            for (auto c = it.getBoundingBox().begin(); c; ++c) {
+                if (values.isValueOn(*c)) values.setValue(*c, fn(grid.transform().indexToWorld(*c), values.getValue(*c)));
+            }
+        }
+        return;
     }
     grid.tree().voxelizeActiveTiles();
     openvdb::tree::LeafManager<typename GridT::TreeType> leaves(grid.tree());
     leaves.foreach ([&](typename GridT::TreeType::LeafNodeType& leaf, std::size_t) {
-        std::optional<openvdb::BoolGrid::ConstAccessor> selected;
-        if (selection) selected.emplace(selection->getConstAccessor());
-        for (auto it = leaf.beginValueOn(); it; ++it) {
-            if (selected && !selected->isValueOn(it.getCoord())) continue;
-            it.setValue(fn(grid.transform().indexToWorld(it.getCoord()), *it));
-        }
+        for (auto it = leaf.beginValueOn(); it; ++it) it.setValue(fn(grid.transform().indexToWorld(it.getCoord()), *it));
     });
 }
 

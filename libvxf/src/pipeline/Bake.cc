@@ -40,8 +40,23 @@ json bakedLight(const Light& l)
         {"baked", l.type == Light::Type::Volume}};
 }
 
+/// What a renderer does with the bake, as the manifest says it.
+const char* bakeNote(BakedScattering scattering, double g)
+{
+    switch (scattering) {
+    case BakedScattering::All:
+        return "the emission is all of vxf's scattered light: render it over a medium that only absorbs (sigma_a + sigma_s)";
+    case BakedScattering::Multiple:
+        return g == 0.0 ? "the emission is vxf's multiple scattering: the renderer's single scattering plus it is vxf's image"
+                        : "the emission is the isotropic part of the multiple scattering vxf solved in the reduced medium (an "
+                          "approximation): add the renderer's single scattering";
+    case BakedScattering::None: return "the emission is the volumes' own: the renderer scatters all the light";
+    }
+    return "";
+}
+
 /// The scene a renderer needs around the baked volume: lights, camera, render settings, opaque objects.
-json manifestOf(const Scene& scene, const Material& material, double actualG)
+json manifestOf(const Scene& scene, const Material& material, double actualG, BakedScattering scattering)
 {
     json lights = json::array();
     for (const Light& l : scene.lights) lights.push_back(bakedLight(l));
@@ -57,10 +72,7 @@ json manifestOf(const Scene& scene, const Material& material, double actualG)
     return {{"grids", {{"density", grids::kDensity}, {"emission", "emission"}}},
         {"medium",
             {{"sigma_a", vecJson(material.sigmaA)}, {"sigma_s", vecJson(material.sigmaS)}, {"phase_g", actualG},
-                {"note",
-                    actualG == 0.0 ? "isotropic: the renderer's single scattering plus the baked emission is vxf's image"
-                                   : "anisotropic: the baked emission is the isotropic part of the multiple scattering vxf "
-                                     "solved in the reduced medium (an approximation)"}}},
+                {"note", bakeNote(scattering, actualG)}}},
         {"lights", lights}, {"objects", objects},
         {"camera",
             {{"type", c.orthographic ? "orthographic" : "perspective"}, {"position", vecJson(c.position)}, {"look_at", vecJson(c.lookAt)},
@@ -88,18 +100,11 @@ openvdb::FloatGrid::Ptr bakeTopology(const openvdb::FloatGrid& density, int fact
     if (factor == 1) {
         fine->topologyUnion(density);
     } else {
-        auto acc = fine->getAccessor();
+        // Each active voxel or tile [lo, hi] covers the fine voxels [lo·factor, (hi + 1)·factor − 1].
+        const auto scaled = [factor](const openvdb::Coord& c) { return openvdb::Coord(c.x() * factor, c.y() * factor, c.z() * factor); };
         for (auto it = density.cbeginValueOn(); it; ++it) {
-            openvdb::CoordBBox box;
-            it.getBoundingBox(box);
-            for (auto ijk = box.begin(); ijk; ++ijk) {
-                const openvdb::Coord lo((*ijk).x() * factor, (*ijk).y() * factor, (*ijk).z() * factor);
-                for (int a = 0; a < factor; ++a) {
-                    for (int b = 0; b < factor; ++b) {
-                        for (int c = 0; c < factor; ++c) acc.setValueOn(lo.offsetBy(a, b, c));
-                    }
-                }
-            }
+            const openvdb::CoordBBox box = it.getBoundingBox();
+            fine->tree().sparseFill(openvdb::CoordBBox(scaled(box.min()), scaled(box.max().offsetBy(1)).offsetBy(-1)), 0.0f, true);
         }
     }
     // Each voxel gets its own values: a mesh medium's interior is tiles, and the light varies there.
@@ -187,8 +192,10 @@ BakedVolume bakeScene(const Scene& scene, const std::string& outDir, const BakeO
                 if (t.direct) e += t.direct->sample(p);
                 if (t.scatter) e += t.scatter->sample(p);
             }
-            const openvdb::Vec3d world = baked->transform().indexToWorld(it.getCoord());
-            for (VolumeEmission::Sampler& s : t.emitters) e += s.at(world);
+            if (!t.emitters.empty()) {
+                const openvdb::Vec3d world = baked->transform().indexToWorld(it.getCoord());
+                for (VolumeEmission::Sampler& s : t.emitters) e += s.at(world);
+            }
             it.setValue(float(fraction * scale * t.density.sampleTrilinear(p)));
             out->setValueOnly(it.pos(), openvdb::Vec3f(e * fraction));
         }
@@ -198,7 +205,7 @@ BakedVolume bakeScene(const Scene& scene, const std::string& outDir, const BakeO
     baked->setName(grids::kDensity);
     baked->setGridClass(openvdb::GRID_FOG_VOLUME);
 
-    BakedVolume result{VoxelSet(baked->transformPtr()), manifestOf(scene, material, material.phaseG)};
+    BakedVolume result{VoxelSet(baked->transformPtr()), manifestOf(scene, material, material.phaseG, options.scattering)};
     result.manifest["scattering"] = options.scattering == BakedScattering::All ? "all"
         : options.scattering == BakedScattering::Multiple                      ? "multiple"
                                                                                : "none";

@@ -453,6 +453,12 @@ std::set<std::string> writtenGrids(const std::string& op, const nlohmann::json& 
     return ops::gridUse(declared, ops::checkArgs(declared, params)).writes;
 }
 
+/// Whether a step writing @a written makes `illumination` (direct + scatter) stale.
+bool staleIllumination(const std::set<std::string>& written)
+{
+    return (written.count(grids::kDirect) || written.count(grids::kScatter)) && !written.count(grids::kIllumination);
+}
+
 /// The step that makes `illumination` again from `direct` and `scatter`, as the scatter stage does.
 const nlohmann::json& illuminationRefresh()
 {
@@ -471,8 +477,7 @@ void ViewSession::runStep(VoxelSet& set, Step& step, std::string* report)
     }
     run(set, step.op, step.params, report);
     const std::set<std::string> written = writtenGrids(step.op, step.params);
-    if ((written.count(grids::kDirect) || written.count(grids::kScatter)) && !written.count(grids::kIllumination) &&
-        set.find(grids::kIllumination) && set.find(grids::kDirect) && set.find(grids::kScatter)) {
+    if (staleIllumination(written) && set.find(grids::kIllumination) && set.find(grids::kDirect) && set.find(grids::kScatter)) {
         run(set, "blend", illuminationRefresh(), nullptr);
         step.refreshes.push_back(grids::kIllumination);
         if (report) *report += fmt::format("; recomputed '{}' = {} + {}", grids::kIllumination, grids::kDirect, grids::kScatter);
@@ -493,7 +498,7 @@ void ViewSession::advance(Step& step, std::string* report)
     const VoxelSet before = mCurrent;
     if (step.enabled) {
         std::set<std::string> written = writtenGrids(step.op, step.params);
-        if (written.count(grids::kDirect) || written.count(grids::kScatter)) written.insert(grids::kIllumination); // a refresh
+        if (staleIllumination(written)) written.insert(grids::kIllumination); // runStep recomputes it
         for (const std::string& name : written) {
             if (const openvdb::GridBase::Ptr grid = mCurrent.find(name)) mCurrent.putAsIs(grid->deepCopyGrid());
         }

@@ -559,8 +559,7 @@ async function apply(op, params) {
 async function refresh(message) {
   await loadInfo();
   await loadPoints(false);
-  if ($('viewMode').value === 'volume') await loadVolume();
-  if (points) points.visible = $('viewMode').value !== 'volume';
+  await showGrid();
   status(message);
 }
 
@@ -765,11 +764,7 @@ function buildVolume() {
   volume = new THREE.Mesh(new THREE.BoxGeometry(1, 1, 1), material);
   volume.scale.set(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
   volume.position.set((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2);
-  volume.onBeforeRender = () => { // the eye in the box's [0, 1]³
-    volume.updateMatrixWorld();
-    material.uniforms.eye.value.copy(camera.position).applyMatrix4(new THREE.Matrix4().copy(volume.matrixWorld).invert())
-      .addScalar(0.5);
-  };
+  volume.onBeforeRender = () => { volume.worldToLocal(material.uniforms.eye.value.copy(camera.position)).addScalar(0.5); }; // [0, 1]³
   scene.add(volume);
   showLegend();
 }
@@ -785,17 +780,17 @@ function showLegend() {
   $('legendHi').textContent = hi.toPrecision(3);
   $('legendName').textContent = state.grid || '';
 }
-async function showGrid(fitCamera) {
+// The shown grid as the view mode says: its volume (loaded again) or its points (kept loaded:
+// painting picks among them in either mode).
+async function showGrid() {
   const asVolume = $('viewMode').value === 'volume';
-  if (points) points.visible = !asVolume;
-  if (asVolume) await loadVolume(); else buildVolume();
-  if (!asVolume || !state.cloud || fitCamera) await loadPoints(fitCamera);
+  if (asVolume) await loadVolume(); else buildVolume(); // buildVolume drops the volume in points mode
   if (points) points.visible = !asVolume;
   showLegend();
 }
-$('viewMode').addEventListener('change', () => guarded(() => showGrid(false)));
+$('viewMode').addEventListener('change', () => guarded(showGrid));
 $('opacity').addEventListener('change', () => { if (volume) volume.material.uniforms.opacity.value = parseFloat($('opacity').value) || 0; });
-$('cells').addEventListener('change', () => guarded(() => showGrid(false)));
+$('cells').addEventListener('change', () => guarded(showGrid));
 
 // --- framing, the selection's outline and the slice plane ----------------------------------------
 function frameAll() {
@@ -867,9 +862,7 @@ $('grid').addEventListener('change', () => guarded(async () => {
   showEditFields();
   $('rampMax').value = ''; // the new grid's range
   await loadPoints(false);
-  if ($('viewMode').value === 'volume') await loadVolume();
-  if (points) points.visible = $('viewMode').value !== 'volume';
-  showLegend();
+  await showGrid();
 }));
 $('budget').addEventListener('change', () => guarded(() => loadPoints(false)));
 for (const id of ['rampMin', 'rampMax']) $(id).addEventListener('change', () => { colourPoints(); buildVolume(); guarded(loadSlice); });
