@@ -94,7 +94,9 @@ def check_layout(page):
 
 def drawn_pixels(page):
     """Pixels of the 3D view other than its background (0x1e1f22)."""
-    return page.evaluate("""() => {
+    # Read inside an animation frame after the page draws one (it draws on demand: the buffer
+    # between frames is not the picture).
+    return page.evaluate("""() => new Promise((resolve) => { window.vxfView.wake(); requestAnimationFrame(() => {
         const gl = document.querySelector('#view canvas');
         const c = document.createElement('canvas');
         c.width = gl.width; c.height = gl.height;
@@ -103,8 +105,8 @@ def drawn_pixels(page):
         const d = ctx.getImageData(0, 0, c.width, c.height).data;
         let n = 0;
         for (let i = 0; i < d.length; i += 4) if (Math.abs(d[i] - 30) + Math.abs(d[i + 1] - 31) + Math.abs(d[i + 2] - 34) > 30) n++;
-        return n;
-    }""")
+        resolve(n);
+    }); })""")
 
 
 def volume_view(page):
@@ -195,6 +197,100 @@ def float_edit(page):
         sys.exit(f"view_test: the density edit reported {page.text_content('#status')}")
     page.click("#undo")
     wait_status(page, "undone")
+
+
+def handles(page):
+    """The selection box dragged by its handle (three.js TransformControls): moved from its centre,
+    the box's fields follow with its size kept; the slice plane dragged along its axis moves the
+    slice."""
+    page.fill("#minX", "-0.02"); page.fill("#minY", "-0.02"); page.fill("#minZ", "-0.02")
+    page.fill("#maxX", "0.02"); page.fill("#maxY", "0.02"); page.fill("#maxZ", "0.02")
+    page.dispatch_event("#maxZ", "change")
+    page.select_option("#handle", "move")
+    canvas = page.locator("#view canvas").bounding_box()
+
+    def on_screen(point):
+        x, y = page.evaluate("""(p) => { const v = new window.vxfView.THREE.Vector3(...p).project(window.vxfView.camera);
+            const c = document.querySelector('#view canvas'); return [(v.x + 1) / 2 * c.clientWidth, (1 - v.y) / 2 * c.clientHeight]; }""", point)
+        return canvas["x"] + x, canvas["y"] + y
+
+    def drag(start, dx, dy):
+        page.mouse.move(*start)
+        page.mouse.down()
+        page.mouse.move(start[0] + dx, start[1] + dy, steps=8)
+        page.mouse.up()
+
+    fields = lambda ids: [float(page.input_value(f"#{i}")) for i in ids]
+    drag(on_screen([0, 0, 0]), 60, 0)  # the centre: free translation in the view's plane
+    lo, hi = fields(["minX", "minY", "minZ"]), fields(["maxX", "maxY", "maxZ"])
+    if not lo[0] > -0.02 + 1e-3 or any(abs((h - l) - 0.04) > 1e-4 for l, h in zip(lo, hi)):
+        sys.exit(f"view_test: the box dragged by its handle is {lo} to {hi}")
+    page.locator("#view canvas").click(position={"x": 5, "y": 5})
+    page.keyboard.press("s")  # the slice plane's handle: an arrow along the slice's axis (z)
+    if page.input_value("#handle") != "slice":
+        sys.exit("view_test: S did not take the slice plane's handle")
+    index = int(page.input_value("#sliceIndex"))
+    origin = page.evaluate("window.vxfView.handlePosition()")
+    # Grab the arrow halfway along it: the gizmo keeps a constant size on screen.
+    tip = page.evaluate("window.vxfView.handleAxisPoint(2, 0.3)")
+    drag(on_screen(tip), 0, -40)
+    page.wait_for_function(f"document.querySelector('#sliceIndex').value != '{index}'", timeout=10000)
+    moved = page.evaluate("window.vxfView.handlePosition()")
+    if not moved[2] > origin[2]:
+        sys.exit(f"view_test: the slice plane dragged up moved from {origin} to {moved}")
+    page.select_option("#handle", "")
+
+
+def render_shows_hue(browser, vxf, work):
+    """With --scene, a select + hue edit of the scattered light, then Render: the image shows the hue
+    (the render once dropped edits made after a re-run of the scatter)."""
+    scene = {"objects": [{"mesh": "bunny00.off", "material": {"albedo": [0.95, 0.35, 0.2], "mean_free_path": 0.02}}],
+             "lights": [{"type": "point", "position": [0.3, -0.4, 0.5], "intensity": 4.0}],
+             "camera": {"position": [0.0, -0.45, 0.15], "look_at": [0, 0, 0.0], "up": [0, 0, 1], "fov": 35}}
+    with open(os.path.join(work, "lit.json"), "w") as f:
+        json.dump(scene, f)
+    run(vxf, "voxelize", os.path.join(work, "bunny00.off"), "-o", os.path.join(work, "v32.vdb"), "--dim", "32", "-q")
+    run(vxf, "light", os.path.join(work, "v32.vdb"), "-o", os.path.join(work, "l32.vdb"), "--scene", os.path.join(work, "lit.json"))
+    run(vxf, "scatter", os.path.join(work, "l32.vdb"), "-o", os.path.join(work, "s32.vdb"))
+    server = subprocess.Popen([vxf, "view", os.path.join(work, "s32.vdb"), "--no-browser", "--port", "0", "--grid", "scatter",
+                               "--scene", os.path.join(work, "lit.json")], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        url = re.search(r"at (http://\S+)", server.stdout.readline()).group(1)
+        page = browser.new_page(viewport={"width": 1280, "height": 800})
+        page.goto(url)
+        page.wait_for_function("window.vxfView && window.vxfView.ready", timeout=60000)
+
+        def render():
+            page.fill("#renderWidth", "96")
+            page.fill("#renderHeight", "72")
+            page.click("#render")
+            wait_status(page, "rendered")
+            page.wait_for_function("document.querySelector('#renderImage').complete && document.querySelector('#renderImage').naturalWidth > 0")
+            return page.evaluate("""() => { const img = document.querySelector('#renderImage');
+                const c = document.createElement('canvas'); c.width = img.naturalWidth; c.height = img.naturalHeight;
+                const ctx = c.getContext('2d'); ctx.drawImage(img, 0, 0);
+                const d = ctx.getImageData(0, 0, c.width, c.height).data; const sum = [0, 0, 0];
+                for (let i = 0; i < d.length; i += 4) for (let k = 0; k < 3; k++) sum[k] += d[i + k];
+                return sum; }""")
+
+        before = render()
+        for field, value in zip(["minX", "minY", "minZ", "maxX", "maxY", "maxZ"], [-10, -10, -10, 10, 10, 10]):
+            page.fill(f"#{field}", str(value))
+        page.click("#select")
+        wait_status(page, "select:")
+        page.fill("#hue", "120")
+        page.click("#apply")
+        wait_status(page, "edit:")
+        after = render()
+        page.close()
+    finally:
+        server.terminate()
+        server.wait(timeout=30)
+    # Red-orange light turned 120° is green: green over red grows several times.
+    ratio = lambda s: s[1] / max(s[0], 1)
+    if not ratio(after) > 2 * ratio(before):
+        sys.exit(f"view_test: after a hue shift of the scatter the render's RGB sums are {after} (before {before})")
+    print(f"view_test: the render after select + hue shows the hue (RGB sums {before} -> {after})")
 
 
 def main():
@@ -290,6 +386,8 @@ def main():
                 sys.exit("view_test: a page from another origin changed the edit history")
             float_edit(page)
             painted, paint_pipeline = paint_stroke(page, work)
+            handles(page)
+            render_shows_hue(browser, vxf, work)
             if errors:
                 sys.exit(f"view_test: the page raised: {errors}")
             browser.close()

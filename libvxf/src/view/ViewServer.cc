@@ -23,6 +23,7 @@ extern const char* const kIndexHtml;
 extern const char* const kViewJs;
 extern const char* const kThreeJs;
 extern const char* const kOrbitControlsJs;
+extern const char* const kTransformControlsJs;
 } // namespace detail
 
 namespace {
@@ -277,6 +278,7 @@ struct ViewServer::Impl
         asset("/view.js", detail::kViewJs, kJavaScript);
         asset("/three.module.min.js", detail::kThreeJs, kJavaScript);
         asset("/OrbitControls.js", detail::kOrbitControlsJs, kJavaScript);
+        asset("/TransformControls.js", detail::kTransformControlsJs, kJavaScript);
 
         server.Get("/favicon.ico", [](const httplib::Request&, httplib::Response& res) { res.status = 204; });
     }

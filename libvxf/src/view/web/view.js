@@ -2,12 +2,16 @@
 // same libvxf operator `vxf op` runs and records it; the page only draws what the server holds.
 import * as THREE from 'three';
 import { OrbitControls } from '/OrbitControls.js';
+import { TransformControls } from '/TransformControls.js';
 
 const $ = (id) => document.getElementById(id);
 const state = { info: null, grid: null, cloud: null, ready: false, fps: 0, selected: false, lastError: '' };
 window.vxfView = state; // for the browser tests
+let awakeUntil = 0; // the page draws until then (see animate)
+function wake() { awakeUntil = performance.now() + 1000; }
 
 function status(text, error = false) {
+  wake();
   $('status').textContent = text;
   $('status').className = error ? 'error' : '';
   if (error) state.lastError = text;
@@ -25,6 +29,7 @@ async function call(method, url, body) {
     try { message = (await response.json()).error; } catch (e) { /* not JSON */ }
     throw new Error(message);
   }
+  wake(); // an answer usually changes what is drawn
   return response;
 }
 
@@ -60,9 +65,21 @@ function resize() {
 window.addEventListener('resize', resize);
 resize();
 
-// Dynamic resolution: below 30 frames a second (a software renderer, a big grid) the canvas is
-// drawn at fewer pixels, down to 0.4 of the screen's; above 50 at more, up to all of them.
-let frames = 0, since = performance.now(), pixelRatio = 1;
+// Drawn on demand: frames are drawn while something happens (input, an answer from the server)
+// and for a second after, then not at all — an idle page costs no CPU, which a software renderer
+// would otherwise take from the server on the same machine.
+for (const type of ['pointerdown', 'pointermove', 'pointerup', 'wheel', 'keydown', 'input', 'change', 'resize']) {
+  window.addEventListener(type, wake, { capture: true, passive: true });
+}
+state.wake = wake;
+// Dynamic resolution while the camera moves: below 30 frames a second (a software renderer, a big
+// grid) the canvas is drawn at fewer pixels, down to 0.3 of the screen's; above 50 at more, up to
+// all of them. The rate is of the frames drawn, over the time spent drawing them (idle time is not
+// counted). The camera still, every pixel is drawn (and the volume refined, see refineVolume).
+let frames = 0, busy = 0, movingRatio = 1, lastFrame = 0, cameraMoving = false;
+const drawAt = (ratio) => { if (renderer.getPixelRatio() !== ratio) { renderer.setPixelRatio(ratio); resize(); } };
+controls.addEventListener('start', () => { cameraMoving = true; drawAt(movingRatio); });
+controls.addEventListener('end', () => { cameraMoving = false; drawAt(1); });
 // The axis triad: a small scene of the world axes (x red, y green, z blue) drawn in the view's
 // lower-left corner, seen from the main camera's direction.
 const triadScene = new THREE.Scene();
@@ -85,19 +102,24 @@ function drawTriad() {
 }
 function animate() {
   requestAnimationFrame(animate);
+  const now = performance.now();
+  if (now > awakeUntil) { lastFrame = 0; return; }
+  if (lastFrame) { busy += now - lastFrame; frames++; }
+  lastFrame = now;
   sun.position.copy(camera.position);
   controls.update();
   renderer.render(scene, camera);
   drawTriad();
-  frames++;
-  const now = performance.now();
-  if (now - since > 1000) {
-    state.fps = frames * 1000 / (now - since);
+  state.frames = (state.frames || 0) + 1;
+  if (busy > 1000) {
+    state.fps = frames * 1000 / busy;
     frames = 0;
-    since = now;
-    const wanted = state.fps < 30 ? Math.max(0.4, pixelRatio * 0.8) : state.fps > 50 ? Math.min(1, pixelRatio * 1.25) : pixelRatio;
-    if (wanted !== pixelRatio) { pixelRatio = wanted; renderer.setPixelRatio(pixelRatio); resize(); }
-    state.pixelRatio = pixelRatio;
+    busy = 0;
+    if (cameraMoving) {
+      movingRatio = state.fps < 30 ? Math.max(0.3, movingRatio * 0.8) : state.fps > 50 ? Math.min(1, movingRatio * 1.25) : movingRatio;
+      drawAt(movingRatio);
+    }
+    state.pixelRatio = renderer.getPixelRatio();
   }
 }
 animate();
@@ -678,6 +700,7 @@ uniform sampler3D volume;
 uniform vec3 eye;       // the camera in the box's own [0, 1]³
 uniform vec3 cells;     // the brick's cells along each axis
 uniform float opacity;  // per cell at alpha 1
+uniform float stride;   // cells a step: 1, or 2 while the camera moves
 in vec3 vLocal;
 out vec4 outColor;
 void main() {
@@ -687,7 +710,7 @@ void main() {
   vec3 lo = min(t0, t1), hi = max(t0, t1);
   float near = max(max(max(lo.x, lo.y), lo.z), 0.0), far = min(min(hi.x, hi.y), hi.z);
   if (near >= far) discard;
-  float step = 1.0 / max(max(cells.x, cells.y), cells.z);
+  float step = stride / max(max(cells.x, cells.y), cells.z);
   float stepCells = length(d * cells) * step; // cells crossed per step
   vec4 sum = vec4(0.0);
   for (int i = 0; i < 1024; i++) {
@@ -701,29 +724,69 @@ void main() {
   outColor = sum;
 }`;
 let volume = null;
-state.volume = null;
-async function loadVolume() {
-  if (!state.grid) return;
-  const started = performance.now();
-  const cells = Math.max(4096, parseInt($('cells').value) || 262144);
+state.volume = null;     // the brick at the budget the page asked for, drawn while the camera moves
+state.fineVolume = null; // a finer one, fetched when the camera stops and drawn until it moves again
+let volumeGeneration = 0, refineTimer = null;
+async function fetchBrick(cells) {
   const response = await call('GET', `/api/volume?grid=${encodeURIComponent(state.grid)}&cells=${cells}`);
   const triple = (name) => response.headers.get(name).split(',').map(parseFloat);
   const data = new Float32Array(await response.arrayBuffer());
-  state.volume = { data, dims: triple('X-Vxf-Dims'), channels: parseInt(response.headers.get('X-Vxf-Channels')),
+  return { data, dims: triple('X-Vxf-Dims'), channels: parseInt(response.headers.get('X-Vxf-Channels')),
     lo: triple('X-Vxf-World-Min'), hi: triple('X-Vxf-World-Max'), min: parseFloat(response.headers.get('X-Vxf-Min')),
     max: parseFloat(response.headers.get('X-Vxf-Max')), cellVoxels: parseInt(response.headers.get('X-Vxf-Cell-Voxels')) };
+}
+const volumeCells = () => Math.max(4096, parseInt($('cells').value) || 262144);
+async function loadVolume() {
+  if (!state.grid) return;
+  const started = performance.now();
+  const generation = ++volumeGeneration;
+  const brick = await fetchBrick(volumeCells());
+  if (generation !== volumeGeneration) return; // a newer load (another grid, an edit) overtook this one
+  for (const old of [state.volume, state.fineVolume]) old?.texture?.dispose();
+  state.volume = brick;
+  state.fineVolume = null;
   if ($('rampMax').value === '') {
-    $('rampMin').value = state.volume.channels === 1 ? state.volume.min.toPrecision(4) : 0;
-    $('rampMax').value = state.volume.max.toPrecision(4);
+    $('rampMin').value = brick.channels === 1 ? brick.min.toPrecision(4) : 0;
+    $('rampMax').value = brick.max.toPrecision(4);
   }
   buildVolume();
-  const [nx, ny, nz] = state.volume.dims;
-  status(`${state.grid}: a volume of ${nx}x${ny}x${nz} cells of ${state.volume.cellVoxels}³ voxels in ` +
+  const [nx, ny, nz] = brick.dims;
+  status(`${state.grid}: a volume of ${nx}x${ny}x${nz} cells of ${brick.cellVoxels}³ voxels in ` +
     `${((performance.now() - started) / 1000).toFixed(2)} s`);
   state.ready = true;
+  if (!cameraMoving) scheduleRefine();
 }
-function volumeTexels() {
-  const { data, dims, channels } = state.volume;
+// Refinement: once the camera has been still for a moment, the same grid at eight times the cells
+// (at most 128³, a texture of 8 MB), unless the brick already holds every voxel.
+const kFineCells = 128 * 128 * 128;
+function scheduleRefine() {
+  clearTimeout(refineTimer);
+  refineTimer = setTimeout(() => guarded(refineVolume), 300);
+}
+async function refineVolume() {
+  const coarse = state.volume;
+  if (cameraMoving || !coarse || state.fineVolume || $('viewMode').value !== 'volume' || coarse.cellVoxels <= 1) return;
+  const cells = Math.min(8 * volumeCells(), kFineCells);
+  if (cells <= volumeCells()) return;
+  const generation = volumeGeneration, started = performance.now();
+  const brick = await fetchBrick(cells);
+  if (generation !== volumeGeneration || state.volume !== coarse) return;
+  state.fineVolume = brick;
+  if (!cameraMoving) buildVolume();
+  const [nx, ny, nz] = brick.dims;
+  status(`${state.grid}: refined to ${nx}x${ny}x${nz} cells of ${brick.cellVoxels}³ voxels in ` +
+    `${((performance.now() - started) / 1000).toFixed(2)} s`);
+}
+controls.addEventListener('start', () => {
+  clearTimeout(refineTimer);
+  if (state.fineVolume && volume && volume.userData.brick === state.fineVolume) buildVolume(); // coarse while moving
+});
+controls.addEventListener('end', () => {
+  if (state.fineVolume) buildVolume(); else scheduleRefine();
+});
+// A brick's texture, made once per ramp: the ramp's colour (or the colour itself) and alpha.
+function volumeTexels(brick) {
+  const { data, dims, channels } = brick;
   const count = dims[0] * dims[1] * dims[2], stride = channels + 1;
   const texels = new Uint8Array(4 * count);
   const [lo, hi] = rampRange();
@@ -745,26 +808,44 @@ function volumeTexels() {
   }
   return texels;
 }
-function buildVolume() {
-  if (volume) { scene.remove(volume); volume.geometry.dispose(); volume.material.uniforms.volume.value.dispose(); volume.material.dispose(); volume = null; }
-  if (!state.volume || $('viewMode').value !== 'volume') { showLegend(); return; }
-  const { dims, lo, hi } = state.volume;
-  const texture = new THREE.Data3DTexture(volumeTexels(), dims[0], dims[1], dims[2]);
+function brickTexture(brick) {
+  const key = rampRange().join(',');
+  if (brick.texture && brick.textureKey === key) return brick.texture;
+  if (brick.texture) brick.texture.dispose();
+  const { dims } = brick;
+  const texture = new THREE.Data3DTexture(volumeTexels(brick), dims[0], dims[1], dims[2]);
   texture.format = THREE.RGBAFormat;
   texture.type = THREE.UnsignedByteType;
   texture.minFilter = texture.magFilter = THREE.LinearFilter;
   texture.unpackAlignment = 1;
   texture.needsUpdate = true;
+  brick.texture = texture;
+  brick.textureKey = key;
+  return texture;
+}
+// The opacity field is per cell of the budget's brick: a finer brick's cells are thinner in proportion,
+// so that refinement sharpens the volume without making it denser.
+const volumeOpacity = (brick) => (parseFloat($('opacity').value) || 0) * brick.cellVoxels / state.volume.cellVoxels;
+// The drawn volume: the fine brick when the camera is still and it is there, else the coarse one.
+function buildVolume() {
+  if (volume) { scene.remove(volume); volume.geometry.dispose(); volume.material.dispose(); volume = null; }
+  if (!state.volume || $('viewMode').value !== 'volume') { showLegend(); return; }
+  const brick = (!cameraMoving && state.fineVolume) || state.volume;
+  const { dims, lo, hi } = brick;
   const material = new THREE.ShaderMaterial({
     glslVersion: THREE.GLSL3, vertexShader: volumeVertex, fragmentShader: volumeFragment, side: THREE.BackSide,
     transparent: true, premultipliedAlpha: true, depthWrite: false,
     blending: THREE.CustomBlending, blendSrc: THREE.OneFactor, blendDst: THREE.OneMinusSrcAlphaFactor,
-    uniforms: { volume: { value: texture }, eye: { value: new THREE.Vector3() }, cells: { value: new THREE.Vector3(...dims) },
-      opacity: { value: parseFloat($('opacity').value) || 0.3 } } });
+    uniforms: { volume: { value: brickTexture(brick) }, eye: { value: new THREE.Vector3() }, cells: { value: new THREE.Vector3(...dims) },
+      opacity: { value: volumeOpacity(brick) }, stride: { value: 1 } } });
   volume = new THREE.Mesh(new THREE.BoxGeometry(1, 1, 1), material);
+  volume.userData.brick = brick;
   volume.scale.set(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
   volume.position.set((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2);
-  volume.onBeforeRender = () => { volume.worldToLocal(material.uniforms.eye.value.copy(camera.position)).addScalar(0.5); }; // [0, 1]³
+  volume.onBeforeRender = () => {
+    volume.worldToLocal(material.uniforms.eye.value.copy(camera.position)).addScalar(0.5); // [0, 1]³
+    material.uniforms.stride.value = cameraMoving ? 2 : 1; // half the samples while tumbling, the same opacity
+  };
   scene.add(volume);
   showLegend();
 }
@@ -789,7 +870,7 @@ async function showGrid() {
   showLegend();
 }
 $('viewMode').addEventListener('change', () => guarded(showGrid));
-$('opacity').addEventListener('change', () => { if (volume) volume.material.uniforms.opacity.value = parseFloat($('opacity').value) || 0; });
+$('opacity').addEventListener('change', () => { if (volume) volume.material.uniforms.opacity.value = volumeOpacity(volume.userData.brick); });
 $('cells').addEventListener('change', () => guarded(showGrid));
 
 // --- framing, the selection's outline and the slice plane ----------------------------------------
@@ -823,6 +904,7 @@ function showOutline() {
     outline.position.set(...c);
   }
   if (outline) scene.add(outline);
+  syncHandle();
 }
 function showSlicePlane() {
   if (slicePlane) { scene.remove(slicePlane); slicePlane.geometry.dispose(); slicePlane = null; }
@@ -844,7 +926,86 @@ function showSlicePlane() {
   if (axis === 0) slicePlane.rotation.y = Math.PI / 2;
   if (axis === 1) slicePlane.rotation.x = Math.PI / 2;
   scene.add(slicePlane);
+  syncHandle();
 }
+// --- handles: the selection box or sphere, or the slice plane, dragged in the view --------------
+// three.js's TransformControls on a stand-in object: moved, its position is the selection's
+// centre (or the slice plane's place); resized, its scale the box's size (or the sphere's
+// radius). Each change writes the fields back, so a handle and the numbers always agree.
+const gizmo = new TransformControls(camera, renderer.domElement);
+const handle = new THREE.Object3D();
+scene.add(gizmo, handle);
+gizmo.addEventListener('dragging-changed', (event) => {
+  controls.enabled = !event.value;
+  if (!event.value && $('handle').value === 'slice') guarded(loadSlice); // the slice's values once the drag ends
+});
+// The handle follows what it stands for when that changes otherwise (fields typed, a brushed box,
+// another grid), but not while it is the one dragging.
+function syncHandle() { if (!gizmo.dragging) attachHandle(); }
+function attachHandle() {
+  gizmo.detach();
+  const mode = $('handle').value, shape = $('shape').value;
+  gizmo.showX = gizmo.showY = gizmo.showZ = true;
+  handle.scale.set(1, 1, 1);
+  if (mode === 'slice') {
+    if (!slicePlane) return;
+    const axis = parseInt($('sliceAxis').value);
+    handle.position.copy(slicePlane.position);
+    gizmo.setMode('translate');
+    [gizmo.showX, gizmo.showY, gizmo.showZ] = [axis === 0, axis === 1, axis === 2];
+  } else if (mode && shape === 'box') {
+    const v = numbers(['minX', 'minY', 'minZ', 'maxX', 'maxY', 'maxZ']);
+    if (!v.every(isFinite)) return;
+    handle.position.set((v[0] + v[3]) / 2, (v[1] + v[4]) / 2, (v[2] + v[5]) / 2);
+    handle.scale.set(Math.abs(v[3] - v[0]), Math.abs(v[4] - v[1]), Math.abs(v[5] - v[2]));
+    gizmo.setMode(mode === 'move' ? 'translate' : 'scale');
+  } else if (mode && shape === 'sphere') {
+    const c = numbers(['cX', 'cY', 'cZ']), r = parseFloat($('radius').value);
+    if (!c.every(isFinite) || !(r > 0)) return;
+    handle.position.set(...c);
+    handle.scale.setScalar(r);
+    gizmo.setMode(mode === 'move' ? 'translate' : 'scale');
+  } else {
+    return; // no handle, or a range selection (nothing to drag)
+  }
+  gizmo.attach(handle);
+}
+gizmo.addEventListener('objectChange', () => {
+  const mode = $('handle').value, p = handle.position, s = handle.scale;
+  if (mode === 'slice') {
+    const g = gridInfo(state.grid), axis = parseInt($('sliceAxis').value), input = $('sliceIndex');
+    const span = g.index_max[axis] - g.index_min[axis], extent = g.world_max[axis] - g.world_min[axis];
+    const at = extent > 0 ? g.index_min[axis] + (p.getComponent(axis) - g.world_min[axis]) / extent * span : g.index_min[axis];
+    input.value = Math.min(Math.max(Math.round(at), g.index_min[axis]), g.index_max[axis]);
+    showSlicePlane();
+    return;
+  }
+  if ($('shape').value === 'box') {
+    const lo = [p.x - s.x / 2, p.y - s.y / 2, p.z - s.z / 2], hi = [p.x + s.x / 2, p.y + s.y / 2, p.z + s.z / 2];
+    ['minX', 'minY', 'minZ'].forEach((id, a) => { $(id).value = lo[a].toPrecision(6); });
+    ['maxX', 'maxY', 'maxZ'].forEach((id, a) => { $(id).value = hi[a].toPrecision(6); });
+  } else {
+    // A sphere stays a sphere: the radius is the axis the user pulled (the one that moved most).
+    const r = parseFloat($('radius').value);
+    const pulled = [s.x, s.y, s.z].reduce((best, x) => (Math.abs(x - r) > Math.abs(best - r) ? x : best), r);
+    handle.scale.setScalar(Math.abs(pulled));
+    $('radius').value = Math.abs(pulled).toPrecision(6);
+    ['cX', 'cY', 'cZ'].forEach((id, a) => { $(id).value = p.getComponent(a).toPrecision(6); });
+  }
+  showOutline();
+  colourPoints();
+});
+$('handle').addEventListener('change', attachHandle);
+// For the browser tests: where the handle is, and a point along one of its arrows (the gizmo keeps
+// a constant size on screen, as TransformControls sizes it).
+state.THREE = THREE;
+state.handlePosition = () => handle.position.toArray();
+state.handleAxisPoint = (axis, along) => {
+  const size = handle.position.distanceTo(camera.position) * Math.min(1.9 * Math.tan(Math.PI * camera.fov / 360) / camera.zoom, 7) / 4;
+  const p = handle.position.clone();
+  p.setComponent(axis, p.getComponent(axis) + along * size);
+  return p.toArray();
+};
 $('frameAll').addEventListener('click', frameAll);
 $('frameSelected').addEventListener('click', frameSelected);
 $('upAxis').addEventListener('change', frameAll);
@@ -854,6 +1015,12 @@ window.addEventListener('keydown', (event) => {
   if (event.ctrlKey || event.metaKey || event.altKey || ['INPUT', 'SELECT', 'TEXTAREA'].includes(event.target.tagName)) return;
   if (event.key === 'Home') { event.preventDefault(); frameAll(); }
   if (event.key === 'f' || event.key === 'F') { event.preventDefault(); frameSelected(); }
+  const handleKeys = { w: 'move', r: 'resize', s: 'slice', Escape: '' };
+  if (event.key in handleKeys || event.key.toLowerCase() in handleKeys) {
+    const mode = handleKeys[event.key] ?? handleKeys[event.key.toLowerCase()];
+    $('handle').value = $('handle').value === mode ? '' : mode; // the same key again drops the handle
+    attachHandle();
+  }
 });
 
 // --- wiring --------------------------------------------------------------------------------------
