@@ -40,6 +40,14 @@ public:
             "cache then holds one frame's stages, not every frame's; a rerun recomputes them)");
         mApp->add_flag(
             "--dry-run", mDryRun, "Check the scene (at every frame) and its input files and print each frame's image, rendering nothing");
+        mApp->add_option("--error", mError,
+                "The error wanted (relative RMSE against a path tracer, 0.001-1): the scene is read with the fastest setting "
+                "bench/accuracy measured to reach it on the closest of its scenes, under the knobs the scene sets itself "
+                "(printed: what was chosen and why). Overrides the scene's quality")
+            ->check(CLI::Range(0.001, 1.0));
+        mApp->add_option("--quality", mLevel, "A level naming an error, as --error: draft (10%), final (5%), reference (2%)")
+            ->check(CLI::IsMember(qualityLevels()))
+            ->excludes("--error");
         mApp->add_flag("--warm-start", mWarmStart,
             "With --frames: each frame's scatter solve starts from the frame before's where the medium lies on the same "
             "voxels (fewer sweeps; results then depend on the frame order, within the scene's tolerance)");
@@ -49,7 +57,8 @@ public:
     {
         if (mFrames.empty()) {
             if (mWarmStart || mPrune) throw UsageError(fmt::format("{} needs --frames", mWarmStart ? "--warm-start" : "--prune-cache"));
-            const Scene scene = loadScene(mScene);
+            const Scene scene = loadScene(mScene, std::nullopt, qualityAsked());
+            sayQuality(scene);
             if (mDryRun) {
                 requireSceneInputs(scene);
                 std::cout << fmt::format("still: {}\n", sceneImagePath(scene, mOut));
@@ -63,9 +72,10 @@ public:
         // run now, not after 36 frames.
         std::vector<Scene> scenes;
         for (int frame : frames) {
-            scenes.push_back(loadScene(mScene, frame));
+            scenes.push_back(loadScene(mScene, frame, qualityAsked()));
             requireSceneInputs(scenes.back());
         }
+        sayQuality(scenes.front());
         if (mDryRun) {
             for (const Scene& scene : scenes) std::cout << fmt::format("frame {}: {}\n", *scene.frame, sceneImagePath(scene, mOut));
             return;
@@ -91,6 +101,19 @@ public:
     }
 
 private:
+    /// --error or --quality, when given.
+    std::optional<QualityRequest> qualityAsked() const
+    {
+        if (mError > 0.0) return QualityRequest{mError, ""};
+        if (!mLevel.empty()) return QualityRequest{qualityLevelError(mLevel), mLevel};
+        return std::nullopt;
+    }
+
+    static void sayQuality(const Scene& scene)
+    {
+        if (scene.settings.quality) std::cout << scene.settings.quality->summary() << "\n";
+    }
+
     /// Remove the entries of @a previous that @a report's frame did not use; the entries it used.
     static std::set<std::string> pruned(const std::set<std::string>& previous, const PipelineReport& report)
     {
@@ -135,7 +158,8 @@ private:
         return report;
     }
 
-    std::string mScene, mOut = "out", mFrames;
+    std::string mScene, mOut = "out", mFrames, mLevel;
+    double mError = 0.0;
     bool mWarmStart = false, mDryRun = false, mPrune = false;
     std::set<std::string> mToldMeshes;
 };

@@ -1,5 +1,9 @@
 #include <vxf/pipeline/SceneFile.h>
 
+#include "QualityPreset.h"
+
+#include <vxf/pipeline/SceneGeometry.h>
+
 #include "SceneAnimation.h"
 
 #include <vxf/io/InputFile.h>
@@ -223,15 +227,30 @@ public:
 };
 
 /// The scene's settings (voxelize, scatter, render, outputs) over the defaults; a medium of an
-/// anisotropic phase (@a phaseG ≠ 0) changes two of them, as schemas/scene.schema.json says.
-SceneSettings readSettings(const json& document, const SceneReader& reader, double phaseG)
+/// anisotropic phase (@a medium's g ≠ 0) changes two of them, as schemas/scene.schema.json says.
+/// An error asked for (@a quality, else the document's `quality`) puts the setting the accuracy
+/// bench chose for it between the defaults and the scene's own blocks.
+SceneSettings readSettings(
+    const json& document, const SceneReader& reader, const detail::QualityMedium& medium, std::optional<QualityRequest> quality)
 {
     SceneSettings s;
+    const double phaseG = medium.phaseG;
     const bool anisotropic = phaseG != 0.0;
     // An anisotropic phase shows in single scattering marched to the lights; the direct grid's is isotropic.
     s.directFromLights = anisotropic;
     // A forward phase's anisotropy only the accelerated sweeps carry (Phase.h, Scatter.h).
     if (anisotropic) s.kernel = defaultScatterKernel(phaseG);
+    if (!quality && document.contains("quality")) {
+        const json& q = document["quality"];
+        quality = QualityRequest{};
+        if (q.is_string()) {
+            quality->level = q.get<std::string>();
+            quality->error = qualityLevelError(quality->level);
+        } else {
+            quality->error = q["error"].get<double>();
+        }
+    }
+    if (quality) s.quality = detail::applyQuality(*quality, medium, document, s);
     if (document.contains("voxelize")) {
         const json& v = document["voxelize"];
         s.dim = v.value("dim", s.dim);
@@ -261,12 +280,26 @@ SceneSettings readSettings(const json& document, const SceneReader& reader, doub
         s.noiseLevel = v.value("noise_level", s.noiseLevel);
         s.gather = v.value("mode", std::string("view")) == "gather";
         s.gatherDirections = v.value("gather_directions", s.gatherDirections);
-        s.directFromLights = v.value("direct", std::string(anisotropic ? "lights" : "grid")) == "lights";
+        if (v.contains("direct")) s.directFromLights = v["direct"].get<std::string>() == "lights";
         s.surface = v.value("surface", s.surface);
         if (v.contains("background")) s.background = reader.rgb(v["background"]);
     }
     if (document.contains("outputs")) s.outputs = document["outputs"].get<std::vector<std::string>>();
     return s;
+}
+
+/// A mesh medium's size in mean free paths (for `quality`): the longest side of its media's joint
+/// bounds × σt (the mean of @a first's channels). Reads the meshes (objectMesh keeps them for the
+/// voxelize stage).
+double opticalSize(const Scene& scene, const SceneObject& first)
+{
+    openvdb::BBoxd bounds;
+    for (const SceneObject& o : scene.objects) {
+        if (o.role == SceneObject::Role::Medium && !o.isVolume()) bounds.expand(objectMesh(o).bounds());
+    }
+    const openvdb::Vec3d sigmaT = first.material->sigmaT();
+    const openvdb::Vec3d extent = bounds.extents();
+    return bounds.isSorted() ? std::max({extent[0], extent[1], extent[2]}) * (sigmaT[0] + sigmaT[1] + sigmaT[2]) / 3.0 : 0.0;
 }
 
 } // namespace
@@ -296,7 +329,7 @@ json sceneDocument(const std::string& text, const std::string& path, std::option
 
 } // namespace
 
-Scene parseScene(const std::string& text, const std::string& path, std::optional<int> frame)
+Scene parseScene(const std::string& text, const std::string& path, std::optional<int> frame, const std::optional<QualityRequest>& quality)
 {
     const json document = sceneDocument(text, path, frame);
 
@@ -381,13 +414,26 @@ Scene parseScene(const std::string& text, const std::string& path, std::optional
                     firstMedium->name, firstMedium->material->phaseG));
         }
     }
-    scene.settings = readSettings(document, reader, firstMedium ? firstMedium->material->phaseG : 0.0);
+    detail::QualityMedium medium;
+    if (firstMedium) {
+        const openvdb::Vec3d albedo = firstMedium->material->albedo();
+        medium = {firstMedium->isVolume(), (albedo[0] + albedo[1] + albedo[2]) / 3.0, firstMedium->material->phaseG, 0.0};
+        if (!medium.volume && (quality || document.contains("quality"))) medium.opticalSize = opticalSize(scene, *firstMedium);
+    }
+    scene.settings = readSettings(document, reader, medium, quality);
+    // The environment lights' samples the quality's setting names, where a light sets none.
+    if (scene.settings.quality && scene.settings.quality->environmentSamples > 0) {
+        for (std::size_t i = 0; i < document["lights"].size(); ++i) {
+            if (scene.lights[i].type == Light::Type::Environment && !document["lights"][i].contains("samples"))
+                scene.lights[i].samples = scene.settings.quality->environmentSamples;
+        }
+    }
     return scene;
 }
 
-Scene loadScene(const std::string& path, std::optional<int> frame)
+Scene loadScene(const std::string& path, std::optional<int> frame, const std::optional<QualityRequest>& quality)
 {
-    return parseScene(readBoundedFile(path, kMaxSceneBytes, "a scene file"), path, frame);
+    return parseScene(readBoundedFile(path, kMaxSceneBytes, "a scene file"), path, frame, quality);
 }
 
 } // namespace vxf

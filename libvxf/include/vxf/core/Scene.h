@@ -2,6 +2,7 @@
 // (the scene file's reader is vxf/pipeline/SceneFile.h; its schema schemas/scene.schema.json).
 #pragma once
 
+#include <vxf/core/Quality.h>
 #include <vxf/core/StageDefaults.h>
 
 #include <openvdb/Types.h>
@@ -132,6 +133,9 @@ struct SceneSettings
     bool directFromLights = false; ///< render "direct": "lights" (single scattering marched per step)
     openvdb::Vec3d background{0.0};
     std::vector<std::string> outputs{"image"};
+    /// Set when the scene (or `vxf run --error`) asked for an error: the setting chosen for it,
+    /// already written into the fields above where the scene left them unset.
+    std::optional<QualityChoice> quality;
 };
 
 struct Scene
