@@ -55,3 +55,25 @@ TEST_CASE("optical depth along an axis is sigma_t times the way in, and a sweep'
     const double j = source.tree().getValue(openvdb::Coord(0))[0];
     CHECK(fluence[centre][0] == Approx(4.0 * M_PI * j / sigmaT).epsilon(1e-4));
 }
+
+TEST_CASE("a lattice for sweeps only holds no per-voxel coefficients and sweeps the same", "[transport][lattice]")
+{
+    const vxf::Material m = vxf::test::albedoMaterial(30.0, 0.5);
+    const vxf::VoxelSet set = vxf::test::uniformSphere(m, 1.0, 16);
+    const auto& source = *set.get<openvdb::Vec3SGrid>("scatter_source");
+    const vxf::Medium medium(set, m);
+    using Lattice = vxf::detail::SweepLattice;
+    const Lattice full(medium, source), sweepOnly(medium, source, Lattice::Coefficients::SweepOnly);
+    CHECK(full.sigmaT().size() == full.voxelCount());
+    CHECK(sweepOnly.sigmaT().empty());
+    CHECK(sweepOnly.sigmaS().empty());
+    std::vector<openvdb::Vec3f> a, b;
+    full.opticalDepthAlong(openvdb::Vec3d(0.6, 0.0, -0.8), a);
+    sweepOnly.opticalDepthAlong(openvdb::Vec3d(0.6, 0.0, -0.8), b);
+    CHECK(a == b);
+    const std::vector<openvdb::Vec3d> directions = vxf::sweepDirections(8, 0);
+    std::vector<openvdb::Vec3f> fa(full.voxelCount(), openvdb::Vec3f(0.0f)), fb = fa;
+    full.sweep(full.sweepSource(full.read(source)), directions, 1.0, fa);
+    sweepOnly.sweep(sweepOnly.sweepSource(sweepOnly.read(source)), directions, 1.0, fb);
+    CHECK(fa == fb);
+}

@@ -218,7 +218,7 @@ DirectLightReport computeDirectLight(
             const bool fromPoint = sweepableFromPoint(active[l].light());
             if (!sweepable(active[l].light()) && !fromPoint) continue;
             if (!lattice) {
-                lattice.emplace(medium, *direct);
+                lattice.emplace(medium, *direct, detail::SweepLattice::Coefficients::SweepOnly);
                 rim = rimOf(*lattice, medium);
             }
             std::vector<openvdb::Vec3f>* flux = anisotropic ? &sweptFlux[l] : nullptr;

@@ -17,7 +17,7 @@
 
 namespace vxf::detail {
 
-SweepLattice::SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topology)
+SweepLattice::SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topology, Coefficients coefficients)
     : mVoxelSize(medium.voxelSize())
 {
     openvdb::MaskTree mask(medium.density().tree(), false, openvdb::TopologyCopy());
@@ -53,8 +53,11 @@ SweepLattice::SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topol
         mWavefronts[octant].push_back(order.size());
     }
 
-    mSigmaTVoxel.resize(voxelCount());
-    mSigmaS.resize(voxelCount());
+    const bool perVoxel = coefficients == Coefficients::PerVoxel;
+    if (perVoxel) {
+        mSigmaTVoxel.resize(voxelCount());
+        mSigmaS.resize(voxelCount());
+    }
     mInterior.assign(voxelCount(), 1.0f);
     std::vector<float> distance(voxelCount(), -1.0f);
     std::vector<openvdb::Vec3f> inside(voxelCount());
@@ -73,8 +76,10 @@ SweepLattice::SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topol
                     if (!std::isfinite(s[ch])) s[ch] = 0.0;
                 }
                 const std::size_t i = n * kLeafVoxels + v;
-                mSigmaTVoxel[i] = openvdb::Vec3f(t);
-                mSigmaS[i] = openvdb::Vec3f(s);
+                if (perVoxel) {
+                    mSigmaTVoxel[i] = openvdb::Vec3f(t);
+                    mSigmaS[i] = openvdb::Vec3f(s);
+                }
                 if (surface) {
                     const double d = sampler.signedDistance(c.asVec3d());
                     distance[i] = float(d);
