@@ -9,7 +9,7 @@ import re
 import shlex
 import sys
 
-from vxf_farm.submit import plan_frames
+from vxf_farm.submit import add_quality_arguments, plan_frames, quality_arguments
 
 
 def opencue_range(frames):
@@ -24,11 +24,12 @@ def job(args):
 
     scene, out = os.path.abspath(args.scene), os.path.abspath(args.out)
     vxf = os.path.abspath(args.vxf) if os.sep in args.vxf else args.vxf
-    plan_frames(vxf, scene, args.frames, out)  # every frame checked, as vxf run does, before a job exists
+    quality = quality_arguments(args)
+    plan_frames(vxf, scene, args.frames, out, quality)  # every frame checked, as vxf run does, before a job exists
     frame_range = opencue_range(args.frames)
     name = args.name or "vxf-" + re.sub(r"[^A-Za-z0-9_]", "_", os.path.splitext(os.path.basename(scene))[0])
     ol = outline.Outline(name, frame_range=frame_range)
-    command = shlex.join([vxf, "run", scene, "--frames", "#IFRAME#", "--out", out]).replace("'#IFRAME#'", "#IFRAME#")
+    command = shlex.join([vxf, "run", scene, "--frames", "#IFRAME#", "--out", out, *quality]).replace("'#IFRAME#'", "#IFRAME#")
     layer_args = {"command": command, "range": frame_range, "chunk": args.chunk}
     if args.cores:
         layer_args["cores"] = args.cores
@@ -45,6 +46,7 @@ def main(argv=None):
     p.add_argument("--shot", default="vxf")
     p.add_argument("--name", help="job name (default vxf-SCENE)")
     p.add_argument("--chunk", type=int, default=1, help="frames per OpenCue frame task (default 1)")
+    add_quality_arguments(p)
     p.add_argument("--cores", type=float, help="cores a frame books (default: the shell service's)")
     p.add_argument("--launch", action="store_true", help="submit to Cuebot (else print the job specification)")
     p.add_argument("--vxf", default=os.environ.get("VXF_BINARY", "vxf"), help="the vxf binary, at this path on every host")

@@ -27,6 +27,7 @@ def parse_args(argv):
     p.add_argument("--retries", type=int, default=2, help="times a failed or lost frame is tried again (default 2)")
     p.add_argument("--chunk", type=int, default=1, help="frames per task (default 1)")
     p.add_argument("--warm-start", action="store_true", help="within a chunk, each frame's scatter starts from the frame before's")
+    add_quality_arguments(p)
     p.add_argument("--vxf", default=os.environ.get("VXF_BINARY", "vxf"), help="the vxf binary, at the same path on every worker")
     args = p.parse_args(argv)
     if args.retries < 0:
@@ -38,14 +39,30 @@ def parse_args(argv):
     return args
 
 
-def plan_frames(vxf, scene, frames, out):
+def add_quality_arguments(parser):
+    """--error / --quality, passed to every frame's vxf run (vxf run --help says what they do)."""
+    quality = parser.add_mutually_exclusive_group()
+    quality.add_argument("--error", help="the error wanted, as vxf run --error (0.001-1): every frame gets the setting chosen for it")
+    quality.add_argument("--quality", choices=["draft", "final", "reference"], help="a level naming an error, as vxf run --quality")
+
+
+def quality_arguments(args):
+    """The vxf run arguments of --error / --quality (none when neither is given)."""
+    return ["--error", args.error] if args.error else ["--quality", args.quality] if args.quality else []
+
+
+def plan_frames(vxf, scene, frames, out, extra=()):
     """The frames, as `vxf run --dry-run` lists them after checking every frame's scene and
-    inputs (a bad range or a missing frame stops here, before anything is submitted)."""
-    done = subprocess.run([vxf, "run", scene, "--frames", frames, "--out", out, "--dry-run"], stdout=subprocess.PIPE,
+    inputs (a bad range or a missing frame stops here, before anything is submitted); @a extra:
+    vxf run's arguments every frame takes (checked too)."""
+    done = subprocess.run([vxf, "run", scene, "--frames", frames, "--out", out, "--dry-run", *extra], stdout=subprocess.PIPE,
                           stderr=subprocess.PIPE, text=True)
     if done.returncode != 0:
         sys.stderr.write(done.stderr)
         raise SystemExit(done.returncode)
+    for line in done.stdout.splitlines():
+        if line.startswith("quality: "):  # what --error / --quality (or the scene's quality) chose, and why
+            print(f"vxf farm: {line}", flush=True)
     return [int(line.split()[1].rstrip(":")) for line in done.stdout.splitlines() if line.startswith("frame ")]
 
 
@@ -84,8 +101,9 @@ def main(argv=None):
     scene, out = os.path.abspath(args.scene), os.path.abspath(args.out)
     if os.sep in args.vxf:
         args.vxf = os.path.abspath(args.vxf)
-    frames = plan_frames(args.vxf, scene, args.frames, out)
-    extra = ["--warm-start"] if args.warm_start else []
+    quality = quality_arguments(args)
+    frames = plan_frames(args.vxf, scene, args.frames, out, quality)
+    extra = (["--warm-start"] if args.warm_start else []) + quality
     # A frame that kills its worker (lost, out of memory) counts against the same retries.
     dask_config.set({"distributed.scheduler.allowed-failures": args.retries})
     if args.local is not None:

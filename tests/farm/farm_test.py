@@ -173,6 +173,15 @@ def main():
     check(open(f"{WORK}/cue out/s.0003.exr", "rb").read() == open(f"{WORK}/ref/s.0003.exr", "rb").read(),
           "the OpenCue frame's command renders frame 3 as vxf run does")
 
+    # 6. --quality and --error reach every frame's vxf run (checked first, as vxf run checks them).
+    r = farm("opencue", s, "--frames", "1-2", "--out", f"{WORK}/cue q", "--quality", "draft")
+    check(r.returncode == 0 and "quality: 'draft'" in r.stdout, "vxf farm opencue --quality says what it chose " + r.stderr[-300:])
+    spec = ET.fromstring(r.stdout[r.stdout.index("<spec>"):]) if "<spec>" in r.stdout else None
+    command = spec.find("job/layers/layer").findtext("cmd") if spec is not None else ""
+    check("--quality draft" in command, "the layer's command asks for the draft quality: " + command)
+    r = farm("opencue", s, "--frames", "1", "--error", "5")
+    check(r.returncode == 2 and "--error" in r.stderr, "an error out of range is refused before a job: " + r.stderr.strip()[-300:])
+
     print(f"{len(failures)} failed" if failures else "all passed")
     return 1 if failures else 0
 
