@@ -105,7 +105,7 @@ private:
     std::optional<QualityRequest> qualityAsked() const
     {
         if (mError > 0.0) return QualityRequest{mError, ""};
-        if (!mLevel.empty()) return QualityRequest{qualityLevelError(mLevel), mLevel};
+        if (!mLevel.empty()) return qualityRequestForLevel(mLevel);
         return std::nullopt;
     }
 

@@ -1,10 +1,9 @@
 #include <vxf/pipeline/SceneFile.h>
 
 #include "QualityPreset.h"
+#include "SceneAnimation.h"
 
 #include <vxf/pipeline/SceneGeometry.h>
-
-#include "SceneAnimation.h"
 
 #include <vxf/io/InputFile.h>
 #include <vxf/scatter/ScatterPass.h>
@@ -242,13 +241,7 @@ SceneSettings readSettings(
     if (anisotropic) s.kernel = defaultScatterKernel(phaseG);
     if (!quality && document.contains("quality")) {
         const json& q = document["quality"];
-        quality = QualityRequest{};
-        if (q.is_string()) {
-            quality->level = q.get<std::string>();
-            quality->error = qualityLevelError(quality->level);
-        } else {
-            quality->error = q["error"].get<double>();
-        }
+        quality = q.is_string() ? qualityRequestForLevel(q.get<std::string>()) : QualityRequest{q["error"].get<double>(), ""};
     }
     if (quality) s.quality = detail::applyQuality(*quality, medium, document, s);
     if (document.contains("voxelize")) {

@@ -70,13 +70,16 @@ SweepLattice::SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topol
             for (int v = 0; v < kLeafVoxels; ++v) {
                 const openvdb::Coord c = mOrigins[n].offsetBy(v >> 6, (v >> 3) & 7, v & 7);
                 // A voxel's own coefficients (a trilinear read at its centre weighs it alone).
-                openvdb::Vec3d t = sampler.sigmaT(c.asVec3d()), s = sampler.sigmaS(c);
+                openvdb::Vec3d t = sampler.sigmaT(c.asVec3d());
                 for (int ch = 0; ch < 3; ++ch) {
                     if (!std::isfinite(t[ch]) || t[ch] < 0.0) t[ch] = 0.0;
-                    if (!std::isfinite(s[ch])) s[ch] = 0.0;
                 }
                 const std::size_t i = n * kLeafVoxels + v;
                 if (perVoxel) {
+                    openvdb::Vec3d s = sampler.sigmaS(c);
+                    for (int ch = 0; ch < 3; ++ch) {
+                        if (!std::isfinite(s[ch])) s[ch] = 0.0;
+                    }
                     mSigmaTVoxel[i] = openvdb::Vec3f(t);
                     mSigmaS[i] = openvdb::Vec3f(s);
                 }

@@ -22,6 +22,10 @@ struct QualityRequest
 /// vxf::UsageError naming the levels for any other name.
 double qualityLevelError(const std::string& level);
 
+/// The request a level makes (its error, and its name for the run to say). Throws as
+/// qualityLevelError.
+inline QualityRequest qualityRequestForLevel(const std::string& level) { return QualityRequest{qualityLevelError(level), level}; }
+
 /// The names of the levels, in the order of their errors (draft first).
 const std::vector<std::string>& qualityLevels();
 
