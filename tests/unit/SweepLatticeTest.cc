@@ -77,3 +77,41 @@ TEST_CASE("a lattice for sweeps only holds no per-voxel coefficients and sweeps 
     sweepOnly.sweep(sweepOnly.sweepSource(sweepOnly.read(source)), directions, 1.0, fb);
     CHECK(fa == fb);
 }
+
+TEST_CASE("a lattice holds grey sigma_t as one float a voxel and no surface arrays without a surface, and sweeps as a coloured one",
+    "[transport][lattice]")
+{
+    // A volume without a surface (uniformSphere: density alone). Grey: σt the same in each
+    // channel (albedo coloured or not); coloured: the third channel's σt 1e-5 larger.
+    const vxf::Material grey = vxf::test::albedoMaterial(30.0, 0.5);
+    vxf::Material coloured = grey;
+    coloured.sigmaA[2] += 3e-4;
+    const vxf::VoxelSet set = vxf::test::uniformSphere(grey, 1.0, 16);
+    const auto& source = *set.get<openvdb::Vec3SGrid>("scatter_source");
+    using Lattice = vxf::detail::SweepLattice;
+    const vxf::Medium greyMedium(set, grey), colouredMedium(set, coloured);
+    REQUIRE(greyMedium.surface() == nullptr);
+    const Lattice a(greyMedium, source, Lattice::Coefficients::SweepOnly), b(colouredMedium, source, Lattice::Coefficients::SweepOnly);
+    CHECK(a.greySigmaT());
+    CHECK_FALSE(b.greySigmaT());
+    // σt padded (1000 values a leaf of 512) is all a sweep-only lattice holds per voxel: 7.8
+    // bytes grey, 23.4 coloured, and the leaves' neighbours and orders under half a byte.
+    const double perVoxelA = double(a.bytes()) / double(a.voxelCount()), perVoxelB = double(b.bytes()) / double(b.voxelCount());
+    INFO("bytes a voxel: grey " << perVoxelA << ", coloured " << perVoxelB);
+    CHECK(perVoxelA < 9.0);
+    CHECK(perVoxelB < 25.0);
+    CHECK(perVoxelB > 23.0);
+    // The same arithmetic per channel: the grey channels agree to the bit.
+    const std::vector<openvdb::Vec3d> directions = vxf::sweepDirections(8, 0);
+    std::vector<openvdb::Vec3f> fa(a.voxelCount(), openvdb::Vec3f(0.0f)), fb = fa, ta, tb;
+    a.sweep(a.sweepSource(a.read(source)), directions, 1.0, fa);
+    b.sweep(b.sweepSource(b.read(source)), directions, 1.0, fb);
+    a.opticalDepthAlong(openvdb::Vec3d(0.6, 0.0, -0.8), ta);
+    b.opticalDepthAlong(openvdb::Vec3d(0.6, 0.0, -0.8), tb);
+    std::size_t differ = 0;
+    for (std::size_t v = 0; v < fa.size(); ++v) {
+        for (int ch = 0; ch < 2; ++ch) differ += (fa[v][ch] != fb[v][ch]) + (ta[v][ch] != tb[v][ch]);
+        CHECK(fb[v][2] <= fa[v][2]); // more extinction, less light
+    }
+    CHECK(differ == 0);
+}

@@ -306,47 +306,45 @@ private:
     void sweepStep(SweepSolveReport::Iteration& it)
     {
         const std::vector<openvdb::Vec3f>& sigmaS = lattice.sigmaS();
-        std::vector<openvdb::Vec3f> j(count);
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
-            for (std::size_t v = r.begin(); v != r.end(); ++v) {
-                for (int ch = 0; ch < 3; ++ch) j[v][ch] = j0[v][ch] + sigmaS[v][ch] * phi[v][ch] * float(1.0 / (4.0 * M_PI));
-            }
-        });
+        const auto sourceAt = [&](std::size_t v) {
+            openvdb::Vec3f j;
+            for (int ch = 0; ch < 3; ++ch) j[ch] = j0[v][ch] + sigmaS[v][ch] * phi[v][ch] * float(1.0 / (4.0 * M_PI));
+            return j;
+        };
+        std::vector<openvdb::Vec3f> beta;
         if (moment) {
             // One mean direction for the sum: its parts' a weighted by their grey J, the
             // scattered light's a = F/φ.
             a.resize(count);
             tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
                 for (std::size_t v = r.begin(); v != r.end(); ++v) {
-                    const double total = greyOf(openvdb::Vec3d(j[v])), own = greyOf(openvdb::Vec3d(j0[v]));
+                    const double total = greyOf(openvdb::Vec3d(sourceAt(v))), own = greyOf(openvdb::Vec3d(j0[v]));
                     const double phiGrey = greyOf(openvdb::Vec3d(phi[v]));
                     openvdb::Vec3d sum = own * openvdb::Vec3d(a0[v]);
                     if (phiGrey > 0.0 && !flux.empty()) sum += (total - own) * clampedToUnit(openvdb::Vec3d(flux[v]) / phiGrey);
                     a[v] = total > 0.0 ? openvdb::Vec3f(sum / total) : openvdb::Vec3f(0.0f);
                 }
             });
-        }
-        const std::vector<openvdb::Vec3f> paddedA = moment ? lattice.padded(a) : std::vector<openvdb::Vec3f>();
-        std::vector<openvdb::Vec3f> paddedBeta;
-        if (moment && !pairFirsts.empty()) {
-            // The direction set's own error in the rest's first moment, taken off (Phase.h).
-            std::vector<openvdb::Vec3f> beta(count);
-            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
-                for (std::size_t v = r.begin(); v != r.end(); ++v) beta[v] = moment->rest.quadratureCorrection(a[v], pairFirsts);
-            });
-            paddedBeta = lattice.padded(beta);
-            moment->quadratureCorrection = &paddedBeta;
-        }
-        if (moment) {
-            moment->sourceAnisotropy = &paddedA;
+            moment->sourceAnisotropy = &a;
+            if (!pairFirsts.empty()) {
+                // The direction set's own error in the rest's first moment, taken off (Phase.h).
+                beta.resize(count);
+                tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
+                    for (std::size_t v = r.begin(); v != r.end(); ++v) beta[v] = moment->rest.quadratureCorrection(a[v], pairFirsts);
+                });
+                moment->quadratureCorrection = &beta;
+            }
             previousFlux.swap(flux);
             flux.assign(count, openvdb::Vec3f(0.0f));
             moment->flux = &flux;
         }
+        // J made padded from its parts (no per-voxel J beside it: 12 bytes a voxel).
+        const std::vector<openvdb::Vec3f> paddedSource = lattice.sweepSource(sourceAt);
         next.assign(count, openvdb::Vec3f(0.0f));
         const auto sweepStart = std::chrono::steady_clock::now();
-        lattice.sweep(lattice.sweepSource(std::move(j)), directions, weight, next, &skin, nullptr, moment ? &*moment : nullptr);
+        lattice.sweep(paddedSource, directions, weight, next, &skin, nullptr, moment ? &*moment : nullptr);
         it.sweepSeconds = secondsSince(sweepStart);
+        if (moment) moment->quadratureCorrection = nullptr; // (beta goes)
     }
 
     /// The correction of φ_{l+½} toward the sum: the sweeps' own solve of the gather's change, or
@@ -456,10 +454,10 @@ private:
     std::optional<detail::SweepLattice::FirstMoment> moment;
     std::vector<openvdb::Vec3f> a0, flux, previousFlux, a;
     std::vector<openvdb::Vec3d> pairFirsts;
-    // Per voxel: what the iteration keeps (the sweep's own arrays and J come and go, so that at
-    // most six such arrays and the padded source live at once: 950 MB at dim 256, 4.5M voxels;
-    // a first moment adds a0, a, F, the last sweep's F and the correction's ΔF, and two padded
-    // arrays, a's and the source toward a direction).
+    // Per voxel: what the iteration keeps (the sweep's own arrays come and go; J is made padded
+    // from j0, σs and φ, with no per-voxel copy; a first moment adds a0, a, β, F, the last
+    // sweep's F and the correction's ΔF, a and β read padded a leaf at a time by the sweep).
+    // docs/accuracy-notes.md (ab) has what each costs.
     std::vector<openvdb::Vec3f> phi, next, skin;
     std::vector<openvdb::Vec3f> firstFlight; ///< the gather's K J0 (the same every iteration)
     AndersonMixing mixing; ///< of the corrected gathers

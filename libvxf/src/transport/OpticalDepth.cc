@@ -20,15 +20,22 @@ namespace vxf::detail {
 openvdb::Vec3f SweepLattice::depthStep(std::size_t leaf, int p, const openvdb::Vec3d& omega, const float (&weight)[4],
     const int (&offset)[4], double length, const openvdb::Vec3f (&tauUpwind)[4]) const
 {
-    const openvdb::Vec3f* st = &mSigmaT[leaf * kPaddedVoxels];
-    const float* distance = &mDistance[leaf * kPaddedVoxels];
+    const std::size_t first = leaf * kPaddedVoxels;
     openvdb::Vec3f tauIn(0.0f), stIn(0.0f);
+    for (int k = 0; k < 4; ++k) {
+        tauIn += weight[k] * tauUpwind[k];
+        stIn += weight[k] * paddedSigmaT(first + std::size_t(p + offset[k]));
+    }
+    const openvdb::Vec3f here = paddedSigmaT(first + std::size_t(p));
+    if (mDistance.empty()) {
+        // No surface: every step whole (as insidePart of two negative distances).
+        return tauIn + float(0.5 * length * mVoxelSize) * (stIn + here);
+    }
+    const float* distance = &mDistance[first];
     float dIn = 0.0f;
     bool outside = false, inside = false; // upwind voxels on either side of the surface
     for (int k = 0; k < 4; ++k) {
         const int q = p + offset[k];
-        tauIn += weight[k] * tauUpwind[k];
-        stIn += weight[k] * st[q];
         dIn += weight[k] * distance[q];
         if (weight[k] > 0.0f) (distance[q] >= 0.0f ? outside : inside) = true;
     }
@@ -46,18 +53,18 @@ openvdb::Vec3f SweepLattice::depthStep(std::size_t leaf, int p, const openvdb::V
     }
     openvdb::Vec3f result = tauIn;
     if (cosine > kContinuedCosine) {
-        result = openvdb::Vec3f(float(length * mVoxelSize) * st[p]);
+        result = openvdb::Vec3f(float(length * mVoxelSize) * here);
         for (int k = 0; k < 4; ++k) {
             const int q = p + offset[k];
             openvdb::Vec3f t = tauUpwind[k];
-            if (distance[q] >= 0.0f) t -= float(distance[q] / cosine * mVoxelSize) * st[p];
+            if (distance[q] >= 0.0f) t -= float(distance[q] / cosine * mVoxelSize) * here;
             result += weight[k] * t;
         }
         for (int ch = 0; ch < 3; ++ch) result[ch] = std::max(result[ch], 0.0f);
     } else {
         const InsidePart part = insidePart(dIn, dHere);
         if (part.fraction > 0.0) {
-            const openvdb::Vec3f sigmaStart = part.startOutside ? st[p] : stIn, sigmaEnd = part.endOutside ? stIn : st[p];
+            const openvdb::Vec3f sigmaStart = part.startOutside ? here : stIn, sigmaEnd = part.endOutside ? stIn : here;
             result += float(0.5 * length * part.fraction * mVoxelSize) * (sigmaStart + sigmaEnd);
         }
     }
@@ -77,7 +84,7 @@ void SweepLattice::opticalDepthAlong(const openvdb::Vec3d& omega, std::vector<op
                 // One σt over the padded block: every step adds the same (its upwind blend of σt
                 // the same sum at every voxel), the block's σt not read (it is most of a sweep's
                 // memory traffic).
-                const openvdb::Vec3f sigmaT = mSigmaT[n * kPaddedVoxels];
+                const openvdb::Vec3f sigmaT = paddedSigmaT(n * kPaddedVoxels);
                 openvdb::Vec3f stIn(0.0f);
                 for (int k = 0; k < 4; ++k) stIn += c.weight[k] * sigmaT;
                 const openvdb::Vec3f own = halfStep * (stIn + sigmaT);
@@ -113,7 +120,6 @@ void SweepLattice::opticalDepthFrom(
 {
     tau.assign(voxelCount(), openvdb::Vec3f(0.0f));
     state.assign(voxelCount(), kPending);
-    const float* distances = mDistance.data();
     for (int octant = 0; octant < 8; ++octant) {
         // The leaves holding voxels of this octant (bit a set: below the point along axis a).
         const auto holds = [&](std::size_t n) {
@@ -134,7 +140,7 @@ void SweepLattice::opticalDepthFrom(
                 const openvdb::Coord ijk = o.offsetBy(local >> 6, (local >> 3) & 7, local & 7);
                 if (octantAround(ijk, point) != octant) continue;
                 const std::size_t i = n * kLeafVoxels + std::size_t(local);
-                const float d = distances[n * kPaddedVoxels + std::size_t(voxel.padded)];
+                const float d = paddedDistance(n * kPaddedVoxels + std::size_t(voxel.padded));
                 const openvdb::Vec3d away = ijk.asVec3d() - point;
                 // A characteristic reaching back past the point's own layer (a voxel next to the
                 // point) has no upwind layer to read: marched.

@@ -8,6 +8,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <cmath>
@@ -58,10 +59,10 @@ SweepLattice::SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topol
         mSigmaTVoxel.resize(voxelCount());
         mSigmaS.resize(voxelCount());
     }
-    mInterior.assign(voxelCount(), 1.0f);
-    std::vector<float> distance(voxelCount(), -1.0f);
-    std::vector<openvdb::Vec3f> inside(voxelCount());
     const bool surface = medium.surface() != nullptr;
+    if (surface) mInterior.assign(voxelCount(), 1.0f);
+    std::vector<float> distance(surface ? voxelCount() : 0, -1.0f);
+    std::vector<openvdb::Vec3f> inside(voxelCount());
     std::vector<std::uint8_t> skin(surface ? voxelCount() : 0, 0);
     std::vector<openvdb::Vec3f> skinNormal(surface ? voxelCount() : 0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mOrigins.size()), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -83,37 +84,66 @@ SweepLattice::SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topol
                     mSigmaTVoxel[i] = openvdb::Vec3f(t);
                     mSigmaS[i] = openvdb::Vec3f(s);
                 }
+                double interior = 1.0;
                 if (surface) {
                     const double d = sampler.signedDistance(c.asVec3d());
                     distance[i] = float(d);
                     mInterior[i] = float(1.0 / std::max(std::clamp(0.5 - d, 0.0, 1.0), Medium::kMinFraction));
+                    interior = double(mInterior[i]);
                     openvdb::Vec3d point, normal;
                     if (sampler.skinPoint(c, point, normal)) {
                         skin[i] = 1;
                         skinNormal[i] = openvdb::Vec3f(normal);
                     }
                 }
-                inside[i] = openvdb::Vec3f(t * double(mInterior[i]));
+                inside[i] = openvdb::Vec3f(t * interior);
             }
         }
     });
-    mSigmaT = padded(inside);
-    mDistance = padded(distance);
+    // Grey σt (every voxel's the same in each channel) held as one float: a third of the
+    // lattice's largest array (issue 62: 16 bytes a voxel).
+    const bool grey = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, inside.size()), true,
+        [&](const tbb::blocked_range<std::size_t>& r, bool all) {
+            for (std::size_t i = r.begin(); all && i != r.end(); ++i) all = inside[i][0] == inside[i][1] && inside[i][0] == inside[i][2];
+            return all;
+        },
+        [](bool a, bool b) { return a && b; });
+    if (grey) {
+        std::vector<float> scalar(inside.size());
+        for (std::size_t i = 0; i < inside.size(); ++i) scalar[i] = inside[i][0];
+        std::vector<openvdb::Vec3f>().swap(inside);
+        mSigmaTGrey = padded(scalar);
+    } else {
+        mSigmaT = padded(inside);
+    }
+    if (surface) mDistance = padded(distance);
     // Leaves whose padded block lies wholly inside the surface (or without one): a sweep there
     // needs no cut of its steps and holds no skin voxel.
-    mDeep.assign(mOrigins.size(), 0);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mOrigins.size()), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t n = r.begin(); n != r.end(); ++n) {
-            const float* d = &mDistance[n * kPaddedVoxels];
-            mDeep[n] = std::all_of(d, d + kPaddedVoxels, [](float v) { return v < -0.5f; }) ? 1 : 0;
-        }
-    });
+    mDeep.assign(mOrigins.size(), surface ? 0 : 1);
+    if (surface) {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mOrigins.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t n = r.begin(); n != r.end(); ++n) {
+                const float* d = &mDistance[n * kPaddedVoxels];
+                mDeep[n] = std::all_of(d, d + kPaddedVoxels, [](float v) { return v < -0.5f; }) ? 1 : 0;
+            }
+        });
+    }
     // Deep leaves of one σt (a voxelized mesh's interior): every step of a sweep there is alike.
     mUniform.assign(mOrigins.size(), 0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mOrigins.size()), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t n = r.begin(); n != r.end(); ++n) {
-            const openvdb::Vec3f* st = &mSigmaT[n * kPaddedVoxels];
-            mUniform[n] = mDeep[n] && std::all_of(st, st + kPaddedVoxels, [&](const openvdb::Vec3f& v) { return v == st[0]; }) ? 1 : 0;
+            if (!mDeep[n]) continue;
+            const std::size_t first = n * kPaddedVoxels;
+            bool one = true;
+            if (grey) {
+                const float* st = &mSigmaTGrey[first];
+                one = std::all_of(st, st + kPaddedVoxels, [&](float v) { return v == st[0]; });
+            } else {
+                const openvdb::Vec3f* st = &mSigmaT[first];
+                one = std::all_of(st, st + kPaddedVoxels, [&](const openvdb::Vec3f& v) { return v == st[0]; });
+            }
+            mUniform[n] = one ? 1 : 0;
         }
     });
     mSkinIndex.assign(surface ? voxelCount() : 0, -1);
@@ -122,6 +152,16 @@ SweepLattice::SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topol
         mSkinIndex[i] = std::int32_t(mSkin.size());
         mSkin.push_back({std::uint32_t(i), skinNormal[i], float(std::max(-double(distance[i]), 0.0) * mVoxelSize)});
     }
+}
+
+std::size_t SweepLattice::bytes() const
+{
+    const auto of = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
+    std::size_t sum = of(mOrigins) + of(mNeighbours) + of(mSigmaT) + of(mSigmaTGrey) + of(mDistance) + of(mDeep) + of(mUniform) +
+        of(mInterior) + of(mSigmaTVoxel) + of(mSigmaS) + of(mSkin) + of(mSkinIndex);
+    for (int o = 0; o < 8; ++o) sum += of(mOrder[o]) + of(mWavefronts[o]);
+    return sum + mLeafIndex.size() * (sizeof(openvdb::Coord) + sizeof(std::int32_t) + 2 * sizeof(void*)) +
+        mLeafIndex.bucket_count() * sizeof(void*);
 }
 
 std::vector<openvdb::Vec3f> SweepLattice::withSkin(const std::vector<openvdb::Vec3f>& fluence,
@@ -143,17 +183,38 @@ void SweepLattice::skinAtCentres(
             const std::uint32_t v = mSkin[s].voxel;
             const int local = int(v % kLeafVoxels);
             const openvdb::Coord c = mOrigins[v / kLeafVoxels].offsetBy(local >> 6, (local >> 3) & 7, local & 7);
-            values[v] = centre(c) / mInterior[v];
+            values[v] = centre(c) / mInterior[v]; // (skin voxels: a surface, so mInterior is there)
         }
     });
 }
 
 std::vector<openvdb::Vec3f> SweepLattice::sweepSource(std::vector<openvdb::Vec3f> source) const
 {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, source.size()), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t i = r.begin(); i != r.end(); ++i) source[i] *= mInterior[i];
-    });
+    if (!mInterior.empty()) {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, source.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t i = r.begin(); i != r.end(); ++i) source[i] *= mInterior[i];
+        });
+    }
     return padded(source);
+}
+
+std::vector<openvdb::Vec3f> SweepLattice::sweepSource(const std::function<openvdb::Vec3f(std::size_t)>& sourceAt) const
+{
+    std::vector<openvdb::Vec3f> out(mOrigins.size() * kPaddedVoxels);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mOrigins.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+        std::int64_t index[kPaddedVoxels];
+        for (std::size_t n = r.begin(); n != r.end(); ++n) {
+            openvdb::Vec3f* block = &out[n * kPaddedVoxels];
+            paddedVoxels(n, index);
+            for (int q = 0; q < kPaddedVoxels; ++q) {
+                const std::int64_t v = index[q];
+                block[q] = v < 0        ? openvdb::Vec3f(0.0f)
+                    : mInterior.empty() ? sourceAt(std::size_t(v))
+                                        : sourceAt(std::size_t(v)) * mInterior[std::size_t(v)];
+            }
+        }
+    });
+    return out;
 }
 
 std::vector<openvdb::Vec3f> SweepLattice::read(const openvdb::Vec3SGrid& grid) const
@@ -171,23 +232,25 @@ std::vector<openvdb::Vec3f> SweepLattice::read(const openvdb::Vec3SGrid& grid) c
     return values;
 }
 
+void SweepLattice::paddedVoxels(std::size_t n, std::int64_t* index) const
+{
+    for (int i = -1; i <= 8; ++i) {
+        for (int j = -1; j <= 8; ++j) {
+            for (int k = -1; k <= 8; ++k) index[paddedIndex(i, j, k)] = voxelIndex(n, i, j, k);
+        }
+    }
+}
+
 template <typename T>
 std::vector<T> SweepLattice::padded(const std::vector<T>& values) const
 {
     std::vector<T> out(mOrigins.size() * kPaddedVoxels);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mOrigins.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+        std::int64_t index[kPaddedVoxels];
         for (std::size_t n = r.begin(); n != r.end(); ++n) {
             T* block = &out[n * kPaddedVoxels];
-            for (int i = -1; i <= 8; ++i) {
-                for (int j = -1; j <= 8; ++j) {
-                    for (int k = -1; k <= 8; ++k) {
-                        const int di = i < 0 ? -1 : (i > 7 ? 1 : 0), dj = j < 0 ? -1 : (j > 7 ? 1 : 0), dk = k < 0 ? -1 : (k > 7 ? 1 : 0);
-                        const int leaf = neighbour(n, di, dj, dk);
-                        block[paddedIndex(i, j, k)] =
-                            leaf < 0 ? T(0) : values[std::size_t(leaf) * kLeafVoxels + localIndex(i - 8 * di, j - 8 * dj, k - 8 * dk)];
-                    }
-                }
-            }
+            paddedVoxels(n, index);
+            for (int q = 0; q < kPaddedVoxels; ++q) block[q] = index[q] < 0 ? T(0) : values[std::size_t(index[q])];
         }
     });
     return out;

@@ -58,6 +58,11 @@ public:
     double voxelSize() const { return mVoxelSize; }
     const openvdb::Coord& origin(std::size_t leaf) const { return mOrigins[leaf]; }
 
+    /// The bytes the lattice holds (its arrays' capacities, the leaf map's nodes estimated).
+    std::size_t bytes() const;
+    /// Whether σt is held grey (one float a voxel: every voxel's σt the same in each channel).
+    bool greySigmaT() const { return !mSigmaTGrey.empty() || mSigmaT.empty(); }
+
     static int localIndex(int x, int y, int z) { return (x << 6) | (y << 3) | z; }
     static int paddedIndex(int x, int y, int z) { return (x + 1) * 100 + (y + 1) * 10 + (z + 1); }
 
@@ -85,6 +90,9 @@ public:
     /// voxel): its voxels their own value, an active tile the mean of its voxels. Non-finite
     /// values are written as 0.
     openvdb::Vec3SGrid::Ptr write(const std::vector<openvdb::Vec3f>& values, const openvdb::Vec3SGrid& topology) const;
+    /// The per-voxel index of each of leaf @a leaf's padded voxels (kPaddedVoxels, in
+    /// paddedIndex order) into @a index; −1 where no leaf is.
+    void paddedVoxels(std::size_t leaf, std::int64_t* index) const;
     /// @a values (per voxel) padded with their neighbours' values.
     template <typename T>
     std::vector<T> padded(const std::vector<T>& values) const;
@@ -92,6 +100,9 @@ public:
     /// the surface (J/f).
     /// (By value: a caller done with @a source moves it in, and its memory goes.)
     std::vector<openvdb::Vec3f> sweepSource(std::vector<openvdb::Vec3f> source) const;
+    /// The same from @a sourceAt(v), the source at each voxel (per-voxel index), made padded
+    /// directly: no per-voxel array of it beside the padded one.
+    std::vector<openvdb::Vec3f> sweepSource(const std::function<openvdb::Vec3f(std::size_t)>& sourceAt) const;
 
     /// One transport sweep per direction: the radiance ψ(x, ω) of dψ/ds = −σt ψ + J with no
     /// light entering the lattice from outside, and @a fluence += Σ_i @a weight·ψ(x, ω_i) (per
@@ -101,14 +112,16 @@ public:
     ///
     /// With @a moment, the source is anisotropic by the rest of the phase (Phase.h) and the
     /// sweep adds up the fluence's first moment too: direction i sweeps the source
-    /// J·RestPhase(a, ω_i, β) (a per voxel, the source's mean direction of travel, padded as
-    /// @a source; β its direction set's correction), and flux += Σ_i weight·grey(ψ_i)·ω_i (per
+    /// J·RestPhase(a, ω_i, β) (a per voxel, the source's mean direction of travel; β its
+    /// direction set's correction), and flux += Σ_i weight·grey(ψ_i)·ω_i (per
     /// voxel). ω_i and a are in world space (worldDirections: @a directions carried to it).
     struct FirstMoment
     {
         RestPhase rest; ///< the rest's moments
-        const std::vector<openvdb::Vec3f>* sourceAnisotropy = nullptr; ///< a, padded
-        /// β, padded (RestPhase::quadratureCorrection for worldDirections), or null: none.
+        /// a, per voxel (read padded a leaf at a time as the sweep visits it: 24 bytes a voxel
+        /// less than held padded)
+        const std::vector<openvdb::Vec3f>* sourceAnisotropy = nullptr;
+        /// β, per voxel (RestPhase::quadratureCorrection for worldDirections), or null: none.
         const std::vector<openvdb::Vec3f>* quadratureCorrection = nullptr;
         std::vector<openvdb::Vec3d> worldDirections; ///< one per sweep direction, unit
         std::vector<openvdb::Vec3f>* flux = nullptr; ///< per voxel, added to
@@ -240,9 +253,15 @@ private:
     /// the upwind ghosts already in @a buffer (padded), the source @a j (padded, the leaf's);
     /// each voxel's ψ into @a buffer, @a weight·ψ added to @a phi (the leaf's, per voxel) and, with
     /// @a flux, @a weight·grey(ψ)·@a worldOmega to it; with @a skinFluence, the skin's too.
-    void sweepLeaf(std::size_t leaf, const openvdb::Vec3d& omega, const UpwindVoxel* voxels, const openvdb::Vec3f* j,
+    /// @a st: the leaf's padded σt (mSigmaTGrey's or mSigmaT's: float or Vec3f).
+    template <typename Sigma>
+    void sweepLeaf(std::size_t leaf, const Sigma* st, const openvdb::Vec3d& omega, const UpwindVoxel* voxels, const openvdb::Vec3f* j,
         openvdb::Vec3f* buffer, float weight, openvdb::Vec3f* phi, openvdb::Vec3f* flux, const openvdb::Vec3f& worldOmega,
         std::vector<openvdb::Vec3f>* skinFluence) const;
+    /// σt at padded index @a q (of the whole padded array).
+    openvdb::Vec3f paddedSigmaT(std::size_t q) const { return mSigmaTGrey.empty() ? mSigmaT[q] : openvdb::Vec3f(mSigmaTGrey[q]); }
+    /// The signed distance at padded index @a q (−1 without a surface).
+    float paddedDistance(std::size_t q) const { return mDistance.empty() ? -1.0f : mDistance[q]; }
 
     double mVoxelSize = 1.0;
     std::vector<openvdb::Coord> mOrigins;
@@ -252,11 +271,17 @@ private:
     /// cut into wavefronts: leaves of one wavefront depend on none of each other.
     std::array<std::vector<std::int32_t>, 8> mOrder;
     std::array<std::vector<std::size_t>, 8> mWavefronts; ///< start of each wavefront in mOrder, then its end
-    std::vector<openvdb::Vec3f> mSigmaT; ///< padded, inside the surface (σt/f)
-    std::vector<float> mDistance; ///< padded, signed distance to the surface (voxels; −1 without one)
+    /// σt padded, inside the surface (σt/f): one float a voxel where every voxel's σt is grey
+    /// (the same in each channel: a medium of one mean free path, whatever its albedo), three
+    /// otherwise; the other array empty.
+    std::vector<openvdb::Vec3f> mSigmaT;
+    std::vector<float> mSigmaTGrey;
+    /// Padded, signed distance to the surface (voxels); empty without a surface (a volume
+    /// object's medium: every voxel whole, f = 1, as if −1 everywhere).
+    std::vector<float> mDistance;
     std::vector<std::uint8_t> mDeep; ///< per leaf: its padded block more than half a voxel inside the surface
     std::vector<std::uint8_t> mUniform; ///< per leaf: deep, and one σt over its padded block (sweep's short path)
-    std::vector<float> mInterior; ///< per voxel, 1/f
+    std::vector<float> mInterior; ///< per voxel, 1/f; empty without a surface (f = 1)
     std::vector<openvdb::Vec3f> mSigmaTVoxel, mSigmaS;
     struct Skin
     {

@@ -87,7 +87,7 @@ struct StepWeights
 
 inline StepWeights stepWeights(double tau)
 {
-    StepWeights w;
+    StepWeights w{};
     w.transmittance = std::exp(-tau);
     if (tau < 0.25) {
         // Σ_n (−τ)ⁿ/n! · 1/(n+2) and Σ_n (−τ)ⁿ/n! · 1/((n+1)(n+2)): no cancellation near 0
@@ -199,13 +199,28 @@ inline float uniformStep(float psiIn, float jStart, float jEnd, double sigma, do
 /// much light. Along the step σt ≥ min(σa, σb), so the source adds at most what J linear along
 /// it gives through that constant σt; an answer above that bound is no model of this step, and
 /// J linear through the step's own τ takes its place.
-inline double varyingStep(double psiIn, double ja, double jb, double sa, double sb, double h)
+/// The step's weights, @a weights kept for the next call (varyingStep: a grey medium's three
+/// channels share one exp; a pure function of its arguments, so nothing depends on the order).
+struct VaryingWeights
+{
+    double sa = -1.0, sb = -1.0, h = -1.0; ///< what they were computed for
+    double tau = 0.0;
+    StepWeights w{};
+};
+inline double varyingStep(double psiIn, double ja, double jb, double sa, double sb, double h, VaryingWeights& weights)
 {
     double Sa = sa > 0.0 ? ja / sa : 0.0, Sb = sb > 0.0 ? jb / sb : 0.0;
     if (sa <= 0.0) Sa = Sb;
     if (sb <= 0.0) Sb = Sa;
-    const double tau = 0.5 * (sa + sb) * h;
-    const StepWeights sw = stepWeights(tau);
+    if (sa != weights.sa || sb != weights.sb || h != weights.h) {
+        weights.sa = sa;
+        weights.sb = sb;
+        weights.h = h;
+        weights.tau = 0.5 * (sa + sb) * h;
+        weights.w = stepWeights(weights.tau);
+    }
+    const double tau = weights.tau;
+    const StepWeights& sw = weights.w;
     double added = tau * (sw.in * Sa + sw.own * Sb);
     // The bound at σt = 0 first (no exp): scattered light stays far below it.
     if (std::abs(added) > 0.5 * h * (std::abs(ja) + std::abs(jb))) {
@@ -214,6 +229,22 @@ inline double varyingStep(double psiIn, double ja, double jb, double sa, double 
     }
     return sw.transmittance * psiIn + added;
 }
+
+/// A leaf's padded σt as Vec3f, stored grey (one float a voxel) or per channel: st[q].
+template <typename Sigma>
+struct PaddedSigma;
+template <>
+struct PaddedSigma<float>
+{
+    const float* values;
+    openvdb::Vec3f operator[](int q) const { return openvdb::Vec3f(values[q]); }
+};
+template <>
+struct PaddedSigma<openvdb::Vec3f>
+{
+    const openvdb::Vec3f* values;
+    const openvdb::Vec3f& operator[](int q) const { return values[q]; }
+};
 
 /// The part of a short characteristic's step inside the surface, from the signed distances at
 /// its start (the upwind crossing) and its end (the centre), linear along it: all of it, none,

@@ -13,6 +13,7 @@
 #include <cmath>
 #include <numeric>
 #include <optional>
+#include <type_traits>
 #include <unordered_map>
 
 namespace vxf::detail {
@@ -29,7 +30,9 @@ void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::v
     const float w = float(weight);
     if (moment &&
         (moment->worldDirections.size() != directions.size() || !moment->sourceAnisotropy ||
-            moment->sourceAnisotropy->size() != source.size() || !moment->flux || moment->flux->size() != voxelCount())) {
+            moment->sourceAnisotropy->size() != voxelCount() ||
+            (moment->quadratureCorrection && moment->quadratureCorrection->size() != voxelCount()) || !moment->flux ||
+            moment->flux->size() != voxelCount())) {
         throw Error("sweep: the first moment's arrays do not match the lattice");
     }
     std::vector<openvdb::Vec3f>* flux = moment ? moment->flux : nullptr;
@@ -56,9 +59,11 @@ void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::v
     struct Scratch
     {
         std::vector<openvdb::Vec3f> buffer, toward;
+        std::vector<std::int64_t> index; ///< with a moment: the leaf's padded block's voxels (paddedVoxels)
     };
     tbb::enumerable_thread_specific<Scratch> scratches([] {
-        return Scratch{std::vector<openvdb::Vec3f>(kPaddedVoxels, openvdb::Vec3f(0.0f)), std::vector<openvdb::Vec3f>(kPaddedVoxels)};
+        return Scratch{std::vector<openvdb::Vec3f>(kPaddedVoxels, openvdb::Vec3f(0.0f)), std::vector<openvdb::Vec3f>(kPaddedVoxels),
+            std::vector<std::int64_t>(kPaddedVoxels)};
     });
     std::size_t swept = 0;
     for (const std::vector<std::size_t>& batch : batches) {
@@ -80,19 +85,29 @@ void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::v
                 const openvdb::Vec3f* j = &source[n * kPaddedVoxels];
                 openvdb::Vec3f worldOmega(0.0f);
                 if (moment) {
+                    if (slot == 0) paddedVoxels(n, scratch.index.data());
                     worldOmega = openvdb::Vec3f(moment->worldDirections[d]);
-                    const openvdb::Vec3f* a = &(*moment->sourceAnisotropy)[n * kPaddedVoxels];
-                    if (moment->quadratureCorrection) {
-                        const openvdb::Vec3f* beta = &(*moment->quadratureCorrection)[n * kPaddedVoxels];
-                        for (int q = 0; q < kPaddedVoxels; ++q)
-                            scratch.toward[std::size_t(q)] = j[q] * moment->rest(a[q], worldOmega, beta[q]);
-                    } else {
-                        for (int q = 0; q < kPaddedVoxels; ++q) scratch.toward[std::size_t(q)] = j[q] * moment->rest(a[q], worldOmega);
+                    const openvdb::Vec3f* a = moment->sourceAnisotropy->data();
+                    const openvdb::Vec3f* beta = moment->quadratureCorrection ? moment->quadratureCorrection->data() : nullptr;
+                    for (int q = 0; q < kPaddedVoxels; ++q) {
+                        // (No voxel: J is 0 there, padded.)
+                        const std::int64_t v = scratch.index[std::size_t(q)];
+                        scratch.toward[std::size_t(q)] = v < 0 ? openvdb::Vec3f(0.0f)
+                            : beta                             ? j[q] * moment->rest(a[v], worldOmega, beta[v])
+                                                               : j[q] * moment->rest(a[v], worldOmega);
                     }
                     j = scratch.toward.data();
                 }
-                sweepLeaf(n, omega, upwindVoxels(octant, dominantAxis(omega)).data(), j, buffer, w, &fluence[n * kLeafVoxels],
-                    flux ? &(*flux)[n * kLeafVoxels] : nullptr, worldOmega, skins ? skinFluence : nullptr);
+                const UpwindVoxel* voxels = upwindVoxels(octant, dominantAxis(omega)).data();
+                openvdb::Vec3f* fluxHere = flux ? &(*flux)[n * kLeafVoxels] : nullptr;
+                std::vector<openvdb::Vec3f>* skinHere = skins ? skinFluence : nullptr;
+                if (mSigmaTGrey.empty()) {
+                    sweepLeaf(n, &mSigmaT[n * kPaddedVoxels], omega, voxels, j, buffer, w, &fluence[n * kLeafVoxels], fluxHere, worldOmega,
+                        skinHere);
+                } else {
+                    sweepLeaf(n, &mSigmaTGrey[n * kPaddedVoxels], omega, voxels, j, buffer, w, &fluence[n * kLeafVoxels], fluxHere,
+                        worldOmega, skinHere);
+                }
                 openvdb::Vec3f* leafFaces = &faces[(slot * leaves + n) * kFaceVoxels];
                 for (int k = 0; k < kFaceVoxels; ++k) leafFaces[k] = buffer[downwind[std::size_t(k)]];
             }
@@ -102,18 +117,22 @@ void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::v
     }
 }
 
-void SweepLattice::sweepLeaf(std::size_t n, const openvdb::Vec3d& omega, const UpwindVoxel* voxels, const openvdb::Vec3f* j,
-    openvdb::Vec3f* buffer, float w, openvdb::Vec3f* phi, openvdb::Vec3f* fluxHere, const openvdb::Vec3f& worldOmega,
-    std::vector<openvdb::Vec3f>* skinFluence) const
+template <typename Sigma>
+void SweepLattice::sweepLeaf(std::size_t n, const Sigma* leafSigmaT, const openvdb::Vec3d& omega, const UpwindVoxel* voxels,
+    const openvdb::Vec3f* j, openvdb::Vec3f* buffer, float w, openvdb::Vec3f* phi, openvdb::Vec3f* fluxHere,
+    const openvdb::Vec3f& worldOmega, std::vector<openvdb::Vec3f>* skinFluence) const
 {
     const Characteristic path = characteristic(omega);
     const float* wt = path.weight;
     const int* off = path.offset;
     const double len = mVoxelSize * path.length;
-    const openvdb::Vec3f* st = &mSigmaT[n * kPaddedVoxels];
-    const float* distance = &mDistance[n * kPaddedVoxels];
-    // Per channel, the last step's weights (uniformWeights).
+    const PaddedSigma<Sigma> st{leafSigmaT};
+    constexpr bool kGrey = std::is_same_v<Sigma, float>; // the channels' steps share their weights
+    const float* distance = mDistance.empty() ? nullptr : &mDistance[n * kPaddedVoxels]; // (deep leaves do not read it)
+    // Per channel, the last step's weights (uniformWeights); the last varying step's, shared
+    // by the channels (varyingStep).
     UniformWeights uw[3];
+    VaryingWeights vw;
     if (mUniform[n]) {
         // The short path of a deep leaf of one σt (about half the thick bunny's leaves at dim
         // 256): what the general path below computes there (every step whole, σt the same at
@@ -176,10 +195,10 @@ void SweepLattice::sweepLeaf(std::size_t n, const openvdb::Vec3d& omega, const U
                 // No extinction, or the common case inside, σt the same at both ends (S linear
                 // is J linear, no division).
                 if ((sa <= 0.0 && sb <= 0.0) || sa == sb) {
-                    result[ch] = uniformStep(psiIn[ch], jStart[ch], jEnd[ch], std::max(sa, sb), h, uw[ch]);
+                    result[ch] = uniformStep(psiIn[ch], jStart[ch], jEnd[ch], std::max(sa, sb), h, uw[kGrey ? 0 : ch]);
                     continue;
                 }
-                result[ch] = float(varyingStep(psiIn[ch], jStart[ch], jEnd[ch], sa, sb, h));
+                result[ch] = float(varyingStep(psiIn[ch], jStart[ch], jEnd[ch], sa, sb, h, vw));
             }
         }
         buffer[p] = result;
