@@ -153,9 +153,13 @@ public:
         report.accelerated = options.accelerate;
         report.setupSeconds = secondsSince(setupStart);
 
-        j0 = gather                                                       ? std::vector<openvdb::Vec3f>()
-            : options.source == ScatterPassOptions::SourceRead::Continued ? detail::readPassSource(lattice, medium, source)
-                                                                          : lattice.read(source); // (the gather reads the grid)
+        // J0: the grid as it is, read where the sweep needs it (no per-voxel copy), or continued
+        // (readPassSource); the gather reads the grid itself.
+        if (!gather && options.source == ScatterPassOptions::SourceRead::Continued) {
+            j0 = detail::readPassSource(lattice, medium, source);
+        } else if (!gather) {
+            j0View.emplace(lattice, source);
+        }
         directions = sweepDirections(std::max(options.directions, 1), options.rotationSeed);
         weight = 4.0 * M_PI / double(directions.size());
         if (restG != 0.0) {
@@ -170,12 +174,7 @@ public:
             bool paired = world.size() % 2 == 0;
             for (std::size_t i = 0; paired && i < world.size(); i += 2) paired = (world[i] + world[i + 1]).length() < 1e-9;
             for (std::size_t i = 0; paired && i < world.size(); i += 2) pairFirsts.push_back(world[i]);
-            if (moments && moments->source) {
-                a0 = lattice.read(*moments->source);
-                for (openvdb::Vec3f& v : a0) v = openvdb::Vec3f(clampedToUnit(openvdb::Vec3d(v)));
-            } else {
-                a0.assign(count, openvdb::Vec3f(0.0f));
-            }
+            if (moments && moments->source) a0View.emplace(lattice, *moments->source);
         }
         phi.assign(count, openvdb::Vec3f(0.0f));
         if (options.initial) {
@@ -308,7 +307,8 @@ private:
         const std::vector<openvdb::Vec3f>& sigmaS = lattice.sigmaS();
         const auto sourceAt = [&](std::size_t v) {
             openvdb::Vec3f j;
-            for (int ch = 0; ch < 3; ++ch) j[ch] = j0[v][ch] + sigmaS[v][ch] * phi[v][ch] * float(1.0 / (4.0 * M_PI));
+            const openvdb::Vec3f own = ownSource(v);
+            for (int ch = 0; ch < 3; ++ch) j[ch] = own[ch] + sigmaS[v][ch] * phi[v][ch] * float(1.0 / (4.0 * M_PI));
             return j;
         };
         std::vector<openvdb::Vec3f> beta;
@@ -318,9 +318,9 @@ private:
             a.resize(count);
             tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
                 for (std::size_t v = r.begin(); v != r.end(); ++v) {
-                    const double total = greyOf(openvdb::Vec3d(sourceAt(v))), own = greyOf(openvdb::Vec3d(j0[v]));
+                    const double total = greyOf(openvdb::Vec3d(sourceAt(v))), own = greyOf(openvdb::Vec3d(ownSource(v)));
                     const double phiGrey = greyOf(openvdb::Vec3d(phi[v]));
-                    openvdb::Vec3d sum = own * openvdb::Vec3d(a0[v]);
+                    openvdb::Vec3d sum = own * openvdb::Vec3d(ownAnisotropy(v));
                     if (phiGrey > 0.0 && !flux.empty()) sum += (total - own) * clampedToUnit(openvdb::Vec3d(flux[v]) / phiGrey);
                     a[v] = total > 0.0 ? openvdb::Vec3f(sum / total) : openvdb::Vec3f(0.0f);
                 }
@@ -445,14 +445,23 @@ private:
     detail::SweepLattice lattice;
     const std::size_t count;
     std::optional<detail::DiffusionCorrection> diffusion; ///< the sweeps' correction (the gathers' is the sweeps' solve)
-    std::vector<openvdb::Vec3f> j0;
+    std::vector<openvdb::Vec3f> j0; ///< J0 continued (readPassSource), or empty: j0View
+    std::optional<detail::SweepLattice::GridView> j0View; ///< J0, the source grid as it is
+    /// J0 at voxel @a v.
+    openvdb::Vec3f ownSource(std::size_t v) const { return j0View ? (*j0View)[v] : j0[v]; }
+    /// a0 at voxel @a v: the source's anisotropy grid's, within the unit ball (0 without one).
+    openvdb::Vec3f ownAnisotropy(std::size_t v) const
+    {
+        return a0View ? openvdb::Vec3f(clampedToUnit(openvdb::Vec3d((*a0View)[v]))) : openvdb::Vec3f(0.0f);
+    }
     std::vector<openvdb::Vec3d> directions;
     double weight = 0.0;
     // The rest of the phase (restG ≠ 0): J0's mean direction of travel a0, per voxel; the
     // directions in world space; the direction set's opposite pairs (sweepDirections: ω, −ω in
     // turn), one of each, for the rest's quadrature correction (none for a set of no such pairs).
     std::optional<detail::SweepLattice::FirstMoment> moment;
-    std::vector<openvdb::Vec3f> a0, flux, previousFlux, a;
+    std::optional<detail::SweepLattice::GridView> a0View; ///< a0: the source's anisotropy grid, if any
+    std::vector<openvdb::Vec3f> flux, previousFlux, a;
     std::vector<openvdb::Vec3d> pairFirsts;
     // Per voxel: what the iteration keeps (the sweep's own arrays come and go; J is made padded
     // from j0, σs and φ, with no per-voxel copy; a first moment adds a0, a, β, F, the last

@@ -241,6 +241,21 @@ void SweepLattice::paddedVoxels(std::size_t n, std::int64_t* index) const
     }
 }
 
+SweepLattice::GridView::GridView(const SweepLattice& lattice, const openvdb::Vec3SGrid& grid)
+    : mLeaves(lattice.leafCount(), nullptr)
+    , mTiles(lattice.leafCount(), openvdb::Vec3f(0.0f))
+{
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lattice.leafCount()), [&](const tbb::blocked_range<std::size_t>& r) {
+        auto acc = grid.getConstAccessor();
+        for (std::size_t n = r.begin(); n != r.end(); ++n) {
+            const openvdb::Coord& origin = lattice.origin(n);
+            mLeaves[n] = acc.probeConstLeaf(origin);
+            openvdb::Vec3f value;
+            if (!mLeaves[n] && acc.probeValue(origin, value)) mTiles[n] = value; // an active tile holds the whole leaf
+        }
+    });
+}
+
 template <typename T>
 std::vector<T> SweepLattice::padded(const std::vector<T>& values) const
 {

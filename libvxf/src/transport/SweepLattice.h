@@ -86,6 +86,28 @@ public:
     /// @a grid's values at the lattice's voxels (per voxel; tiles and inactive values as the
     /// grid holds them at each voxel, only where @a grid is active, 0 elsewhere).
     std::vector<openvdb::Vec3f> read(const openvdb::Vec3SGrid& grid) const;
+    /// A grid's values at the lattice's voxels as read() gives them, without a per-voxel copy
+    /// (a pointer to the grid's leaf, or its tile's value, per lattice leaf: 12 bytes a voxel
+    /// saved for each grid a solve reads as it is). @a grid must outlive it.
+    class GridView
+    {
+    public:
+        GridView(const SweepLattice& lattice, const openvdb::Vec3SGrid& grid);
+        /// The value at per-voxel index @a v (0 where the grid is not active).
+        openvdb::Vec3f operator[](std::size_t v) const
+        {
+            const std::size_t n = v / kLeafVoxels;
+            const auto i = openvdb::Index(v % kLeafVoxels);
+            if (const openvdb::Vec3STree::LeafNodeType* leaf = mLeaves[n])
+                return leaf->isValueOn(i) ? leaf->getValue(i) : openvdb::Vec3f(0.0f);
+            return mTiles[n];
+        }
+
+    private:
+        std::vector<const openvdb::Vec3STree::LeafNodeType*> mLeaves; ///< per lattice leaf, or null
+        std::vector<openvdb::Vec3f> mTiles; ///< per lattice leaf without a grid leaf: its active tile's value, or 0
+    };
+
     /// A Vec3f grid on @a topology's active topology and transform holding @a values (per
     /// voxel): its voxels their own value, an active tile the mean of its voxels. Non-finite
     /// values are written as 0.
