@@ -113,6 +113,44 @@ openvdb::Vec3SGrid::Ptr stageGrid(const openvdb::FloatGrid& density, const char*
     return grid;
 }
 
+/// Σ over @a leaves' active voxels of @a fluence (per lattice voxel), and over @a tiles of the
+/// value at the tile's centre times its voxels (as the light stage's grids hold them), in a
+/// fixed order: the same for every thread count.
+openvdb::Vec3d energyOf(const std::vector<openvdb::Vec3f>& fluence, const detail::SweepLattice& lattice,
+    const openvdb::tree::LeafManager<openvdb::Vec3STree>& leaves, const std::vector<openvdb::CoordBBox>& tiles)
+{
+    std::vector<openvdb::Vec3d> sums(leaves.leafCount() + tiles.size(), openvdb::Vec3d(0.0));
+    const auto at = [&](const openvdb::Coord& ijk) {
+        const std::int64_t i = lattice.indexOf(ijk);
+        return i < 0 ? openvdb::Vec3d(0.0) : openvdb::Vec3d(fluence[std::size_t(i)]);
+    };
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, sums.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t item = r.begin(); item != r.end(); ++item) {
+            if (item < leaves.leafCount()) {
+                for (auto it = leaves.leaf(item).cbeginValueOn(); it; ++it) sums[item] += at(it.getCoord());
+            } else {
+                const openvdb::CoordBBox& box = tiles[item - leaves.leafCount()];
+                sums[item] += at(box.min() + openvdb::Coord(box.dim().x() / 2)) * double(box.volume());
+            }
+        }
+    });
+    openvdb::Vec3d total(0.0);
+    for (const openvdb::Vec3d& s : sums) total += s;
+    return total;
+}
+
+/// @a sum += @a values (per voxel; @a sum empty: takes them).
+void addTo(std::vector<openvdb::Vec3f>& sum, std::vector<openvdb::Vec3f>&& values)
+{
+    if (sum.empty()) {
+        sum = std::move(values);
+        return;
+    }
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, sum.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t v = r.begin(); v != r.end(); ++v) sum[v] += values[v];
+    });
+}
+
 /// The light stage at one point: φ0 from every light (swept where a sweep holds the voxel,
 /// marched otherwise), J0 and the source's mean direction of travel.
 struct PointLighting
@@ -121,11 +159,13 @@ struct PointLighting
     const DirectLightOptions& options;
     const std::vector<LightSampler>& active;
     const std::optional<detail::SweepLattice>& lattice;
-    const std::vector<std::vector<openvdb::Vec3f>>& swept;
-    const std::vector<std::vector<openvdb::Vec3f>>& sweptFlux;
+    const std::vector<bool>& swept; ///< per light: its fluence is in sweptFluence
+    const std::vector<openvdb::Vec3f>& sweptFluence; ///< per lattice voxel, the swept lights' sum
+    const std::vector<openvdb::Vec3f>& sweptFlux; ///< per lattice voxel, their first moment's sum (anisotropic)
     const bool anisotropic;
 
-    /// At voxel @a ijk (index point @a pointIjk), adding each light's fluence × @a weight to @a sums.
+    /// At voxel @a ijk (index point @a pointIjk), adding each marched light's fluence × @a weight
+    /// to @a sums (the swept ones' are summed where they are swept: sweptEnergy).
     void operator()(Medium::Sampler& sampler, std::vector<VolumeEmission::Sampler>& emitters, const openvdb::Coord& ijk,
         const openvdb::Vec3d& pointIjk, std::vector<openvdb::Vec3d>& sums, openvdb::Vec3f& outDirect, openvdb::Vec3f& outSource,
         openvdb::Vec3f& outAnisotropy, double weight) const
@@ -133,12 +173,14 @@ struct PointLighting
         openvdb::Vec3d phi(0.0), flux(0.0);
         // Swept lights from their sweep; the others marched (lightFluence).
         const std::int64_t index = lattice ? lattice->indexOf(ijk) : -1;
+        if (index >= 0 && !sweptFluence.empty()) {
+            phi += openvdb::Vec3d(sweptFluence[std::size_t(index)]);
+            if (anisotropic) flux += openvdb::Vec3d(sweptFlux[std::size_t(index)]);
+        }
         for (std::size_t l = 0; l < active.size(); ++l) {
-            const bool marched = index < 0 || swept[l].empty();
-            const openvdb::Vec3d f = marched
-                ? lightFluence(active[l], sampler, medium, ijk, options.march, options.occluders, anisotropic ? &flux : nullptr)
-                : openvdb::Vec3d(swept[l][std::size_t(index)]);
-            if (anisotropic && !marched) flux += openvdb::Vec3d(sweptFlux[l][std::size_t(index)]);
+            if (index >= 0 && swept[l]) continue;
+            const openvdb::Vec3d f =
+                lightFluence(active[l], sampler, medium, ijk, options.march, options.occluders, anisotropic ? &flux : nullptr);
             phi += f;
             sums[l] += f * weight;
         }
@@ -179,20 +221,11 @@ DirectLightReport computeDirectLight(
 
     const openvdb::FloatGrid& density = medium.density();
     auto direct = stageGrid(density, grids::kDirect, options.coarseTiles);
-    auto source = stageGrid(density, grids::kScatterSource, options.coarseTiles);
     // An anisotropic rest of the phase (Medium: delta-M's g*): the source's mean direction of travel.
     const bool anisotropic = medium.material().phaseG != 0.0;
-    openvdb::Vec3SGrid::Ptr anisotropy;
-    if (anisotropic) {
-        anisotropy = source->deepCopy(); // its values are all 0 yet
-        anisotropy->setName(grids::kSourceAnisotropy);
-    }
 
     // Work items: leaf voxels (per leaf) and active tiles (value at the tile centre).
     openvdb::tree::LeafManager<openvdb::Vec3STree> leaves(direct->tree());
-    openvdb::tree::LeafManager<openvdb::Vec3STree> sourceLeaves(source->tree());
-    std::optional<openvdb::tree::LeafManager<openvdb::Vec3STree>> anisotropyLeaves;
-    if (anisotropy) anisotropyLeaves.emplace(anisotropy->tree());
     std::vector<openvdb::CoordBBox> tiles;
     for (auto it = direct->tree().cbeginValueOn(); it; ++it) {
         if (it.isTileValue()) {
@@ -209,9 +242,13 @@ DirectLightReport computeDirectLight(
     std::atomic<bool> cancelled{false};
 
     // Lights by sweeps: their fluence at every voxel centre (at the rim, from its medium point
-    // along the directions that graze the surface there).
+    // along the directions that graze the surface there), summed over the lights as they are
+    // swept (one array, not one a light: 12 bytes a voxel and light, 24 with a phase), each
+    // light's energy for the report taken first.
     std::optional<detail::SweepLattice> lattice;
-    std::vector<std::vector<openvdb::Vec3f>> swept(active.size()), sweptFlux(active.size());
+    std::vector<bool> swept(active.size(), false);
+    std::vector<openvdb::Vec3d> sweptEnergy(active.size(), openvdb::Vec3d(0.0));
+    std::vector<openvdb::Vec3f> sweptFluence, sweptFlux;
     Rim rim;
     if (options.sweep) {
         for (std::size_t l = 0; l < active.size(); ++l) {
@@ -221,14 +258,31 @@ DirectLightReport computeDirectLight(
                 lattice.emplace(medium, *direct, detail::SweepLattice::Coefficients::SweepOnly);
                 rim = rimOf(*lattice, medium);
             }
-            std::vector<openvdb::Vec3f>* flux = anisotropic ? &sweptFlux[l] : nullptr;
-            swept[l] = fromPoint ? sweepPointLight(active[l], *lattice, medium, rim, options, flux)
-                                 : sweepLight(active[l], *lattice, medium, rim, options, flux);
+            std::vector<openvdb::Vec3f> flux;
+            std::vector<openvdb::Vec3f> fluence = fromPoint
+                ? sweepPointLight(active[l], *lattice, medium, rim, options, anisotropic ? &flux : nullptr)
+                : sweepLight(active[l], *lattice, medium, rim, options, anisotropic ? &flux : nullptr);
+            swept[l] = true;
+            sweptEnergy[l] = energyOf(fluence, *lattice, leaves, tiles);
+            addTo(sweptFluence, std::move(fluence));
+            if (anisotropic) addTo(sweptFlux, std::move(flux));
             checkInterrupt(interrupter);
         }
     }
 
-    const PointLighting evaluate{medium, options, active, lattice, swept, sweptFlux, anisotropic};
+    // The other grids of the stage, on direct's topology (made after the sweeps, whose arrays
+    // and optical depths were the peak).
+    auto source = stageGrid(density, grids::kScatterSource, options.coarseTiles);
+    openvdb::Vec3SGrid::Ptr anisotropy;
+    if (anisotropic) {
+        anisotropy = source->deepCopy(); // its values are all 0 yet
+        anisotropy->setName(grids::kSourceAnisotropy);
+    }
+    openvdb::tree::LeafManager<openvdb::Vec3STree> sourceLeaves(source->tree());
+    std::optional<openvdb::tree::LeafManager<openvdb::Vec3STree>> anisotropyLeaves;
+    if (anisotropy) anisotropyLeaves.emplace(anisotropy->tree());
+
+    const PointLighting evaluate{medium, options, active, lattice, swept, sweptFluence, sweptFlux, anisotropic};
 
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, total, 1), [&](const tbb::blocked_range<std::size_t>& range) {
         Medium::Sampler sampler = lightStageSampler(medium, options);
@@ -272,6 +326,7 @@ DirectLightReport computeDirectLight(
     for (std::size_t e = 0; e < report.lights.size(); ++e) {
         if (activeIndex[e] < 0) continue;
         for (const auto& sums : perLight) report.lights[e].fluenceSum += sums[std::size_t(activeIndex[e])];
+        report.lights[e].fluenceSum += sweptEnergy[std::size_t(activeIndex[e])];
     }
     set.put(direct);
     set.put(source);

@@ -88,10 +88,12 @@ ScatterOptions scatterOptionsFrom(const SceneSettings& settings);
 /// Σ over active values of a Vec3f grid, active tiles weighted by their voxel count.
 openvdb::Vec3d gridEnergy(const openvdb::Vec3SGrid& grid);
 
-/// The scatter stage's peak per active voxel of the medium's density: 976 MiB for the bunny's
-/// 3.67M at dim 256 solved whole by accelerated sweeps (docs/reports/performance.md), less the fixed
-/// part, rounded up. scatter checks it against the memory budget before it allocates.
-inline constexpr double kScatterBytesPerVoxel = 260.0;
+/// The scatter stage's peak per active voxel of the medium's density, the larger of two solved
+/// whole by accelerated sweeps (bench/scale, docs/reports/scale.md), less the fixed part,
+/// rounded up: the bunny's 3.67M at dim 256 (814 MiB, 204 bytes a voxel) and scripts/make-smoke's
+/// 4.59M at 256³ with a Henyey-Greenstein phase (1156 MiB, 241: its first moment's arrays).
+/// scatter checks it against the memory budget before it allocates.
+inline constexpr double kScatterBytesPerVoxel = 250.0;
 
 /// Run scattering passes on @a set: J_k = σs·φ_k/(4π) feeds pass k+1 (J_0 is `scatter_source`,
 /// read from the set, so an artist may have edited it). @a medium is the transport's (Medium):
