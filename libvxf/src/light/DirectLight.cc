@@ -151,6 +151,46 @@ void addTo(std::vector<openvdb::Vec3f>& sum, std::vector<openvdb::Vec3f>&& value
     });
 }
 
+/// The lights a sweep carries, swept over one lattice on @a direct's topology: their fluence at
+/// every voxel centre (at the rim, from its medium point along the directions that graze the
+/// surface there), summed over the lights as each is swept (one array, not one a light: 12 bytes
+/// a voxel and light, 24 with a phase), each light's energy for the report (energyOf) taken first.
+struct SweptLights
+{
+    std::optional<detail::SweepLattice> lattice; ///< none: no light is swept
+    std::vector<bool> swept; ///< per light
+    std::vector<openvdb::Vec3d> energy; ///< per light, its swept fluence's energyOf
+    std::vector<openvdb::Vec3f> fluence, flux; ///< per lattice voxel, the sums (flux: anisotropic)
+};
+SweptLights sweepLights(const std::vector<LightSampler>& active, const Medium& medium, const openvdb::Vec3SGrid& direct,
+    const DirectLightOptions& options, bool anisotropic, const openvdb::tree::LeafManager<openvdb::Vec3STree>& leaves,
+    const std::vector<openvdb::CoordBBox>& tiles, Interrupter* interrupter)
+{
+    SweptLights out;
+    out.swept.assign(active.size(), false);
+    out.energy.assign(active.size(), openvdb::Vec3d(0.0));
+    if (!options.sweep) return out;
+    Rim rim;
+    for (std::size_t l = 0; l < active.size(); ++l) {
+        const bool fromPoint = sweepableFromPoint(active[l].light());
+        if (!sweepable(active[l].light()) && !fromPoint) continue;
+        if (!out.lattice) {
+            out.lattice.emplace(medium, direct, detail::SweepLattice::Coefficients::SweepOnly);
+            rim = rimOf(*out.lattice, medium);
+        }
+        std::vector<openvdb::Vec3f> flux;
+        std::vector<openvdb::Vec3f>* fluxOut = anisotropic ? &flux : nullptr;
+        std::vector<openvdb::Vec3f> fluence = fromPoint ? sweepPointLight(active[l], *out.lattice, medium, rim, options, fluxOut)
+                                                        : sweepLight(active[l], *out.lattice, medium, rim, options, fluxOut);
+        out.swept[l] = true;
+        out.energy[l] = energyOf(fluence, *out.lattice, leaves, tiles);
+        addTo(out.fluence, std::move(fluence));
+        if (anisotropic) addTo(out.flux, std::move(flux));
+        checkInterrupt(interrupter);
+    }
+    return out;
+}
+
 /// The light stage at one point: φ0 from every light (swept where a sweep holds the voxel,
 /// marched otherwise), J0 and the source's mean direction of travel.
 struct PointLighting
@@ -241,35 +281,7 @@ DirectLightReport computeDirectLight(
     std::atomic<std::size_t> done{0};
     std::atomic<bool> cancelled{false};
 
-    // Lights by sweeps: their fluence at every voxel centre (at the rim, from its medium point
-    // along the directions that graze the surface there), summed over the lights as they are
-    // swept (one array, not one a light: 12 bytes a voxel and light, 24 with a phase), each
-    // light's energy for the report taken first.
-    std::optional<detail::SweepLattice> lattice;
-    std::vector<bool> swept(active.size(), false);
-    std::vector<openvdb::Vec3d> sweptEnergy(active.size(), openvdb::Vec3d(0.0));
-    std::vector<openvdb::Vec3f> sweptFluence, sweptFlux;
-    Rim rim;
-    if (options.sweep) {
-        for (std::size_t l = 0; l < active.size(); ++l) {
-            const bool fromPoint = sweepableFromPoint(active[l].light());
-            if (!sweepable(active[l].light()) && !fromPoint) continue;
-            if (!lattice) {
-                lattice.emplace(medium, *direct, detail::SweepLattice::Coefficients::SweepOnly);
-                rim = rimOf(*lattice, medium);
-            }
-            std::vector<openvdb::Vec3f> flux;
-            std::vector<openvdb::Vec3f> fluence = fromPoint
-                ? sweepPointLight(active[l], *lattice, medium, rim, options, anisotropic ? &flux : nullptr)
-                : sweepLight(active[l], *lattice, medium, rim, options, anisotropic ? &flux : nullptr);
-            swept[l] = true;
-            sweptEnergy[l] = energyOf(fluence, *lattice, leaves, tiles);
-            addTo(sweptFluence, std::move(fluence));
-            if (anisotropic) addTo(sweptFlux, std::move(flux));
-            checkInterrupt(interrupter);
-        }
-    }
-
+    const SweptLights swept = sweepLights(active, medium, *direct, options, anisotropic, leaves, tiles, interrupter);
     // The other grids of the stage, on direct's topology (made after the sweeps, whose arrays
     // and optical depths were the peak).
     auto source = stageGrid(density, grids::kScatterSource, options.coarseTiles);
@@ -282,7 +294,7 @@ DirectLightReport computeDirectLight(
     std::optional<openvdb::tree::LeafManager<openvdb::Vec3STree>> anisotropyLeaves;
     if (anisotropy) anisotropyLeaves.emplace(anisotropy->tree());
 
-    const PointLighting evaluate{medium, options, active, lattice, swept, sweptFluence, sweptFlux, anisotropic};
+    const PointLighting evaluate{medium, options, active, swept.lattice, swept.swept, swept.fluence, swept.flux, anisotropic};
 
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, total, 1), [&](const tbb::blocked_range<std::size_t>& range) {
         Medium::Sampler sampler = lightStageSampler(medium, options);
@@ -326,7 +338,7 @@ DirectLightReport computeDirectLight(
     for (std::size_t e = 0; e < report.lights.size(); ++e) {
         if (activeIndex[e] < 0) continue;
         for (const auto& sums : perLight) report.lights[e].fluenceSum += sums[std::size_t(activeIndex[e])];
-        report.lights[e].fluenceSum += sweptEnergy[std::size_t(activeIndex[e])];
+        report.lights[e].fluenceSum += swept.energy[std::size_t(activeIndex[e])];
     }
     set.put(direct);
     set.put(source);

@@ -17,10 +17,11 @@ namespace vxf::detail {
 int DiffusionCorrection::coarseningFor(const SweepLattice& lattice)
 {
     // The mean optical thickness σt·dx of the domain's voxels (the thickest channel).
-    const std::vector<openvdb::Vec3f>& sigmaT = lattice.sigmaT();
+    const SweepLattice::Coefficient sigmaT = lattice.sigmaT();
     double sum = 0.0;
     std::size_t count = 0;
-    for (const openvdb::Vec3f& t : sigmaT) {
+    for (std::size_t v = 0; v < sigmaT.size(); ++v) {
+        const openvdb::Vec3f t = sigmaT[v];
         if (std::min({t[0], t[1], t[2]}) * lattice.voxelSize() < kThinVoxel) continue;
         sum += std::max({t[0], t[1], t[2]}) * lattice.voxelSize();
         ++count;
@@ -40,8 +41,7 @@ DiffusionCorrection::DiffusionCorrection(const SweepLattice& lattice, int coarse
     while ((2 << shift) <= mFactor) ++shift;
     mFactor = 1 << shift;
     const double h = dx * mFactor; // a cell's width
-    const std::vector<openvdb::Vec3f>& sigmaT = lattice.sigmaT();
-    const std::vector<openvdb::Vec3f>& sigmaS = lattice.sigmaS();
+    const SweepLattice::Coefficient sigmaT = lattice.sigmaT(), sigmaS = lattice.sigmaS();
     const auto inDomain = [&](const openvdb::Vec3f& t) { return std::min({t[0], t[1], t[2]}) * dx >= kThinVoxel; };
     // Cells (blocks of mFactor³ voxels holding a voxel of the domain) in lattice order, and
     // each voxel's cell.
@@ -156,7 +156,7 @@ DiffusionCorrection::Solve DiffusionCorrection::solve(const std::vector<openvdb:
     Solve result;
     if (mMembers.empty()) return result;
     const double h = mLattice.voxelSize() * mFactor;
-    const std::vector<openvdb::Vec3f>& sigmaS = mLattice.sigmaS();
+    const SweepLattice::Coefficient sigmaS = mLattice.sigmaS();
     const std::size_t cells = size();
     const auto count = openvdb::math::pcg::SizeType(cells);
     // The first moment's change per cell (its voxels' mean), for the term −∇·(χ1σsΔF/σtr).

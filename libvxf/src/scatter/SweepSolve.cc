@@ -304,7 +304,7 @@ private:
     /// J = J0 + σs·φ/4π, then φ_{l+½} = K J.
     void sweepStep(SweepSolveReport::Iteration& it)
     {
-        const std::vector<openvdb::Vec3f>& sigmaS = lattice.sigmaS();
+        const detail::SweepLattice::Coefficient sigmaS = lattice.sigmaS();
         const auto sourceAt = [&](std::size_t v) {
             openvdb::Vec3f j;
             const openvdb::Vec3f own = ownSource(v);

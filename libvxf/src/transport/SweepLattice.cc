@@ -21,6 +21,12 @@ namespace vxf::detail {
 SweepLattice::SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topology, Coefficients coefficients)
     : mVoxelSize(medium.voxelSize())
 {
+    indexLeaves(medium, topology);
+    readMedium(medium, coefficients == Coefficients::PerVoxel);
+}
+
+void SweepLattice::indexLeaves(const Medium& medium, const openvdb::Vec3SGrid& topology)
+{
     openvdb::MaskTree mask(medium.density().tree(), false, openvdb::TopologyCopy());
     mask.topologyUnion(topology.tree());
     mask.voxelizeActiveTiles();
@@ -53,12 +59,21 @@ SweepLattice::SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topol
         }
         mWavefronts[octant].push_back(order.size());
     }
+}
 
-    const bool perVoxel = coefficients == Coefficients::PerVoxel;
-    if (perVoxel) {
+void SweepLattice::readMedium(const Medium& medium, bool perVoxel)
+{
+    // σt and σs per voxel: density × the material's where the medium is that (no σa/σs grids).
+    const bool fromDensity = !medium.sigmaAGrid() && !medium.sigmaSGrid();
+    if (perVoxel && fromDensity) {
+        mDensityVoxel.resize(voxelCount());
+        mMaterialSigmaT = medium.material().sigmaT();
+        mMaterialSigmaS = medium.material().sigmaS;
+    } else if (perVoxel) {
         mSigmaTVoxel.resize(voxelCount());
         mSigmaS.resize(voxelCount());
     }
+    const openvdb::FloatGrid::ConstAccessor densityAccessor = medium.density().getConstAccessor();
     const bool surface = medium.surface() != nullptr;
     if (surface) mInterior.assign(voxelCount(), 1.0f);
     std::vector<float> distance(surface ? voxelCount() : 0, -1.0f);
@@ -67,6 +82,7 @@ SweepLattice::SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topol
     std::vector<openvdb::Vec3f> skinNormal(surface ? voxelCount() : 0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mOrigins.size()), [&](const tbb::blocked_range<std::size_t>& r) {
         Medium::Sampler sampler(medium);
+        openvdb::FloatGrid::ConstAccessor density = densityAccessor;
         for (std::size_t n = r.begin(); n != r.end(); ++n) {
             for (int v = 0; v < kLeafVoxels; ++v) {
                 const openvdb::Coord c = mOrigins[n].offsetBy(v >> 6, (v >> 3) & 7, v & 7);
@@ -76,7 +92,9 @@ SweepLattice::SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topol
                     if (!std::isfinite(t[ch]) || t[ch] < 0.0) t[ch] = 0.0;
                 }
                 const std::size_t i = n * kLeafVoxels + v;
-                if (perVoxel) {
+                if (perVoxel && fromDensity) {
+                    mDensityVoxel[i] = density.getValue(c); // (the sampler reads it so: sigmaT(), sigmaS())
+                } else if (perVoxel) {
                     openvdb::Vec3d s = sampler.sigmaS(c);
                     for (int ch = 0; ch < 3; ++ch) {
                         if (!std::isfinite(s[ch])) s[ch] = 0.0;
@@ -118,6 +136,18 @@ SweepLattice::SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topol
         mSigmaT = padded(inside);
     }
     if (surface) mDistance = padded(distance);
+    classifyLeaves();
+    mSkinIndex.assign(surface ? voxelCount() : 0, -1);
+    for (std::size_t i = 0; i < skin.size(); ++i) {
+        if (!skin[i]) continue;
+        mSkinIndex[i] = std::int32_t(mSkin.size());
+        mSkin.push_back({std::uint32_t(i), skinNormal[i], float(std::max(-double(distance[i]), 0.0) * mVoxelSize)});
+    }
+}
+
+void SweepLattice::classifyLeaves()
+{
+    const bool surface = !mDistance.empty(), grey = !mSigmaTGrey.empty();
     // Leaves whose padded block lies wholly inside the surface (or without one): a sweep there
     // needs no cut of its steps and holds no skin voxel.
     mDeep.assign(mOrigins.size(), surface ? 0 : 1);
@@ -146,19 +176,38 @@ SweepLattice::SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topol
             mUniform[n] = one ? 1 : 0;
         }
     });
-    mSkinIndex.assign(surface ? voxelCount() : 0, -1);
-    for (std::size_t i = 0; i < skin.size(); ++i) {
-        if (!skin[i]) continue;
-        mSkinIndex[i] = std::int32_t(mSkin.size());
-        mSkin.push_back({std::uint32_t(i), skinNormal[i], float(std::max(-double(distance[i]), 0.0) * mVoxelSize)});
+}
+
+SweepLattice::Coefficient SweepLattice::sigmaT() const
+{
+    Coefficient c;
+    if (mDensityVoxel.empty()) {
+        c.mValues = &mSigmaTVoxel;
+    } else {
+        c.mDensity = &mDensityVoxel;
+        c.mPerDensity = mMaterialSigmaT;
+        c.mNonNegative = true;
     }
+    return c;
+}
+
+SweepLattice::Coefficient SweepLattice::sigmaS() const
+{
+    Coefficient c;
+    if (mDensityVoxel.empty()) {
+        c.mValues = &mSigmaS;
+    } else {
+        c.mDensity = &mDensityVoxel;
+        c.mPerDensity = mMaterialSigmaS;
+    }
+    return c;
 }
 
 std::size_t SweepLattice::bytes() const
 {
     const auto of = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
     std::size_t sum = of(mOrigins) + of(mNeighbours) + of(mSigmaT) + of(mSigmaTGrey) + of(mDistance) + of(mDeep) + of(mUniform) +
-        of(mInterior) + of(mSigmaTVoxel) + of(mSigmaS) + of(mSkin) + of(mSkinIndex);
+        of(mInterior) + of(mSigmaTVoxel) + of(mSigmaS) + of(mDensityVoxel) + of(mSkin) + of(mSkinIndex);
     for (int o = 0; o < 8; ++o) sum += of(mOrder[o]) + of(mWavefronts[o]);
     return sum + mLeafIndex.size() * (sizeof(openvdb::Coord) + sizeof(std::int32_t) + 2 * sizeof(void*)) +
         mLeafIndex.bucket_count() * sizeof(void*);

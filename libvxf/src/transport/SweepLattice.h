@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <limits>
@@ -66,14 +67,41 @@ public:
     static int localIndex(int x, int y, int z) { return (x << 6) | (y << 3) | z; }
     static int paddedIndex(int x, int y, int z) { return (x + 1) * 100 + (y + 1) * 10 + (z + 1); }
 
+    /// A coefficient per voxel, read as an array (operator[] by per-voxel index): held per voxel
+    /// (the medium's `sigma_a`/`sigma_s` grids), or made from the voxel's density and the
+    /// material's coefficient as the medium's sampler makes it (4 bytes a voxel for σt and σs
+    /// together, not 24), non-finite values 0 and, for σt, negative ones too.
+    class Coefficient
+    {
+    public:
+        openvdb::Vec3f operator[](std::size_t v) const
+        {
+            if (mValues) return (*mValues)[v];
+            openvdb::Vec3d x = mPerDensity * double((*mDensity)[v]);
+            for (int ch = 0; ch < 3; ++ch) {
+                if (!std::isfinite(x[ch]) || (mNonNegative && x[ch] < 0.0)) x[ch] = 0.0;
+            }
+            return openvdb::Vec3f(x);
+        }
+        std::size_t size() const { return mValues ? mValues->size() : mDensity->size(); }
+        bool empty() const { return size() == 0; }
+
+    private:
+        friend class SweepLattice;
+        const std::vector<openvdb::Vec3f>* mValues = nullptr;
+        const std::vector<float>* mDensity = nullptr;
+        openvdb::Vec3d mPerDensity{0.0};
+        bool mNonNegative = false;
+    };
     /// σt per voxel, the voxel's own (volume-fraction weighted; 1/world unit); empty with
     /// Coefficients::SweepOnly.
-    const std::vector<openvdb::Vec3f>& sigmaT() const { return mSigmaTVoxel; }
-    /// Free sigmaT() (empty afterwards): only the diffusion correction's matrices read it, and
-    /// a solve at dim 256 needs its 54 MB back (the sweeps read σt inside the surface, padded).
+    Coefficient sigmaT() const;
+    /// Free sigmaT() where it is held per voxel (empty afterwards): only the diffusion
+    /// correction's matrices read it, and a solve at dim 256 needs its 54 MB back (the sweeps
+    /// read σt inside the surface, padded). Made from the density, it stays (σs needs that).
     void releaseSigmaT() { std::vector<openvdb::Vec3f>().swap(mSigmaTVoxel); }
     /// σs per voxel, the voxel's own (1/world unit); empty with Coefficients::SweepOnly.
-    const std::vector<openvdb::Vec3f>& sigmaS() const { return mSigmaS; }
+    Coefficient sigmaS() const;
     /// The per-voxel index of local voxel (x, y, z) of leaf @a leaf, coordinates −8…15 reaching
     /// into the neighbouring leaves; −1 where there is no leaf.
     std::int64_t voxelIndex(std::size_t leaf, int x, int y, int z) const
@@ -241,6 +269,14 @@ public:
     }
 
 private:
+    /// The leaves of @a medium's density and @a topology (tiles voxelized), their neighbours and
+    /// their upwind orders.
+    void indexLeaves(const Medium& medium, const openvdb::Vec3SGrid& topology);
+    /// σt (padded), the surface's distance, 1/f and skin, and with @a perVoxel σt and σs per voxel.
+    void readMedium(const Medium& medium, bool perVoxel);
+    /// mDeep and mUniform from σt and the distance.
+    void classifyLeaves();
+
     /// A leaf's voxel as a sweep visits it: its index in the padded block and in the leaf.
     struct UpwindVoxel
     {
@@ -304,7 +340,11 @@ private:
     std::vector<std::uint8_t> mDeep; ///< per leaf: its padded block more than half a voxel inside the surface
     std::vector<std::uint8_t> mUniform; ///< per leaf: deep, and one σt over its padded block (sweep's short path)
     std::vector<float> mInterior; ///< per voxel, 1/f; empty without a surface (f = 1)
+    /// σt and σs per voxel (Coefficients::PerVoxel): held (the medium's σa/σs grids), or the
+    /// voxel's density with the material's coefficients (the other arrays empty).
     std::vector<openvdb::Vec3f> mSigmaTVoxel, mSigmaS;
+    std::vector<float> mDensityVoxel;
+    openvdb::Vec3d mMaterialSigmaT{0.0}, mMaterialSigmaS{0.0};
     struct Skin
     {
         std::uint32_t voxel; ///< per-voxel index
