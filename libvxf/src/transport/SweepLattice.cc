@@ -178,30 +178,23 @@ void SweepLattice::classifyLeaves()
     });
 }
 
-SweepLattice::Coefficient SweepLattice::sigmaT() const
+SweepLattice::Coefficient SweepLattice::coefficient(
+    const std::vector<openvdb::Vec3f>& held, const openvdb::Vec3d& perDensity, bool nonNegative) const
 {
     Coefficient c;
     if (mDensityVoxel.empty()) {
-        c.mValues = &mSigmaTVoxel;
+        c.mValues = &held;
     } else {
         c.mDensity = &mDensityVoxel;
-        c.mPerDensity = mMaterialSigmaT;
-        c.mNonNegative = true;
+        c.mPerDensity = perDensity;
+        c.mNonNegative = nonNegative;
     }
     return c;
 }
 
-SweepLattice::Coefficient SweepLattice::sigmaS() const
-{
-    Coefficient c;
-    if (mDensityVoxel.empty()) {
-        c.mValues = &mSigmaS;
-    } else {
-        c.mDensity = &mDensityVoxel;
-        c.mPerDensity = mMaterialSigmaS;
-    }
-    return c;
-}
+SweepLattice::Coefficient SweepLattice::sigmaT() const { return coefficient(mSigmaTVoxel, mMaterialSigmaT, true); }
+
+SweepLattice::Coefficient SweepLattice::sigmaS() const { return coefficient(mSigmaS, mMaterialSigmaS, false); }
 
 std::size_t SweepLattice::bytes() const
 {

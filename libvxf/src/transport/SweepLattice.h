@@ -276,6 +276,9 @@ private:
     void readMedium(const Medium& medium, bool perVoxel);
     /// mDeep and mUniform from σt and the distance.
     void classifyLeaves();
+    /// A Coefficient of @a held values, or of the density times @a perDensity (@a nonNegative:
+    /// negative values read 0).
+    Coefficient coefficient(const std::vector<openvdb::Vec3f>& held, const openvdb::Vec3d& perDensity, bool nonNegative) const;
 
     /// A leaf's voxel as a sweep visits it: its index in the padded block and in the leaf.
     struct UpwindVoxel

@@ -87,7 +87,7 @@ openvdb::Vec3d lightFluence(const LightSampler& light, Medium::Sampler& sampler,
     const MarchOptions& options, const RayScene* occluders = nullptr, openvdb::Vec3d* flux = nullptr);
 
 /// The light stage's peak per active voxel of the medium's density (tiles' voxels counted), the
-/// larger of the bunny's 3.67M at dim 256 (547 MiB, 128 bytes a voxel) and scripts/make-smoke's
+/// larger of the bunny's 3.67M at dim 256 (546 MiB, 127 bytes a voxel) and scripts/make-smoke's
 /// 4.59M at 256³ with a phase (590 MiB, 112) (bench/scale, docs/reports/scale.md), less the fixed
 /// part, rounded up. computeDirectLight checks it against the memory budget before it allocates.
 inline constexpr double kLightBytesPerVoxel = 140.0;

@@ -90,8 +90,8 @@ openvdb::Vec3d gridEnergy(const openvdb::Vec3SGrid& grid);
 
 /// The scatter stage's peak per active voxel of the medium's density, the larger of two solved
 /// whole by accelerated sweeps (bench/scale, docs/reports/scale.md), less the fixed part,
-/// rounded up: the bunny's 3.67M at dim 256 (814 MiB, 204 bytes a voxel) and scripts/make-smoke's
-/// 4.59M at 256³ with a Henyey-Greenstein phase (1156 MiB, 241: its first moment's arrays).
+/// rounded up: the bunny's 3.67M at dim 256 (779 MiB, 194 bytes a voxel) and scripts/make-smoke's
+/// 4.59M at 256³ with a Henyey-Greenstein phase (1112 MiB, 231: its first moment's arrays).
 /// scatter checks it against the memory budget before it allocates.
 inline constexpr double kScatterBytesPerVoxel = 250.0;
 
