@@ -205,7 +205,7 @@ struct PointLighting
     const bool anisotropic;
 
     /// At voxel @a ijk (index point @a pointIjk), adding each marched light's fluence × @a weight
-    /// to @a sums (the swept ones' are summed where they are swept: sweptEnergy).
+    /// to @a sums (the swept ones' are summed as they are swept: SweptLights::energy).
     void operator()(Medium::Sampler& sampler, std::vector<VolumeEmission::Sampler>& emitters, const openvdb::Coord& ijk,
         const openvdb::Vec3d& pointIjk, std::vector<openvdb::Vec3d>& sums, openvdb::Vec3f& outDirect, openvdb::Vec3f& outSource,
         openvdb::Vec3f& outAnisotropy, double weight) const

@@ -87,20 +87,13 @@ void SweepLattice::readMedium(const Medium& medium, bool perVoxel)
             for (int v = 0; v < kLeafVoxels; ++v) {
                 const openvdb::Coord c = mOrigins[n].offsetBy(v >> 6, (v >> 3) & 7, v & 7);
                 // A voxel's own coefficients (a trilinear read at its centre weighs it alone).
-                openvdb::Vec3d t = sampler.sigmaT(c.asVec3d());
-                for (int ch = 0; ch < 3; ++ch) {
-                    if (!std::isfinite(t[ch]) || t[ch] < 0.0) t[ch] = 0.0;
-                }
+                const openvdb::Vec3d t = finiteCoefficient(sampler.sigmaT(c.asVec3d()), true);
                 const std::size_t i = n * kLeafVoxels + v;
                 if (perVoxel && fromDensity) {
                     mDensityVoxel[i] = density.getValue(c); // (the sampler reads it so: sigmaT(), sigmaS())
                 } else if (perVoxel) {
-                    openvdb::Vec3d s = sampler.sigmaS(c);
-                    for (int ch = 0; ch < 3; ++ch) {
-                        if (!std::isfinite(s[ch])) s[ch] = 0.0;
-                    }
                     mSigmaTVoxel[i] = openvdb::Vec3f(t);
-                    mSigmaS[i] = openvdb::Vec3f(s);
+                    mSigmaS[i] = openvdb::Vec3f(finiteCoefficient(sampler.sigmaS(c), false));
                 }
                 double interior = 1.0;
                 if (surface) {
@@ -232,12 +225,7 @@ void SweepLattice::skinAtCentres(
 
 std::vector<openvdb::Vec3f> SweepLattice::sweepSource(std::vector<openvdb::Vec3f> source) const
 {
-    if (!mInterior.empty()) {
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, source.size()), [&](const tbb::blocked_range<std::size_t>& r) {
-            for (std::size_t i = r.begin(); i != r.end(); ++i) source[i] *= mInterior[i];
-        });
-    }
-    return padded(source);
+    return sweepSource([&source](std::size_t v) { return source[v]; });
 }
 
 std::vector<openvdb::Vec3f> SweepLattice::sweepSource(const std::function<openvdb::Vec3f(std::size_t)>& sourceAt) const

@@ -67,6 +67,15 @@ public:
     static int localIndex(int x, int y, int z) { return (x << 6) | (y << 3) | z; }
     static int paddedIndex(int x, int y, int z) { return (x + 1) * 100 + (y + 1) * 10 + (z + 1); }
 
+    /// @a x with non-finite channels 0 and, with @a nonNegative, negative ones too: a voxel's
+    /// coefficient as the lattice keeps it.
+    static openvdb::Vec3d finiteCoefficient(openvdb::Vec3d x, bool nonNegative)
+    {
+        for (int ch = 0; ch < 3; ++ch) {
+            if (!std::isfinite(x[ch]) || (nonNegative && x[ch] < 0.0)) x[ch] = 0.0;
+        }
+        return x;
+    }
     /// A coefficient per voxel, read as an array (operator[] by per-voxel index): held per voxel
     /// (the medium's `sigma_a`/`sigma_s` grids), or made from the voxel's density and the
     /// material's coefficient as the medium's sampler makes it (4 bytes a voxel for σt and σs
@@ -77,11 +86,7 @@ public:
         openvdb::Vec3f operator[](std::size_t v) const
         {
             if (mValues) return (*mValues)[v];
-            openvdb::Vec3d x = mPerDensity * double((*mDensity)[v]);
-            for (int ch = 0; ch < 3; ++ch) {
-                if (!std::isfinite(x[ch]) || (mNonNegative && x[ch] < 0.0)) x[ch] = 0.0;
-            }
-            return openvdb::Vec3f(x);
+            return openvdb::Vec3f(finiteCoefficient(mPerDensity * double((*mDensity)[v]), mNonNegative));
         }
         std::size_t size() const { return mValues ? mValues->size() : mDensity->size(); }
         bool empty() const { return size() == 0; }
@@ -148,7 +153,7 @@ public:
     std::vector<T> padded(const std::vector<T>& values) const;
     /// A source J (per voxel, the voxels' own values) as a sweep reads it: padded, and inside
     /// the surface (J/f).
-    /// (By value: a caller done with @a source moves it in, and its memory goes.)
+    /// (By value: a caller done with @a source moves it in, and its memory goes on return.)
     std::vector<openvdb::Vec3f> sweepSource(std::vector<openvdb::Vec3f> source) const;
     /// The same from @a sourceAt(v), the source at each voxel (per-voxel index), made padded
     /// directly: no per-voxel array of it beside the padded one.
