@@ -64,7 +64,10 @@ TEST_CASE("a byte damaged on disk that OpenVDB still reads is named on read, and
                 if (what.find("damaged") == std::string::npos) continue; // OpenVDB's own error: not this case
                 CHECK_THAT(what, Catch::Contains(path) && Catch::Contains("does not match the checksum vxf wrote"));
                 std::vector<std::string> names;
-                CHECK_NOTHROW(vxf::readVoxelSet(path, vxf::VoxelSetReadOptions{true, &names}));
+                vxf::VoxelSetReadOptions accept;
+                accept.acceptDamaged = true;
+                accept.damaged = &names;
+                CHECK_NOTHROW(vxf::readVoxelSet(path, accept));
                 CHECK(names.size() == 1);
                 found = true;
             }

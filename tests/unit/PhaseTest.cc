@@ -134,21 +134,22 @@ TEST_CASE("the rest of the phase: delta-M's moments, and its angular factor's Le
 TEST_CASE("the rest of the phase on the sweep's directions: mean 1 and first moment chi1 a, with their correction", "[phase][sweep]")
 {
     // On the sweep's N directions (opposite pairs, isotropic second moments) the factor's mean
-    // is 1 and, with β = RestPhase::quadratureCorrection, its first moment Σ R·ω_i/N is χ1·a as
-    // on the sphere; without β the cubic term's aliasing puts it off. (g 0.6: R nowhere clamped.)
+    // is 1 and, less β·ω_i (QuadratureCorrection, a cubic form in a per direction), its first
+    // moment Σ R·ω_i/N is χ1·a as on the sphere; without β the cubic term's aliasing puts it off.
+    // (g 0.6: R nowhere clamped.)
     const vxf::RestPhase rest(vxf::transportScaling(0.6));
     for (const int count : {16, 32}) {
         const std::vector<openvdb::Vec3d> directions = vxf::sweepDirections(count, 7);
         std::vector<openvdb::Vec3d> firsts;
         for (std::size_t i = 0; i < directions.size(); i += 2) firsts.push_back(directions[i]);
         const openvdb::Vec3f a = openvdb::Vec3f(0.3f, -0.5f, 0.6f);
-        const openvdb::Vec3f beta = rest.quadratureCorrection(a, firsts);
         double mean = 0.0;
         openvdb::Vec3d moment(0.0), plain(0.0);
         for (const openvdb::Vec3d& w : directions) {
             const openvdb::Vec3f omega(w);
-            mean += rest(a, omega, beta) / double(count);
-            moment += w * (rest(a, omega, beta) / double(count));
+            const float betaDotOmega = vxf::QuadratureCorrection(rest, w, firsts).betaDotOmega(a);
+            mean += rest(a, omega, betaDotOmega) / double(count);
+            moment += w * (rest(a, omega, betaDotOmega) / double(count));
             plain += w * (rest(a, omega) / double(count));
         }
         INFO(count << " directions");

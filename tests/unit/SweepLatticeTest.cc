@@ -115,3 +115,49 @@ TEST_CASE("a lattice holds grey sigma_t as one float a voxel and no surface arra
     }
     CHECK(differ == 0);
 }
+
+TEST_CASE("a source held per voxel sweeps as the padded one to the bit, with and without a first moment", "[transport][lattice]")
+{
+    const vxf::Material m = vxf::test::albedoMaterial(30.0, 0.5);
+    const vxf::VoxelSet set = vxf::test::uniformSphere(m, 1.0, 16);
+    const auto& source = *set.get<openvdb::Vec3SGrid>("scatter_source");
+    const vxf::Medium medium(set, m);
+    using Lattice = vxf::detail::SweepLattice;
+    using Layout = Lattice::SweepSource::Layout;
+    const Lattice lattice(medium, source, Lattice::Coefficients::SweepOnly);
+    // A source that varies from voxel to voxel, so that a leaf's halo is not its own values.
+    std::vector<openvdb::Vec3f> j = lattice.read(source);
+    for (std::size_t v = 0; v < j.size(); ++v) j[v] *= 1.0f + 0.01f * float(v % 97);
+    const auto at = [&j](std::size_t v) { return j[v]; };
+    const Lattice::SweepSource padded = lattice.sweepSource(at, Layout::Padded), perVoxel = lattice.sweepSource(at, Layout::PerVoxel);
+    CHECK(perVoxel.values.size() == lattice.voxelCount());
+    CHECK(padded.values.size() > 19 * lattice.voxelCount() / 10); // 1000 values a leaf of 512
+    const std::vector<openvdb::Vec3d> directions = vxf::sweepDirections(8, 0);
+    const std::vector<openvdb::Vec3f> zero(lattice.voxelCount(), openvdb::Vec3f(0.0f));
+    std::vector<openvdb::Vec3f> fa = zero, fb = zero;
+    lattice.sweep(padded, directions, 1.0, fa);
+    lattice.sweep(perVoxel, directions, 1.0, fb);
+    CHECK(fa == fb);
+
+    // Anisotropic: J·RestPhase(a, ω, β·ω) toward each direction, the first moment summed.
+    Lattice::FirstMoment moment;
+    moment.rest = vxf::RestPhase(vxf::transportScaling(0.6));
+    std::vector<openvdb::Vec3d> firsts;
+    for (std::size_t i = 0; i < directions.size(); i += 2) firsts.push_back(directions[i]);
+    for (const openvdb::Vec3d& d : directions) {
+        moment.worldDirections.push_back(d);
+        moment.corrections.emplace_back(moment.rest, d, firsts);
+    }
+    const std::vector<openvdb::Vec3f> a(lattice.voxelCount(), openvdb::Vec3f(0.3f, -0.2f, 0.5f));
+    moment.sourceAnisotropy = &a;
+    std::vector<openvdb::Vec3f> ma = zero, mb = zero, fluxA = zero, fluxB = zero;
+    moment.flux = &fluxA;
+    lattice.sweep(padded, directions, 1.0, ma, nullptr, nullptr, &moment);
+    moment.flux = &fluxB;
+    lattice.sweep(perVoxel, directions, 1.0, mb, nullptr, nullptr, &moment);
+    CHECK(ma == mb);
+    CHECK(fluxA == fluxB);
+    CHECK(ma != fa); // the phase moved the light
+    const std::size_t centre = std::size_t(lattice.indexOf(openvdb::Coord(0)));
+    CHECK(fluxA[centre].dot(openvdb::Vec3f(0.3f, -0.2f, 0.5f)) > 0.0f); // toward a
+}

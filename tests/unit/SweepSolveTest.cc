@@ -232,7 +232,7 @@ TEST_CASE("an anisotropic phase's first moment: an infinite medium's fluence and
     // scattered isotropically (the moment not carried through the scattering) it would be
     // g*·σa·a0/σt, 25% less at g = 0.6. R's cubic term is a polynomial of degree 4 in ω with ω's
     // first moment, which 16 directions do not integrate: without the direction set's correction
-    // (RestPhase::quadratureCorrection) a came out 10% long at g 0.6, 25% at g 0.9, and 0.6-2.6%
+    // (QuadratureCorrection) a came out 10% long at g 0.6, 25% at g 0.9, and 0.6-2.6%
     // of it across the axis.
     for (const double g : {0.6, 0.9}) {
         vxf::Material m = vxf::test::albedoMaterial(40.0, 0.5);

@@ -78,6 +78,27 @@ TEST_CASE("voxel sets round-trip through .vdb files exactly", "[io][vdb]")
     CHECK(vxf::test::schemaErrors(metadataAsJson(back.metadata()), "schemas/vxf-metadata.schema.json") == "");
 }
 
+TEST_CASE("a read can leave grids on disk and take them later, as they were", "[io][vdb]")
+{
+    TempDir dir;
+    const vxf::VoxelSet set = sampleSet();
+    const std::string path = dir.path("set.vdb");
+    vxf::writeVoxelSet(path, set);
+    vxf::VoxelSetReadOptions options;
+    options.wanted = [](const std::string& name) { return name != "color"; };
+    vxf::VoxelSet partial = vxf::readVoxelSet(path, options);
+    CHECK(partial.grids().size() == 2);
+    CHECK_FALSE(partial.find("color"));
+    REQUIRE(partial.find("mask")); // the grid after the one left on disk is read as it is
+    CHECK(vxf::test::identicalGrids(*set.find("mask"), *partial.find("mask")));
+    vxf::readGridsInto(partial, path, {"color", "no such grid"});
+    REQUIRE(partial.grids().size() == 3);
+    std::string why;
+    CHECK(vxf::test::identicalGrids(*set.find("color"), *partial.find("color"), &why));
+    INFO(why);
+    CHECK(&partial.find("color")->transform() == &partial.transform());
+}
+
 TEST_CASE("the metadata schema rejects what it should", "[io][vdb][schema]")
 {
     const std::string schema = "schemas/vxf-metadata.schema.json";

@@ -310,7 +310,7 @@ private:
 class CheckedArchiveReader : public openvdb::io::Archive
 {
 public:
-    VdbArchive read(std::istream& in, std::uint64_t fileBytes)
+    VdbArchive read(std::istream& in, std::uint64_t fileBytes, const std::function<bool(const std::string&)>& wanted)
     {
         readHeader(in);
         if (fileVersion() < openvdb::OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION || fileVersion() > openvdb::OPENVDB_FILE_VERSION) {
@@ -335,10 +335,19 @@ public:
         if (count < 0) throw openvdb::IoError(fmt::format("the file declares {} grids", count));
         std::vector<openvdb::io::GridDescriptor> descriptors;
         NamedGridMap named;
+        std::set<std::string> unwanted;
         for (std::int32_t i = 0; i < count; ++i) {
             Lookahead ahead(in, fileBytes);
             const DescriptorAhead d = checkDescriptor(ahead);
             const TreeLayout* layout = voxelTreeLayout(d.type);
+            if (layout && wanted && !wanted(d.name)) {
+                unwanted.insert(d.name);
+                const std::uint64_t at = ahead.position();
+                if (d.endPos > 0 && std::uint64_t(d.endPos) >= at && std::uint64_t(d.endPos) <= fileBytes) {
+                    in.seekg(std::streamoff(d.endPos));
+                    continue;
+                }
+            }
             if (!layout) {
                 const std::uint64_t at = ahead.position();
                 if (d.endPos <= 0 || std::uint64_t(d.endPos) < at || std::uint64_t(d.endPos) > fileBytes) {
@@ -360,9 +369,13 @@ public:
             // Delayed-load metadata was read as opaque bytes (initializeVdbReading); it describes
             // this file's layout, so it would be wrong in any file vxf writes.
             grid->removeMeta(openvdb::GridBase::META_FILE_DELAYED_LOAD);
+            if (gd.isInstance() && unwanted.count(openvdb::io::GridDescriptor::stripSuffix(gd.instanceParentName()))) {
+                throw openvdb::IoError(
+                    fmt::format("grid '{}' is an instance of '{}', which was not to be read", d.name, gd.instanceParentName()));
+            }
             named[gd.uniqueName()] = grid;
-            archive.grids.push_back(grid);
             descriptors.push_back(gd);
+            if (!unwanted.count(d.name)) archive.grids.push_back(grid);
         }
         for (const auto& gd : descriptors) connectInstance(gd, named);
         return archive;
@@ -402,10 +415,10 @@ private:
 
 } // namespace
 
-VdbArchive readVdbArchive(std::istream& in, std::uint64_t fileBytes)
+VdbArchive readVdbArchive(std::istream& in, std::uint64_t fileBytes, const std::function<bool(const std::string&)>& wanted)
 {
     initializeVdbReading();
-    return CheckedArchiveReader().read(in, fileBytes);
+    return CheckedArchiveReader().read(in, fileBytes, wanted);
 }
 
 } // namespace vxf::detail

@@ -4,6 +4,7 @@
 #include <openvdb/openvdb.h>
 
 #include <cstdint>
+#include <functional>
 #include <istream>
 #include <string>
 #include <vector>
@@ -29,9 +30,12 @@ struct VdbArchive
 /// OpenVDB's delayed-load metadata (for reading a file piecewise, which vxf never does; its
 /// reader sizes buffers from counts it does not check) is read as opaque bytes and dropped.
 /// Files of format versions 222 (OpenVDB 1.0) to 224 (every later OpenVDB) are read.
+/// With @a wanted, a voxel grid whose name it refuses is skipped by its descriptor's end offset
+/// (read, then dropped, where the file gives none); a grid that is an instance of one skipped
+/// throws (its tree is that grid's).
 /// @a in must be seekable, with exceptions on (a read past the end throws). Throws
 /// openvdb::IoError describing the first size that does not fit.
-VdbArchive readVdbArchive(std::istream& in, std::uint64_t fileBytes);
+VdbArchive readVdbArchive(std::istream& in, std::uint64_t fileBytes, const std::function<bool(const std::string&)>& wanted = {});
 
 /// Once per process, before any .vdb is read: openvdb::initialize(), and the delayed-load
 /// metadata type unregistered (above).

@@ -104,7 +104,7 @@ VoxelSet readVoxelSet(const std::string& path, const VoxelSetReadOptions& option
         std::ifstream in(path, std::ios::binary);
         if (!in) throw Error(fmt::format("{}: cannot open: {}", path, std::strerror(errno)));
         in.exceptions(std::ios::failbit | std::ios::badbit);
-        archive = detail::readVdbArchive(in, bytes);
+        archive = detail::readVdbArchive(in, bytes, options.wanted);
     } catch (const Error&) {
         throw;
     } catch (const std::ios_base::failure&) {
@@ -154,6 +154,14 @@ VoxelSet readVoxelSet(const std::string& path, const VoxelSetReadOptions& option
         if (options.damaged) *options.damaged = damaged;
     }
     return set;
+}
+
+void readGridsInto(VoxelSet& set, const std::string& path, const std::vector<std::string>& names)
+{
+    VoxelSetReadOptions options;
+    options.wanted = [&names](const std::string& name) { return std::find(names.begin(), names.end(), name) != names.end(); };
+    const VoxelSet read = readVoxelSet(path, options);
+    for (const openvdb::GridBase::Ptr& grid : read.grids()) set.put(grid);
 }
 
 namespace {

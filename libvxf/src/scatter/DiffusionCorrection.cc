@@ -150,8 +150,22 @@ DiffusionCorrection::DiffusionCorrection(const SweepLattice& lattice, int coarse
     }
 }
 
-DiffusionCorrection::Solve DiffusionCorrection::solve(const std::vector<openvdb::Vec3f>& change, double guessScale, double tolerance,
-    int maxIterations, const std::vector<openvdb::Vec3f>* fluxChange)
+std::vector<openvdb::Vec3d> DiffusionCorrection::cellMeans(const std::vector<openvdb::Vec3f>& values) const
+{
+    std::vector<openvdb::Vec3d> means;
+    if (values.empty()) return means;
+    means.assign(size(), openvdb::Vec3d(0.0));
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, means.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t c = r.begin(); c != r.end(); ++c) {
+            for (std::uint32_t k = mStart[c]; k < mStart[c + 1]; ++k) means[c] += openvdb::Vec3d(values[mMembers[k]]);
+            means[c] /= double(mStart[c + 1] - mStart[c]);
+        }
+    });
+    return means;
+}
+
+DiffusionCorrection::Solve DiffusionCorrection::solve(const std::vector<openvdb::Vec3f>& next, const std::vector<openvdb::Vec3f>& phi,
+    double guessScale, double tolerance, int maxIterations, const std::vector<openvdb::Vec3d>* fluxChange)
 {
     Solve result;
     if (mMembers.empty()) return result;
@@ -159,17 +173,10 @@ DiffusionCorrection::Solve DiffusionCorrection::solve(const std::vector<openvdb:
     const SweepLattice::Coefficient sigmaS = mLattice.sigmaS();
     const std::size_t cells = size();
     const auto count = openvdb::math::pcg::SizeType(cells);
+    const auto change = [&](std::size_t v) { return next[v] - phi[v]; };
     // The first moment's change per cell (its voxels' mean), for the term −∇·(χ1σsΔF/σtr).
-    std::vector<openvdb::Vec3d> cellFlux;
-    if (fluxChange && !mMomentFactor.empty()) {
-        cellFlux.assign(cells, openvdb::Vec3d(0.0));
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells), [&](const tbb::blocked_range<std::size_t>& r) {
-            for (std::size_t c = r.begin(); c != r.end(); ++c) {
-                for (std::uint32_t k = mStart[c]; k < mStart[c + 1]; ++k) cellFlux[c] += openvdb::Vec3d((*fluxChange)[mMembers[k]]);
-                cellFlux[c] /= double(mStart[c + 1] - mStart[c]);
-            }
-        });
-    }
+    const std::vector<openvdb::Vec3d>* cellFlux = fluxChange && !fluxChange->empty() && !mMomentFactor.empty() ? fluxChange : nullptr;
+    if (cellFlux && cellFlux->size() != cells) throw Error("diffusion correction: the first moment's change is not one a cell");
     for (int ch = 0; ch < 3; ++ch) {
         const int source = mChannels[ch].same >= 0 ? mChannels[ch].same : ch;
         const Channel& channel = mChannels[source];
@@ -182,7 +189,8 @@ DiffusionCorrection::Solve DiffusionCorrection::solve(const std::vector<openvdb:
             bool equal = true;
             for (std::size_t i = 0; i < mMembers.size() && equal; ++i) {
                 const std::size_t v = mMembers[i];
-                equal = change[v][ch] == change[v][other] && sigmaS[v][ch] == sigmaS[v][other];
+                const openvdb::Vec3f d = change(v);
+                equal = d[ch] == d[other] && sigmaS[v][ch] == sigmaS[v][other];
             }
             if (equal) solvedAs = other;
         }
@@ -198,10 +206,10 @@ DiffusionCorrection::Solve DiffusionCorrection::solve(const std::vector<openvdb:
                 double rhs = 0.0;
                 for (std::uint32_t k = mStart[c]; k < mStart[c + 1]; ++k) {
                     const std::size_t v = mMembers[k];
-                    rhs += double(sigmaS[v][ch]) * double(change[v][ch]);
+                    rhs += double(sigmaS[v][ch]) * double(change(v)[ch]);
                 }
                 rhs = rhs / double(mStart[c + 1] - mStart[c]) * h;
-                if (!cellFlux.empty()) {
+                if (cellFlux) {
                     // −∮ G·n over the cell's faces (in units of the cell, as the rows are), G =
                     // χ1σsΔF/σtr at a face the mean of its two cells', 0 at a vacuum face (taking
                     // the cell's own there, where the light streams out, the sweeps diverged on
@@ -209,9 +217,9 @@ DiffusionCorrection::Solve DiffusionCorrection::solve(const std::vector<openvdb:
                     const double own = mMomentFactor[c][ch];
                     for (int f = 0; f < 6; ++f) {
                         const int j = mNeighbours[c * 6 + std::size_t(f)];
-                        const double g = j < 0
-                            ? 0.0
-                            : 0.5 * (own * cellFlux[c][f >> 1] + mMomentFactor[std::size_t(j)][ch] * cellFlux[std::size_t(j)][f >> 1]);
+                        const double g = j < 0 ? 0.0
+                                               : 0.5 *
+                                (own * (*cellFlux)[c][f >> 1] + mMomentFactor[std::size_t(j)][ch] * (*cellFlux)[std::size_t(j)][f >> 1]);
                         rhs -= (f & 1) ? g : -g;
                     }
                 }

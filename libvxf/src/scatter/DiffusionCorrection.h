@@ -60,20 +60,24 @@ public:
         double residual = 0.0; ///< largest relative residual |b − Aδ|/|b| of a channel
     };
 
-    /// δ per cell for @a change = φ_{l+½} − φ_l per voxel, kept here (addTo); solved to
+    /// δ per cell for the change φ_{l+½} − φ_l per voxel (@a next − @a phi), kept here (addTo); solved to
     /// @a tolerance relative residual (at most @a maxIterations), starting from the last
     /// solution times @a guessScale (the previous sweep's correction scaled as the change
     /// shrank; 0, or before the first solve: from 0).
-    /// With @a fluxChange (per voxel, F_{l+½} − F_l of the light's first moment, grey, along the
-    /// lattice's index axes) and a phase, the right-hand side takes the moment's part of the
+    /// With @a fluxChange (per cell, the mean of its voxels' F_{l+½} − F_l of the light's first
+    /// moment, grey, along the lattice's index axes: cellMeans) and a phase, the right-hand side
+    /// takes the moment's part of the
     /// P1 error equations too, −∇·(χ1σs·ΔF/σtr) (ΔF grey, each channel by its own σs/σtr; see
     /// the constructor for where it fades). The moment itself is not corrected: correcting it
     /// by the P1 error equations' ε1 = −D∇δ + χ1σsΔF/σtr too made every cloud of
     /// docs/accuracy-notes.md (y) diverge (P1 synthetic acceleration is known to be unstable in
     /// several dimensions); without this term the correction, blind to the moment's lag, stalled
     /// or diverged on the forward clouds (g ≥ 0.6 at albedo 0.999).
-    Solve solve(const std::vector<openvdb::Vec3f>& change, double guessScale, double tolerance, int maxIterations,
-        const std::vector<openvdb::Vec3f>* fluxChange = nullptr);
+    Solve solve(const std::vector<openvdb::Vec3f>& next, const std::vector<openvdb::Vec3f>& phi, double guessScale, double tolerance,
+        int maxIterations, const std::vector<openvdb::Vec3d>* fluxChange = nullptr);
+
+    /// Per cell, the mean of @a values (per voxel) over its voxels (empty for empty @a values).
+    std::vector<openvdb::Vec3d> cellMeans(const std::vector<openvdb::Vec3f>& values) const;
 
     /// @a values (per voxel) += @a weight × the last solution δ, each voxel of the domain its cell's.
     void addTo(std::vector<openvdb::Vec3f>& values, double weight = 1.0) const;

@@ -12,7 +12,7 @@
 namespace vxf::detail {
 
 /// A pass's source (σs·φ/4π of a fluence whose skin voxels hold the light on the surface, as
-/// SweepLattice::withSkin and the gathers give it) as a sweep steps it, from centre to centre:
+/// SweepLattice::putSkin and the gathers give it) as a sweep steps it, from centre to centre:
 /// read on @a lattice, its skin voxels' values at their centres (SweepLattice::skinAtCentres,
 /// from SourceField's lattice read). Read as it is, the thick bunny's second order came out 7%
 /// below the gather's (the first 1.7%).

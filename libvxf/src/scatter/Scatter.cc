@@ -151,13 +151,19 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
     } else {
         set.remove(grids::kScatterAnisotropy); // isotropic now
     }
-    if (auto direct = set.find(grids::kDirect)) {
-        auto illumination = openvdb::gridPtrCast<openvdb::Vec3SGrid>(direct)->deepCopy();
-        auto addend = sum->deepCopy();
-        openvdb::tools::compSum(*illumination, *addend);
-        set.put(detail::named(illumination, grids::kIllumination));
-    }
+    putIllumination(set);
     return report;
+}
+
+void putIllumination(VoxelSet& set)
+{
+    const auto direct = set.find(grids::kDirect);
+    const auto scattered = set.find(grids::kScatter);
+    if (!direct || !scattered) return;
+    auto illumination = set.get<openvdb::Vec3SGrid>(grids::kDirect)->deepCopy();
+    auto addend = set.get<openvdb::Vec3SGrid>(grids::kScatter)->deepCopy();
+    openvdb::tools::compSum(*illumination, *addend);
+    set.put(detail::named(illumination, grids::kIllumination));
 }
 
 } // namespace vxf

@@ -61,7 +61,8 @@ openvdb::Vec3SGrid::Ptr sweepPass(
             : lattice.read(source);
         lattice.sweep(lattice.sweepSource(std::move(j)), directions, 4.0 * M_PI / double(directions.size()), fluence, &skin, interrupter);
     }
-    auto grid = lattice.write(lattice.withSkin(fluence, skin), source);
+    lattice.putSkin(fluence, skin);
+    auto grid = lattice.write(fluence, source);
     grid->setName("fluence");
     return grid;
 }

@@ -112,13 +112,6 @@ openvdb::Vec3d l1(const std::vector<openvdb::Vec3f>& values)
     return sum;
 }
 
-/// The largest channel of l1(@a values).
-double l1Max(const std::vector<openvdb::Vec3f>& values)
-{
-    const openvdb::Vec3d s = l1(values);
-    return std::max({s[0], s[1], s[2]});
-}
-
 /// The accelerated (or plain) iteration of sweepSolve: the lattice and its arrays, one
 /// iteration (the transport of a gather or a sweep, its correction, the change it made) and the
 /// decisions to stop, halve or drop the correction.
@@ -169,11 +162,16 @@ public:
                 moment->worldDirections.push_back(medium.transform().baseMap()->applyJacobian(d).unit());
             }
             // The direction set's opposite pairs (sweepDirections: ω, −ω in turn), one of each, for
-            // the rest's quadrature correction (none for a set of no such pairs).
+            // the rest's quadrature correction (none for a set of no such pairs): its β·ω a
+            // direction's cubic form in a (no β held per voxel).
             const std::vector<openvdb::Vec3d>& world = moment->worldDirections;
             bool paired = world.size() % 2 == 0;
             for (std::size_t i = 0; paired && i < world.size(); i += 2) paired = (world[i] + world[i + 1]).length() < 1e-9;
+            std::vector<openvdb::Vec3d> pairFirsts;
             for (std::size_t i = 0; paired && i < world.size(); i += 2) pairFirsts.push_back(world[i]);
+            for (std::size_t d = 0; d < world.size() && !pairFirsts.empty(); ++d) {
+                moment->corrections.emplace_back(moment->rest, world[d], pairFirsts);
+            }
             if (moments && moments->source) a0View.emplace(lattice, *moments->source);
         }
         phi.assign(count, openvdb::Vec3f(0.0f));
@@ -311,7 +309,6 @@ private:
             for (int ch = 0; ch < 3; ++ch) j[ch] = own[ch] + sigmaS[v][ch] * phi[v][ch] * float(1.0 / (4.0 * M_PI));
             return j;
         };
-        std::vector<openvdb::Vec3f> beta;
         if (moment) {
             // One mean direction for the sum: its parts' a weighted by their grey J, the
             // scattered light's a = F/φ.
@@ -326,36 +323,29 @@ private:
                 }
             });
             moment->sourceAnisotropy = &a;
-            if (!pairFirsts.empty()) {
-                // The direction set's own error in the rest's first moment, taken off (Phase.h).
-                beta.resize(count);
-                tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
-                    for (std::size_t v = r.begin(); v != r.end(); ++v) beta[v] = moment->rest.quadratureCorrection(a[v], pairFirsts);
-                });
-                moment->quadratureCorrection = &beta;
-            }
-            previousFlux.swap(flux);
+            if (accelerate && diffusion) previousCellFlux = diffusion->cellMeans(flux); // (ΔF a cell's mean, as the correction reads it)
             flux.assign(count, openvdb::Vec3f(0.0f));
             moment->flux = &flux;
         }
-        // J made padded from its parts (no per-voxel J beside it: 12 bytes a voxel).
-        const std::vector<openvdb::Vec3f> paddedSource = lattice.sweepSource(sourceAt);
+        // J made from its parts, no per-voxel J beside it; per voxel where the sweep makes the
+        // leaf's block for each direction anyway (a moment's J·RestPhase), else padded.
+        using Layout = detail::SweepLattice::SweepSource::Layout;
+        const detail::SweepLattice::SweepSource sweepSource = lattice.sweepSource(sourceAt, moment ? Layout::PerVoxel : Layout::Padded);
         next.assign(count, openvdb::Vec3f(0.0f));
         const auto sweepStart = std::chrono::steady_clock::now();
-        lattice.sweep(paddedSource, directions, weight, next, &skin, nullptr, moment ? &*moment : nullptr);
+        lattice.sweep(sweepSource, directions, weight, next, &skin, nullptr, moment ? &*moment : nullptr);
         it.sweepSeconds = secondsSince(sweepStart);
-        if (moment) moment->quadratureCorrection = nullptr; // (beta goes)
     }
 
     /// The correction of φ_{l+½} toward the sum: the sweeps' own solve of the gather's change, or
     /// the diffusion correction of the sweep's.
     void correct(SweepSolveReport::Iteration& it)
     {
-        std::vector<openvdb::Vec3f> change(count);
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
-            for (std::size_t v = r.begin(); v != r.end(); ++v) change[v] = next[v] - phi[v];
-        });
         if (gather) {
+            std::vector<openvdb::Vec3f> change(count);
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
+                for (std::size_t v = r.begin(); v != r.end(); ++v) change[v] = next[v] - phi[v];
+            });
             // δ = (I − K_s S)⁻¹ K_s S (φ_{l+½} − φ_l): the error the gather leaves, as the
             // sweeps would leave it, by their own accelerated solve of the change's scattered
             // light (its skin voxels hold the light on the surface: read at their centres).
@@ -379,23 +369,28 @@ private:
         } else {
             // Start from the last correction scaled as the change shrank: near albedo 1 the
             // error left is the slowest mode, its shape the same from sweep to sweep.
-            const double moved = l1Max(change);
-            const double scale = previousChange > 0.0 ? std::min(1.0, moved / std::max(previousMoved, 1e-300)) : 0.0;
-            previousMoved = moved;
-            // With a phase, the first moment's change too (along the lattice's axes).
-            std::vector<openvdb::Vec3f> fluxChange;
+            // The change φ_{l+½} − φ_l is read as next − phi where it is needed (no array of it).
+            openvdb::Vec3d moved(0.0);
+            for (std::size_t v = 0; v < count; ++v) {
+                const openvdb::Vec3f d = next[v] - phi[v];
+                moved += openvdb::Vec3d(std::abs(d[0]), std::abs(d[1]), std::abs(d[2]));
+            }
+            const double largest = std::max({moved[0], moved[1], moved[2]});
+            const double scale = previousChange > 0.0 ? std::min(1.0, largest / std::max(previousMoved, 1e-300)) : 0.0;
+            previousMoved = largest;
+            // With a phase, the first moment's change too, a cell's mean (along the lattice's axes).
+            std::vector<openvdb::Vec3d> cellFluxChange;
             if (moment) {
                 const openvdb::math::MapBase& map = *medium.transform().baseMap();
                 const double dx = medium.voxelSize();
-                fluxChange.resize(count);
-                tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
-                    for (std::size_t v = r.begin(); v != r.end(); ++v) {
-                        const openvdb::Vec3d d(previousFlux.empty() ? flux[v] : flux[v] - previousFlux[v]);
-                        fluxChange[v] = openvdb::Vec3f(map.applyInverseJacobian(d) * dx);
-                    }
-                });
+                cellFluxChange = diffusion->cellMeans(flux);
+                for (std::size_t c = 0; c < cellFluxChange.size(); ++c) {
+                    const openvdb::Vec3d d = previousCellFlux.empty() ? cellFluxChange[c] : cellFluxChange[c] - previousCellFlux[c];
+                    cellFluxChange[c] = map.applyInverseJacobian(d) * dx;
+                }
             }
-            const auto solved = diffusion->solve(change, scale, kDiffusionTolerance, 1000, fluxChange.empty() ? nullptr : &fluxChange);
+            const auto solved =
+                diffusion->solve(next, phi, scale, kDiffusionTolerance, 1000, cellFluxChange.empty() ? nullptr : &cellFluxChange);
             corrected = true;
             it.diffusionIterations = solved.iterations;
             it.diffusionResidual = solved.residual;
@@ -410,6 +405,9 @@ private:
                 fmt::format("stopped after {} {}, estimated error {:.2g} of the sum", report.iterations.size(), iterations,
                     report.iterations.empty() ? 0.0 : report.iterations.back().error);
         }
+        // The solve's arrays go before the grids are made (φ itself becomes the output's values).
+        std::vector<openvdb::Vec3f>().swap(next);
+        std::vector<openvdb::Vec3d>().swap(previousCellFlux);
         // The skin voxels hold the fluence on the surface, as the gathers give it.
         std::vector<openvdb::Vec3f> shift;
         if (corrected) {
@@ -428,7 +426,10 @@ private:
             moments->scattered = lattice.write(a, source);
             moments->scattered->setName(grids::kScatterAnisotropy);
         }
-        auto grid = lattice.write(lattice.withSkin(phi, skin, corrected ? &shift : nullptr), source);
+        std::vector<openvdb::Vec3f>().swap(a);
+        std::vector<openvdb::Vec3f>().swap(flux);
+        lattice.putSkin(phi, skin, corrected ? &shift : nullptr);
+        auto grid = lattice.write(phi, source);
         grid->setName(grids::kScatter);
         return grid;
     }
@@ -461,8 +462,8 @@ private:
     // turn), one of each, for the rest's quadrature correction (none for a set of no such pairs).
     std::optional<detail::SweepLattice::FirstMoment> moment;
     std::optional<detail::SweepLattice::GridView> a0View; ///< a0: the source's anisotropy grid, if any
-    std::vector<openvdb::Vec3f> flux, previousFlux, a;
-    std::vector<openvdb::Vec3d> pairFirsts;
+    std::vector<openvdb::Vec3f> flux, a;
+    std::vector<openvdb::Vec3d> previousCellFlux; ///< the last sweep's F, a diffusion cell's mean
     // Per voxel: what the iteration keeps (the sweep's own arrays come and go; J is made padded
     // from j0, σs and φ, with no per-voxel copy; a first moment adds a0, a, β, F, the last
     // sweep's F and the correction's ΔF, a and β read padded a leaf at a time by the sweep).

@@ -199,15 +199,13 @@ std::size_t SweepLattice::bytes() const
         mLeafIndex.bucket_count() * sizeof(void*);
 }
 
-std::vector<openvdb::Vec3f> SweepLattice::withSkin(const std::vector<openvdb::Vec3f>& fluence,
-    const std::vector<openvdb::Vec3f>& skinFluence, const std::vector<openvdb::Vec3f>* shift) const
+void SweepLattice::putSkin(
+    std::vector<openvdb::Vec3f>& fluence, const std::vector<openvdb::Vec3f>& skinFluence, const std::vector<openvdb::Vec3f>* shift) const
 {
-    std::vector<openvdb::Vec3f> out = fluence;
     for (std::size_t s = 0; s < mSkin.size() && s < skinFluence.size(); ++s) {
         const std::uint32_t v = mSkin[s].voxel;
-        out[v] = skinFluence[s] + (shift ? (*shift)[v] : openvdb::Vec3f(0.0f));
+        fluence[v] = skinFluence[s] + (shift ? (*shift)[v] : openvdb::Vec3f(0.0f));
     }
-    return out;
 }
 
 void SweepLattice::skinAtCentres(
@@ -223,25 +221,31 @@ void SweepLattice::skinAtCentres(
     });
 }
 
-std::vector<openvdb::Vec3f> SweepLattice::sweepSource(std::vector<openvdb::Vec3f> source) const
+SweepLattice::SweepSource SweepLattice::sweepSource(std::vector<openvdb::Vec3f> source) const
 {
     return sweepSource([&source](std::size_t v) { return source[v]; });
 }
 
-std::vector<openvdb::Vec3f> SweepLattice::sweepSource(const std::function<openvdb::Vec3f(std::size_t)>& sourceAt) const
+SweepLattice::SweepSource SweepLattice::sweepSource(
+    const std::function<openvdb::Vec3f(std::size_t)>& sourceAt, SweepSource::Layout layout) const
 {
-    std::vector<openvdb::Vec3f> out(mOrigins.size() * kPaddedVoxels);
+    const auto inside = [&](std::size_t v) { return mInterior.empty() ? sourceAt(v) : sourceAt(v) * mInterior[v]; };
+    SweepSource out;
+    out.layout = layout;
+    if (layout == SweepSource::Layout::PerVoxel) {
+        out.values.resize(voxelCount());
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, voxelCount()), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t v = r.begin(); v != r.end(); ++v) out.values[v] = inside(v);
+        });
+        return out;
+    }
+    out.values.resize(mOrigins.size() * kPaddedVoxels);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mOrigins.size()), [&](const tbb::blocked_range<std::size_t>& r) {
         std::int64_t index[kPaddedVoxels];
         for (std::size_t n = r.begin(); n != r.end(); ++n) {
-            openvdb::Vec3f* block = &out[n * kPaddedVoxels];
+            openvdb::Vec3f* block = &out.values[n * kPaddedVoxels];
             paddedVoxels(n, index);
-            for (int q = 0; q < kPaddedVoxels; ++q) {
-                const std::int64_t v = index[q];
-                block[q] = v < 0        ? openvdb::Vec3f(0.0f)
-                    : mInterior.empty() ? sourceAt(std::size_t(v))
-                                        : sourceAt(std::size_t(v)) * mInterior[std::size_t(v)];
-            }
+            for (int q = 0; q < kPaddedVoxels; ++q) block[q] = index[q] < 0 ? openvdb::Vec3f(0.0f) : inside(std::size_t(index[q]));
         }
     });
     return out;

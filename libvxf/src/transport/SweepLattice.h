@@ -151,23 +151,34 @@ public:
     /// @a values (per voxel) padded with their neighbours' values.
     template <typename T>
     std::vector<T> padded(const std::vector<T>& values) const;
-    /// A source J (per voxel, the voxels' own values) as a sweep reads it: padded, and inside
-    /// the surface (J/f).
+    /// A source J as a sweep reads it, inside the surface (J/f): padded (each leaf's block with
+    /// its neighbours' values, read as it is by every direction: 23.4 bytes a voxel), or per
+    /// voxel (12 bytes a voxel, a leaf's block gathered through its padded index when the sweep
+    /// visits it: free where the sweep makes a block per direction anyway, the first moment's
+    /// J·RestPhase, and a tenth slower where it would read the padded block as it is).
+    struct SweepSource
+    {
+        enum class Layout { Padded, PerVoxel };
+        std::vector<openvdb::Vec3f> values;
+        Layout layout = Layout::Padded;
+    };
+    /// The source of @a source (per voxel, the voxels' own values), padded.
     /// (By value: a caller done with @a source moves it in, and its memory goes on return.)
-    std::vector<openvdb::Vec3f> sweepSource(std::vector<openvdb::Vec3f> source) const;
-    /// The same from @a sourceAt(v), the source at each voxel (per-voxel index), made padded
-    /// directly: no per-voxel array of it beside the padded one.
-    std::vector<openvdb::Vec3f> sweepSource(const std::function<openvdb::Vec3f(std::size_t)>& sourceAt) const;
+    SweepSource sweepSource(std::vector<openvdb::Vec3f> source) const;
+    /// The same from @a sourceAt(v), the source at each voxel (per-voxel index), made in
+    /// @a layout directly: no per-voxel array of J beside it.
+    SweepSource sweepSource(
+        const std::function<openvdb::Vec3f(std::size_t)>& sourceAt, SweepSource::Layout layout = SweepSource::Layout::Padded) const;
 
     /// One transport sweep per direction: the radiance ψ(x, ω) of dψ/ds = −σt ψ + J with no
     /// light entering the lattice from outside, and @a fluence += Σ_i @a weight·ψ(x, ω_i) (per
     /// voxel, at the voxels' centres). @a source: from sweepSource. Upwind order leaf by leaf
     /// (see SweepPass.h). With @a skinFluence (skinCount() values), also the fluence of each
-    /// skin voxel on the surface (see withSkin).
+    /// skin voxel on the surface (see putSkin).
     ///
     /// With @a moment, the source is anisotropic by the rest of the phase (Phase.h) and the
     /// sweep adds up the fluence's first moment too: direction i sweeps the source
-    /// J·RestPhase(a, ω_i, β) (a per voxel, the source's mean direction of travel; β its
+    /// J·RestPhase(a, ω_i, β·ω_i) (a per voxel, the source's mean direction of travel; β its
     /// direction set's correction), and flux += Σ_i weight·grey(ψ_i)·ω_i (per
     /// voxel). ω_i and a are in world space (worldDirections: @a directions carried to it).
     struct FirstMoment
@@ -176,12 +187,13 @@ public:
         /// a, per voxel (read padded a leaf at a time as the sweep visits it: 24 bytes a voxel
         /// less than held padded)
         const std::vector<openvdb::Vec3f>* sourceAnisotropy = nullptr;
-        /// β, per voxel (RestPhase::quadratureCorrection for worldDirections), or null: none.
-        const std::vector<openvdb::Vec3f>* quadratureCorrection = nullptr;
+        /// β·ω's cubic form, one per direction (QuadratureCorrection for worldDirections), or
+        /// empty: none.
+        std::vector<QuadratureCorrection> corrections;
         std::vector<openvdb::Vec3d> worldDirections; ///< one per sweep direction, unit
         std::vector<openvdb::Vec3f>* flux = nullptr; ///< per voxel, added to
     };
-    void sweep(const std::vector<openvdb::Vec3f>& source, const std::vector<openvdb::Vec3d>& directions, double weight,
+    void sweep(const SweepSource& source, const std::vector<openvdb::Vec3d>& directions, double weight,
         std::vector<openvdb::Vec3f>& fluence, std::vector<openvdb::Vec3f>* skinFluence = nullptr, Interrupter* interrupter = nullptr,
         const FirstMoment* moment = nullptr) const;
 
@@ -238,7 +250,7 @@ public:
     }
 
     /// @a values (per voxel) with each skin voxel's replaced by centre(voxel)·f: for a source made
-    /// from a pass's fluence, whose skin voxels hold the light on the surface (withSkin), the
+    /// from a pass's fluence, whose skin voxels hold the light on the surface (putSkin), the
     /// value at the centre that sweepSource takes it for (@a centre: the source inside the
     /// surface at a voxel's centre, e.g. SourceField's; f its volume fraction).
     void skinAtCentres(std::vector<openvdb::Vec3f>& values, const std::function<openvdb::Vec3f(const openvdb::Coord&)>& centre) const;
@@ -253,9 +265,9 @@ public:
     std::size_t skinCount() const { return mSkin.size(); }
     /// Whether voxel @a voxel (per-voxel index) is a skin voxel.
     bool isSkin(std::size_t voxel) const { return !mSkinIndex.empty() && mSkinIndex[voxel] >= 0; }
-    /// @a fluence (per voxel) with its skin voxels' values replaced by @a skinFluence plus
-    /// @a shift at the voxel (e.g. a diffusion correction; null: none).
-    std::vector<openvdb::Vec3f> withSkin(const std::vector<openvdb::Vec3f>& fluence, const std::vector<openvdb::Vec3f>& skinFluence,
+    /// @a fluence's (per voxel) skin voxels' values replaced by @a skinFluence plus @a shift at
+    /// the voxel (e.g. a diffusion correction; null: none), in place.
+    void putSkin(std::vector<openvdb::Vec3f>& fluence, const std::vector<openvdb::Vec3f>& skinFluence,
         const std::vector<openvdb::Vec3f>* shift = nullptr) const;
 
     /// The leaf at @a leaf's origin + 8·(dx, dy, dz), dx… ∈ {−1, 0, 1}, or −1 for none.

@@ -18,20 +18,39 @@
 
 namespace vxf::detail {
 
-void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::vector<openvdb::Vec3d>& directions, double weight,
+namespace {
+
+/// @a f(q) for each padded index q a sweep of @a octant reads: the leaf's own voxels and its
+/// upwind halo, 9³ of the block's 10³ (the downwind halo is the next leaves' to read).
+template <typename F>
+void forUpwindBlock(int octant, F&& f)
+{
+    const int lo[3] = {octant & 1 ? 0 : -1, octant & 2 ? 0 : -1, octant & 4 ? 0 : -1};
+    for (int x = lo[0]; x < lo[0] + 9; ++x) {
+        for (int y = lo[1]; y < lo[1] + 9; ++y) {
+            const int row = SweepLattice::paddedIndex(x, y, lo[2]);
+            for (int q = row; q < row + 9; ++q) f(q);
+        }
+    }
+}
+
+} // namespace
+
+void SweepLattice::sweep(const SweepSource& source, const std::vector<openvdb::Vec3d>& directions, double weight,
     std::vector<openvdb::Vec3f>& fluence, std::vector<openvdb::Vec3f>* skinFluence, Interrupter* interrupter,
     const FirstMoment* moment) const
 {
     if (skinFluence) skinFluence->assign(mSkin.size(), openvdb::Vec3f(0.0f));
     const bool skins = skinFluence && !mSkin.empty();
-    if (source.size() != mOrigins.size() * kPaddedVoxels || fluence.size() != voxelCount()) {
+    const bool padded = source.layout == SweepSource::Layout::Padded;
+    if (source.values.size() != (padded ? mOrigins.size() * kPaddedVoxels : voxelCount()) || fluence.size() != voxelCount()) {
         throw Error("sweep: source or fluence does not match the lattice");
     }
     const float w = float(weight);
     if (moment &&
         (moment->worldDirections.size() != directions.size() || !moment->sourceAnisotropy ||
             moment->sourceAnisotropy->size() != voxelCount() ||
-            (moment->quadratureCorrection && moment->quadratureCorrection->size() != voxelCount()) || !moment->flux ||
+            (!moment->corrections.empty() && moment->corrections.size() != directions.size()) || !moment->flux ||
             moment->flux->size() != voxelCount())) {
         throw Error("sweep: the first moment's arrays do not match the lattice");
     }
@@ -59,11 +78,14 @@ void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::v
     struct Scratch
     {
         std::vector<openvdb::Vec3f> buffer, toward;
-        std::vector<std::int64_t> index; ///< with a moment: the leaf's padded block's voxels (paddedVoxels)
+        /// Gathered once a leaf and batch (a moment's, or a source per voxel): the leaf's padded
+        /// block's voxels (paddedVoxels), J and a over it (0 where no voxel is).
+        std::vector<std::int64_t> index;
+        std::vector<openvdb::Vec3f> block, anisotropy;
     };
     tbb::enumerable_thread_specific<Scratch> scratches([] {
-        return Scratch{std::vector<openvdb::Vec3f>(kPaddedVoxels, openvdb::Vec3f(0.0f)), std::vector<openvdb::Vec3f>(kPaddedVoxels),
-            std::vector<std::int64_t>(kPaddedVoxels)};
+        const std::vector<openvdb::Vec3f> zeros(kPaddedVoxels, openvdb::Vec3f(0.0f));
+        return Scratch{zeros, zeros, std::vector<std::int64_t>(kPaddedVoxels), zeros, zeros};
     });
     std::size_t swept = 0;
     for (const std::vector<std::size_t>& batch : batches) {
@@ -81,22 +103,32 @@ void SweepLattice::sweep(const std::vector<openvdb::Vec3f>& source, const std::v
                     const int leaf = mNeighbours[n * 27 + g.slot];
                     buffer[g.padded] = leaf >= 0 ? ownFaces[std::size_t(leaf) * kFaceVoxels + std::size_t(g.face)] : openvdb::Vec3f(0.0f);
                 }
-                // With a moment, the source toward ω: J·RestPhase(a, ω) over the leaf's padded block.
-                const openvdb::Vec3f* j = &source[n * kPaddedVoxels];
+                // The leaf's padded block of J: as it is (padded, no moment), or gathered once a
+                // batch by the block's index, with a moment's a beside it; with a moment, J
+                // toward ω: J·RestPhase(a, ω, β·ω), over the gathered blocks.
+                const openvdb::Vec3f* j = padded ? &source.values[n * kPaddedVoxels] : nullptr;
+                if (slot == 0 && (moment || !padded)) {
+                    paddedVoxels(n, scratch.index.data());
+                    const openvdb::Vec3f* a = moment ? moment->sourceAnisotropy->data() : nullptr;
+                    forUpwindBlock(octant, [&](int q) {
+                        const std::int64_t v = scratch.index[std::size_t(q)];
+                        scratch.block[std::size_t(q)] = v < 0 ? openvdb::Vec3f(0.0f) : padded ? j[q] : source.values[std::size_t(v)];
+                        if (a) scratch.anisotropy[std::size_t(q)] = v < 0 ? openvdb::Vec3f(0.0f) : a[v];
+                    });
+                }
+                if (moment || !padded) j = scratch.block.data();
                 openvdb::Vec3f worldOmega(0.0f);
                 if (moment) {
-                    if (slot == 0) paddedVoxels(n, scratch.index.data());
                     worldOmega = openvdb::Vec3f(moment->worldDirections[d]);
-                    const openvdb::Vec3f* a = moment->sourceAnisotropy->data();
-                    const openvdb::Vec3f* beta = moment->quadratureCorrection ? moment->quadratureCorrection->data() : nullptr;
-                    for (int q = 0; q < kPaddedVoxels; ++q) {
-                        // (No voxel: J is 0 there, padded.)
-                        const std::int64_t v = scratch.index[std::size_t(q)];
-                        scratch.toward[std::size_t(q)] = v < 0 ? openvdb::Vec3f(0.0f)
-                            : beta                             ? j[q] * moment->rest(a[v], worldOmega, beta[v])
-                                                               : j[q] * moment->rest(a[v], worldOmega);
+                    const openvdb::Vec3f* a = scratch.anisotropy.data();
+                    openvdb::Vec3f* toward = scratch.toward.data();
+                    if (moment->corrections.empty()) {
+                        forUpwindBlock(octant, [&](int q) { toward[q] = j[q] * moment->rest(a[q], worldOmega); });
+                    } else {
+                        const QuadratureCorrection& beta = moment->corrections[d];
+                        forUpwindBlock(octant, [&](int q) { toward[q] = j[q] * moment->rest(a[q], worldOmega, beta.betaDotOmega(a[q])); });
                     }
-                    j = scratch.toward.data();
+                    j = toward;
                 }
                 const UpwindVoxel* voxels = upwindVoxels(octant, dominantAxis(omega)).data();
                 openvdb::Vec3f* fluxHere = flux ? &(*flux)[n * kLeafVoxels] : nullptr;

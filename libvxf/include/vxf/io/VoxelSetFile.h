@@ -3,6 +3,7 @@
 
 #include <vxf/core/VoxelSet.h>
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,10 @@ struct VoxelSetReadOptions
     /// Grids the file holds that are not voxel grids (point data, strings) are skipped; their
     /// "NAME (TYPE)" go here when given.
     std::vector<std::string>* skipped = nullptr;
+    /// Only the grids whose names this accepts are read (empty: every grid); the others' data
+    /// are skipped on disk, not read and dropped. A stage that needs a grid only when it
+    /// writes reads it then (readGridsInto), and holds its memory for none of the work.
+    std::function<bool(const std::string& name)> wanted;
 };
 
 /// Read every voxel grid and the file metadata of the .vdb at @a path, every size the file
@@ -35,6 +40,10 @@ struct VoxelSetReadOptions
 /// tools carry none and read as they are).
 VoxelSet readVoxelSet(const std::string& path);
 VoxelSet readVoxelSet(const std::string& path, const VoxelSetReadOptions& options);
+
+/// The grids named @a names of the .vdb at @a path (those it holds; read as readVoxelSet does)
+/// put into @a set, replacing grids of the same names.
+void readGridsInto(VoxelSet& set, const std::string& path, const std::vector<std::string>& names);
 
 /// Write @a set to @a path atomically (temporary file + rename): the grids in order, with
 /// "vxf:units" grid metadata filled in from their roles, "vxf:checksum" of each grid's data as

@@ -90,10 +90,10 @@ openvdb::Vec3d gridEnergy(const openvdb::Vec3SGrid& grid);
 
 /// The scatter stage's peak per active voxel of the medium's density, the larger of two solved
 /// whole by accelerated sweeps (bench/scale, docs/reports/scale.md), less the fixed part,
-/// rounded up: the bunny's 3.67M at dim 256 (779 MiB, 194 bytes a voxel) and scripts/make-smoke's
-/// 4.59M at 256³ with a Henyey-Greenstein phase (1112 MiB, 231: its first moment's arrays).
+/// rounded up: the bunny's 3.67M at dim 256 (722 MiB, 178 bytes a voxel) and scripts/make-smoke's
+/// 4.59M at 256³ with a Henyey-Greenstein phase (831 MiB, 167: its first moment's arrays).
 /// scatter checks it against the memory budget before it allocates.
-inline constexpr double kScatterBytesPerVoxel = 250.0;
+inline constexpr double kScatterBytesPerVoxel = 180.0;
 
 /// Run scattering passes on @a set: J_k = σs·φ_k/(4π) feeds pass k+1 (J_0 is `scatter_source`,
 /// read from the set, so an artist may have edited it). @a medium is the transport's (Medium):
@@ -122,5 +122,9 @@ inline constexpr double kScatterBytesPerVoxel = 250.0;
 /// lattice's slightly different operator left out; see Scatter.cc.
 /// Throws vxf::Error naming a missing grid, vxf::UsageError for a bad coarseFactor.
 ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions& options = {}, Interrupter* interrupter = nullptr);
+
+/// `illumination` = `direct` + `scatter` into @a set, when it holds both (scatter does this at
+/// its end; a caller that reads `direct` only after the solve calls it then).
+void putIllumination(VoxelSet& set);
 
 } // namespace vxf

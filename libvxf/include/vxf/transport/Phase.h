@@ -84,7 +84,7 @@ inline PhaseScaling transportScaling(double g)
 /// 3c·k²), c = a·ω, clamped at 0 (a strongly forward rest of a near-collimated beam dips below
 /// it backward). Its mean over the sphere is 1, and over the sweep's directions too (opposite
 /// pairs, isotropic second moments: SweepPass.h), clamp aside; its first moment χ1·a there with
-/// quadratureCorrection.
+/// QuadratureCorrection.
 struct RestPhase
 {
     float chi[kRestOrders] = {0.0f, 0.0f, 0.0f};
@@ -99,28 +99,11 @@ struct RestPhase
         const float f = unclamped(a, omega);
         return f > 0.0f ? f : 0.0f;
     }
-    /// The same less β·ω: a discrete direction set's correction (quadratureCorrection).
-    float operator()(const openvdb::Vec3f& a, const openvdb::Vec3f& omega, const openvdb::Vec3f& beta) const
+    /// The same less β·ω (@a beta: QuadratureCorrection for ω).
+    float operator()(const openvdb::Vec3f& a, const openvdb::Vec3f& omega, float betaDotOmega) const
     {
-        const float f = unclamped(a, omega) - beta.dot(omega);
+        const float f = unclamped(a, omega) - betaDotOmega;
         return f > 0.0f ? f : 0.0f;
-    }
-    /// On N directions ω_i in opposite pairs with isotropic second moments (the sweep's), the
-    /// factor's mean is 1 and its first moment Σ R·ω_i/N is χ1·a as on the sphere but for the
-    /// cubic term, of degree 4 with ω, which N directions do not integrate: it adds
-    /// (7/2)χ3·(5/N·Σ_i ω_i(a·ω_i)³ − k²·a). The β that takes that off (Σ (β·ω_i)ω_i/N = β/3):
-    /// β = (21/2)·χ3·(5/N·Σ_i ω_i(a·ω_i)³ − k²·a), leaving the mean as it is (Σ ω_i = 0).
-    /// @a directions: one of each opposite pair (ω(a·ω)³ is the same for both), N twice their count.
-    openvdb::Vec3f quadratureCorrection(const openvdb::Vec3f& a, const std::vector<openvdb::Vec3d>& directions) const
-    {
-        if (chi[2] == 0.0f || directions.empty()) return openvdb::Vec3f(0.0f);
-        openvdb::Vec3d sum(0.0);
-        const openvdb::Vec3d ad(a);
-        for (const openvdb::Vec3d& w : directions) {
-            const double c = ad.dot(w);
-            sum += w * (c * c * c);
-        }
-        return openvdb::Vec3f((sum * (5.0 / double(directions.size())) - ad * ad.lengthSqr()) * (10.5 * double(chi[2])));
     }
 
 private:
@@ -129,6 +112,55 @@ private:
         const float c = a.dot(omega), k2 = a.lengthSqr();
         return 1.0f + c * (3.0f * chi[0] + 3.5f * chi[2] * (5.0f * c * c - 3.0f * k2)) + 2.5f * chi[1] * (3.0f * c * c - k2);
     }
+};
+
+/// On N directions ω_i in opposite pairs with isotropic second moments (the sweep's), RestPhase's
+/// mean is 1 and its first moment Σ R·ω_i/N is χ1·a as on the sphere but for the cubic term, of
+/// degree 4 with ω, which N directions do not integrate: it adds (7/2)χ3·(5/N·Σ_i ω_i(a·ω_i)³ −
+/// k²·a). The β that takes that off (Σ (β·ω_i)ω_i/N = β/3): β = (21/2)·χ3·(5/N·Σ_i ω_i(a·ω_i)³ −
+/// k²·a), leaving the mean as it is (Σ ω_i = 0). A sweep needs only β·ω for its own direction ω:
+/// (21/2)·χ3·(5/N·Σ_i (ω·ω_i)(a·ω_i)³ − k²·a·ω), whose sum is a cubic form in a with 10
+/// coefficients fixed by ω and the set: made once a direction, β·ω is then a few multiplies a
+/// voxel, with no β held per voxel (12 bytes a voxel).
+class QuadratureCorrection
+{
+public:
+    QuadratureCorrection() = default;
+    /// For direction @a omega of a set whose opposite pairs are @a pairFirsts (one of each:
+    /// ω(a·ω)³ is the same for both; N twice their count). None (0) where the rest has no cubic
+    /// term or there are no pairs.
+    QuadratureCorrection(const RestPhase& rest, const openvdb::Vec3d& omega, const std::vector<openvdb::Vec3d>& pairFirsts)
+        : mOmega(omega)
+    {
+        if (rest.chi[2] == 0.0f || pairFirsts.empty()) return;
+        mScale = 10.5 * double(rest.chi[2]);
+        double c[10] = {};
+        for (const openvdb::Vec3d& w : pairFirsts) {
+            // 5/N·Σ over all N directions = 5/(N/2)·Σ over one of each pair.
+            const double t = omega.dot(w) * 5.0 / double(pairFirsts.size());
+            const double x = w[0], y = w[1], z = w[2];
+            // (a·w)³ expanded: the multinomial coefficients 1, 3, 6.
+            const double m[10] = {x * x * x, 3 * x * x * y, 3 * x * x * z, 3 * x * y * y, 6 * x * y * z, 3 * x * z * z, y * y * y,
+                3 * y * y * z, 3 * y * z * z, z * z * z};
+            for (int i = 0; i < 10; ++i) c[i] += t * m[i];
+        }
+        for (int i = 0; i < 10; ++i) mCubic[i] = float(mScale * c[i]);
+    }
+    /// β·ω at mean direction @a a.
+    float betaDotOmega(const openvdb::Vec3f& a) const
+    {
+        if (mScale == 0.0) return 0.0f;
+        const float x = a[0], y = a[1], z = a[2];
+        const float cubic =
+            x * (x * (mCubic[0] * x + mCubic[1] * y + mCubic[2] * z) + y * (mCubic[3] * y + mCubic[4] * z) + mCubic[5] * z * z) +
+            y * y * (mCubic[6] * y + mCubic[7] * z) + z * z * (mCubic[8] * y + mCubic[9] * z);
+        return cubic - float(mScale) * a.lengthSqr() * a.dot(openvdb::Vec3f(mOmega));
+    }
+
+private:
+    openvdb::Vec3d mOmega{0.0};
+    double mScale = 0.0;
+    float mCubic[10] = {}; ///< (21/2)χ3·5/N·Σ_i (ω·ω_i)·(the monomial's coefficient in (a·ω_i)³)
 };
 
 /// The mean of a colour's channels: what one anisotropy vector stands for.
