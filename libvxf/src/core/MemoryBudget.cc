@@ -156,7 +156,9 @@ void requireMemory(const std::string& stage, const MemoryEstimate& estimate)
         throw Error(fmt::format("{} needs about {} at its peak ({}), more than the memory budget of {} ({}); {}", stage,
             huge ? fmt::format("{:.3g} bytes", estimate.bytes) : formatBytes(std::uint64_t(estimate.bytes)), estimate.how,
             formatBytes(budget), gExplicit.load() ? "--max-memory" : "the memory this machine has available",
-            gExplicit.load() ? "raise --max-memory, or lower the resolution" : "lower the resolution, or free memory"));
+            gExplicit.load() ? "raise --max-memory, or lower the resolution"
+                             : "lower the resolution, free memory, or set --max-memory above the estimate (it is an "
+                               "estimate, a little high for large volumes)"));
     }
 }
 

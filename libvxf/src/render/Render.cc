@@ -82,9 +82,11 @@ RenderedImage render(const VoxelSet& set, const Medium& medium, const Scene& sce
         throw UsageError(
             fmt::format("image size {}x{} with {} samples per pixel is empty", options.width, options.height, options.samples));
     }
+    const double voxels = double(medium.density().activeVoxelCount());
+    const double denseCopies = std::min(4.0 * double(kDenseCopyBytes), voxels * kRenderDenseBytesPerVoxel);
     requireMemory("render",
-        stageMemory(kStageFixedBytes, double(medium.density().activeVoxelCount()), kRenderBytesPerVoxel,
-            double(options.width) * double(options.height), kRenderBytesPerPixel));
+        stageMemory(kStageFixedBytes + denseCopies, voxels, kRenderBytesPerVoxel, double(options.width) * double(options.height),
+            kRenderBytesPerPixel));
     const detail::RenderContext context(set, medium, scene, options, meshes);
 
     RenderedImage image;

@@ -56,10 +56,15 @@ struct RenderMeshes
 };
 
 /// The render stage's peak per active voxel of the medium's density and per pixel (its layers,
-/// sample tables and the EXR written): 1,322 MiB at dim 256 and 1280x720, 367 MiB at dim 128
-/// (docs/reports/performance.md), less the fixed part, rounded up. render checks them against the
-/// memory budget before it allocates (a 32768² image is refused at once).
-inline constexpr double kRenderBytesPerVoxel = 300.0;
+/// sample tables and the EXR written), beyond the fixed part and its dense copies: what each added
+/// voxel took between the two largest rows of bench/scale (docs/reports/scale.md; the bunny's dims
+/// 256 to 512 and the smoke's 256³ to 384³ both 113 bytes), rounded up. The dense copies the
+/// marches read (density and three colour fields) stop growing at kDenseCopyBytes each: counted
+/// as kRenderDenseBytesPerVoxel a voxel up to 4 × that (the bunny at dim 256: 1,291 MiB estimated,
+/// 1,313 measured; at dim 512 4,481 against 3,945). render checks them against the memory budget
+/// before it allocates (a 32768² image is refused at once).
+inline constexpr double kRenderBytesPerVoxel = 120.0;
+inline constexpr double kRenderDenseBytesPerVoxel = 180.0;
 inline constexpr double kRenderBytesPerPixel = 160.0;
 
 /// Render the voxel set @a set with @a scene's camera, lights and object shading.

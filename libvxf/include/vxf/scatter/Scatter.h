@@ -88,12 +88,14 @@ ScatterOptions scatterOptionsFrom(const SceneSettings& settings);
 /// Σ over active values of a Vec3f grid, active tiles weighted by their voxel count.
 openvdb::Vec3d gridEnergy(const openvdb::Vec3SGrid& grid);
 
-/// The scatter stage's peak per active voxel of the medium's density, the larger of two solved
-/// whole by accelerated sweeps (bench/scale, docs/reports/scale.md), less the fixed part,
-/// rounded up: the bunny's 3.67M at dim 256 (722 MiB, 178 bytes a voxel) and scripts/make-smoke's
-/// 4.59M at 256³ with a Henyey-Greenstein phase (831 MiB, 167: its first moment's arrays).
+/// The scatter stage's peak per active voxel of the medium's density beyond the fixed part: what
+/// each added voxel took between the two largest of bench/scale's rows (docs/reports/scale.md),
+/// the larger medium's, rounded up: scripts/make-smoke's puff with a Henyey-Greenstein phase, 256³
+/// to 384³ (831 → 2510 MiB for 4.59M → 15.5M voxels: 161 bytes); the bunny's dims 256 to 512 took
+/// 131. Small volumes hold more a voxel (the dense copies, up to 256 MiB each: the bunny at dim
+/// 256 is 6% above the estimate), large ones less (102M voxels at 720³: 146 bytes, 13.9 GiB).
 /// scatter checks it against the memory budget before it allocates.
-inline constexpr double kScatterBytesPerVoxel = 180.0;
+inline constexpr double kScatterBytesPerVoxel = 165.0;
 
 /// Run scattering passes on @a set: J_k = σs·φ_k/(4π) feeds pass k+1 (J_0 is `scatter_source`,
 /// read from the set, so an artist may have edited it). @a medium is the transport's (Medium):
