@@ -253,13 +253,15 @@ function showHistory(steps, redo) {
   state.selected = steps.some((s) => s.op === 'select' && s.enabled);
   if (!state.selected) $('selected').textContent = '';
 }
-async function changeHistory(change, what) {
-  await guarded(async () => {
-    const steps = state.steps.map((s) => ({ op: s.op, params: s.params, enabled: s.enabled }));
-    change(steps);
-    await call('POST', '/api/steps', { steps });
+function changeHistory(change, what) {
+  return inOrder(async () => {
+    await guarded(async () => {
+      const steps = state.steps.map((s) => ({ op: s.op, params: s.params, enabled: s.enabled }));
+      change(steps);
+      await call('POST', '/api/steps', { steps });
+    });
+    await refresh(`history: step ${what}`); // the server's record, changed or not
   });
-  await guarded(() => refresh(`history: step ${what}`)); // the server's record, changed or not
 }
 
 // A whole export's grids: every one but the selection masks, unless the user says otherwise.
@@ -492,7 +494,7 @@ async function endStroke() {
   } else {
     params.value = parseFloat($('paintValue').value) || 0;
   }
-  await guarded(async () => refresh(`paint: ${await apply('paint', params)}`));
+  await inOrder(async () => refresh(`paint: ${await apply('paint', params)}`));
 }
 container.addEventListener('pointermove', (event) => {
   const [x, y] = local(event);
@@ -588,8 +590,17 @@ async function refresh(message) {
 async function guarded(action) {
   try { await action(); } catch (error) { status(error.message, true); }
 }
+// What changes the server's record (an edit, a history change, undo and redo, a paint stroke, an
+// export of it) runs in the order the artist asked, each after the one before has finished and the
+// page shows its result: a Ctrl-Z pressed while an edit is in flight undoes that edit, not the one
+// before it, whatever order the browser's connections would deliver the requests in.
+let pendingChanges = Promise.resolve();
+function inOrder(action) {
+  pendingChanges = pendingChanges.then(() => guarded(action));
+  return pendingChanges;
+}
 
-$('select').addEventListener('click', () => guarded(async () => {
+$('select').addEventListener('click', () => inOrder(async () => {
   const shape = $('shape').value;
   const params = { grid: $('selectFrom').value || state.grid, shape, out: 'mask' };
   if (shape === 'box') { params.min = numbers(['minX', 'minY', 'minZ']); params.max = numbers(['maxX', 'maxY', 'maxZ']); }
@@ -615,7 +626,7 @@ function showEditFields() {
   for (const e of document.querySelectorAll('.numberOnly')) e.hidden = colour;
   $('valLabel').textContent = colour ? 'value x' : 'scale x';
 }
-$('apply').addEventListener('click', () => guarded(async () => {
+$('apply').addEventListener('click', () => inOrder(async () => {
   const extra = { value: parseFloat($('val').value), offset: parseFloat($('offset').value) || 0 };
   if (shownIsColour()) {
     extra.hue_shift = parseFloat($('hue').value) || 0;
@@ -631,18 +642,18 @@ $('apply').addEventListener('click', () => guarded(async () => {
   await refresh(`edit: ${report}`);
 }));
 // Noise breaks up the selection's values: each scaled by 1 ± amount (fractal Perlin noise).
-$('noise').addEventListener('click', () => guarded(async () => {
+$('noise').addEventListener('click', () => inOrder(async () => {
   const params = editParams({ mode: 'multiply', offset: 1, amplitude: parseFloat($('noiseAmount').value) || 0,
     frequency: parseFloat($('noiseFrequency').value) || 8 });
   await refresh(`noise: ${await apply('noise', params)}`);
 }));
-$('add').addEventListener('click', () => guarded(async () => refresh(`edit: ${await apply('edit', editParams({ add: true }))}`)));
-$('remove').addEventListener('click', () => guarded(async () => refresh(`edit: ${await apply('edit', editParams({ remove: true }))}`)));
-const undo = () => guarded(async () => {
+$('add').addEventListener('click', () => inOrder(async () => refresh(`edit: ${await apply('edit', editParams({ add: true }))}`)));
+$('remove').addEventListener('click', () => inOrder(async () => refresh(`edit: ${await apply('edit', editParams({ remove: true }))}`)));
+const undo = () => inOrder(async () => {
   const result = await (await call('POST', '/api/undo')).json();
   await refresh(result.undone ? 'undone' : 'nothing to undo');
 });
-const redo = () => guarded(async () => {
+const redo = () => inOrder(async () => {
   const result = await (await call('POST', '/api/redo')).json();
   await refresh(result.redone ? 'redone' : 'nothing to redo');
 });
@@ -656,7 +667,7 @@ window.addEventListener('keydown', (event) => {
   if ((key === 'z' && event.shiftKey) || key === 'y') { event.preventDefault(); redo(); }
 });
 $('exportMode').addEventListener('change', showExportGrids);
-$('export').addEventListener('click', () => guarded(async () => {
+$('export').addEventListener('click', () => inOrder(async () => {
   const body = { path: $('exportPath').value, mode: $('exportMode').value, grid: state.grid, smooth: parseInt($('smooth').value) || 0 };
   if (body.mode === 'whole') body.grids = [...$('exportGrids').querySelectorAll('input')].filter((i) => i.checked).map((i) => i.value);
   const result = await (await call('POST', '/api/export', body)).json();
