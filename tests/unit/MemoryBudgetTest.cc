@@ -4,6 +4,8 @@
 
 #include <catch2/catch.hpp>
 
+#include <vector>
+
 TEST_CASE("memory sizes read as users write them, and anything else is a usage error naming it", "[core][memory]")
 {
     CHECK(vxf::parseMemorySize("8G") == (std::uint64_t(8) << 30));
@@ -19,6 +21,21 @@ TEST_CASE("memory sizes read as users write them, and anything else is a usage e
         CHECK_THROWS_AS(vxf::parseMemorySize(bad), vxf::UsageError);
         CHECK_THROWS_WITH(vxf::parseMemorySize(bad), Catch::Contains(std::string("'") + bad + "' is not a memory size"));
     }
+}
+
+TEST_CASE("the default budget counts what the process already holds: a stage's estimate includes its input", "[core][memory]")
+{
+    // A stage asks for the budget after it has read its input; the estimate it checks is of the
+    // whole process. What is available then is on top of what the process holds.
+    constexpr std::uint64_t kHeld = std::uint64_t(512) << 20;
+    const std::vector<char> held(kHeld, 1); // every page written
+    CHECK(vxf::residentMemory() >= kHeld);
+    vxf::setMemoryBudget(0);
+    const std::uint64_t budget = vxf::memoryBudget();
+    const std::uint64_t available = vxf::availableMemory(); // after: other processes move it by far less than kHeld / 2
+    CHECK(budget >= available + kHeld / 2);
+    CHECK(held.back() == 1);
+    vxf::setMemoryBudget(0);
 }
 
 TEST_CASE("a stage's estimate above the budget stops it with the estimate, the budget and where the budget came from", "[core][memory]")

@@ -38,13 +38,24 @@ bool readCgroupValue(const std::string& path, std::uint64_t& value)
 
 } // namespace
 
-std::uint64_t mappedMemory()
+namespace {
+
+/// Field @a field (0: size, 1: resident) of /proc/self/statm, in bytes; 0 if unknown.
+std::uint64_t statmBytes(int field)
 {
     std::ifstream statm("/proc/self/statm");
     std::uint64_t pages = 0;
-    if (!(statm >> pages)) return 0;
+    for (int i = 0; i <= field; ++i) {
+        if (!(statm >> pages)) return 0;
+    }
     return pages * std::uint64_t(::sysconf(_SC_PAGESIZE));
 }
+
+} // namespace
+
+std::uint64_t mappedMemory() { return statmBytes(0); }
+
+std::uint64_t residentMemory() { return statmBytes(1); }
 
 std::uint64_t availableMemory()
 {
@@ -129,8 +140,10 @@ std::uint64_t memoryBudget()
 {
     std::uint64_t budget = gBudget.load();
     if (budget == kUnset) {
-        budget = availableMemory();
-        if (budget == 0) budget = std::numeric_limits<std::uint64_t>::max();
+        // A stage's estimate is of the whole process's peak, what it read and made so far
+        // included; what is available now is on top of what the process already holds.
+        const std::uint64_t available = availableMemory();
+        budget = available == 0 ? std::numeric_limits<std::uint64_t>::max() : available + residentMemory();
         std::uint64_t expected = kUnset;
         gBudget.compare_exchange_strong(expected, budget);
         budget = gBudget.load();

@@ -14,13 +14,18 @@ std::uint64_t availableMemory();
 /// The bytes of address space the process has mapped (/proc/self/statm's size); 0 if unknown.
 std::uint64_t mappedMemory();
 
+/// The bytes of the process in memory now (/proc/self/statm's resident); 0 if unknown.
+std::uint64_t residentMemory();
+
 /// "8G", "512M", "1.5T", "64K" (binary units: G = 2^30 bytes; a trailing "B" or "iB" is
 /// accepted) or a plain number of bytes. Throws vxf::UsageError naming @a text.
 std::uint64_t parseMemorySize(const std::string& text);
 
-/// The budget every stage checks its estimated peak against (`--max-memory`). Until set (or
-/// after setMemoryBudget(0)), the memory available when first asked (availableMemory();
-/// unbounded if that is unknown).
+/// The budget every stage checks its estimated peak against (`--max-memory`): the most the
+/// whole process may hold. Until set (or after setMemoryBudget(0)), what was available when
+/// first asked plus what the process held then (availableMemory() + residentMemory(): a stage
+/// asks after it has read its input, and its estimate counts that input; unbounded if nothing
+/// is known).
 void setMemoryBudget(std::uint64_t bytes);
 std::uint64_t memoryBudget();
 
