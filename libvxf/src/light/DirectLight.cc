@@ -139,27 +139,15 @@ openvdb::Vec3d energyOf(const std::vector<openvdb::Vec3f>& fluence, const detail
     return total;
 }
 
-/// @a sum += @a values (per voxel; @a sum empty: takes them).
-void addTo(std::vector<openvdb::Vec3f>& sum, std::vector<openvdb::Vec3f>&& values)
-{
-    if (sum.empty()) {
-        sum = std::move(values);
-        return;
-    }
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, sum.size()), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t v = r.begin(); v != r.end(); ++v) sum[v] += values[v];
-    });
-}
-
 /// The lights a sweep carries, swept over one lattice on @a direct's topology: their fluence at
 /// every voxel centre (at the rim, from its medium point along the directions that graze the
-/// surface there), summed over the lights as each is swept (one array, not one a light: 12 bytes
-/// a voxel and light, 24 with a phase), each light's energy for the report (energyOf) taken first.
+/// surface there), each light added into the sums as it is swept (no array of its own: 12 bytes
+/// a voxel and light, 24 with a phase), its energy for the report what it added.
 struct SweptLights
 {
     std::optional<detail::SweepLattice> lattice; ///< none: no light is swept
     std::vector<bool> swept; ///< per light
-    std::vector<openvdb::Vec3d> energy; ///< per light, its swept fluence's energyOf
+    std::vector<openvdb::Vec3d> energy; ///< per light, the energyOf the fluence it added
     std::vector<openvdb::Vec3f> fluence, flux; ///< per lattice voxel, the sums (flux: anisotropic)
 };
 SweptLights sweepLights(const std::vector<LightSampler>& active, const Medium& medium, const openvdb::Vec3SGrid& direct,
@@ -178,14 +166,16 @@ SweptLights sweepLights(const std::vector<LightSampler>& active, const Medium& m
             out.lattice.emplace(medium, direct, detail::SweepLattice::Coefficients::SweepOnly);
             rim = rimOf(*out.lattice, medium);
         }
-        std::vector<openvdb::Vec3f> flux;
-        std::vector<openvdb::Vec3f>* fluxOut = anisotropic ? &flux : nullptr;
-        std::vector<openvdb::Vec3f> fluence = fromPoint ? sweepPointLight(active[l], *out.lattice, medium, rim, options, fluxOut)
-                                                        : sweepLight(active[l], *out.lattice, medium, rim, options, fluxOut);
+        // Each light adds into the sums; its energy is what it added (energyOf is a sum, and
+        // the earlier lights' part is known).
+        const openvdb::Vec3d before = out.fluence.empty() ? openvdb::Vec3d(0.0) : energyOf(out.fluence, *out.lattice, leaves, tiles);
+        std::vector<openvdb::Vec3f>* flux = anisotropic ? &out.flux : nullptr;
+        if (fromPoint)
+            sweepPointLight(active[l], *out.lattice, medium, rim, options, out.fluence, flux);
+        else
+            sweepLight(active[l], *out.lattice, medium, rim, options, out.fluence, flux);
         out.swept[l] = true;
-        out.energy[l] = energyOf(fluence, *out.lattice, leaves, tiles);
-        addTo(out.fluence, std::move(fluence));
-        if (anisotropic) addTo(out.flux, std::move(flux));
+        out.energy[l] = energyOf(out.fluence, *out.lattice, leaves, tiles) - before;
         checkInterrupt(interrupter);
     }
     return out;

@@ -25,6 +25,17 @@
 
 namespace vxf::detail {
 
+namespace {
+
+/// The sums a sweep adds its light to, made zero at @a count voxels when they are empty.
+void sizeSums(std::size_t count, std::vector<openvdb::Vec3f>& fluence, std::vector<openvdb::Vec3f>* flux)
+{
+    if (fluence.empty()) fluence.assign(count, openvdb::Vec3f(0.0f));
+    if (flux && flux->empty()) flux->assign(count, openvdb::Vec3f(0.0f));
+}
+
+} // namespace
+
 /// The rim of @a lattice's voxels: centres outside the surface within half a voxel, where
 /// Medium::Sampler::mediumPoint is the surface beneath (with its normal there).
 Rim rimOf(const detail::SweepLattice& lattice, const Medium& medium)
@@ -132,8 +143,8 @@ bool sweepable(const Light& light) { return light.type == Light::Type::Direction
 /// below options.march.cutoff the light counts as blocked, as a march stops there; occluder
 /// meshes are still asked per voxel and sample. With @a flux, also the light's grey first
 /// moment per voxel (lightFluence).
-std::vector<openvdb::Vec3f> sweepLight(const LightSampler& light, const detail::SweepLattice& lattice, const Medium& medium, const Rim& rim,
-    const DirectLightOptions& options, std::vector<openvdb::Vec3f>* flux)
+void sweepLight(const LightSampler& light, const detail::SweepLattice& lattice, const Medium& medium, const Rim& rim,
+    const DirectLightOptions& options, std::vector<openvdb::Vec3f>& phi, std::vector<openvdb::Vec3f>* flux)
 {
     const openvdb::math::Transform& xform = medium.transform();
     const std::size_t count = lattice.voxelCount();
@@ -141,8 +152,8 @@ std::vector<openvdb::Vec3f> sweepLight(const LightSampler& light, const detail::
     // One sampler per thread for the entering depths' marches (a sampler registers accessors).
     tbb::enumerable_thread_specific<Medium::Sampler> samplers([&] { return lightStageSampler(medium, options); });
     const double minDistance = 0.5 * medium.voxelSize();
-    std::vector<openvdb::Vec3f> phi(count, openvdb::Vec3f(0.0f)), tau;
-    if (flux) flux->assign(count, openvdb::Vec3f(0.0f));
+    sizeSums(count, phi, flux);
+    std::vector<openvdb::Vec3f> tau;
     const auto worldOf = [&](std::size_t i) {
         const openvdb::Coord& o = lattice.origin(i / detail::SweepLattice::kLeafVoxels);
         const int v = int(i % detail::SweepLattice::kLeafVoxels);
@@ -224,7 +235,6 @@ std::vector<openvdb::Vec3f> sweepLight(const LightSampler& light, const detail::
             }
         });
     }
-    return phi;
 }
 
 /// Whether sweepPointLight handles @a light: one point whose light every voxel sees along its
@@ -250,8 +260,8 @@ constexpr float kVacuumSpread = 0.05f;
 /// handing the rest of the way to the sweep kRimHandOff voxels from the surface; the rim marched
 /// from its medium point the same way. Without a surface (a density grid's medium) every voxel
 /// the sweep can blend is swept. With @a flux, also the light's grey first moment per voxel.
-std::vector<openvdb::Vec3f> sweepPointLight(const LightSampler& light, const detail::SweepLattice& lattice, const Medium& medium,
-    const Rim& rim, const DirectLightOptions& options, std::vector<openvdb::Vec3f>* flux)
+void sweepPointLight(const LightSampler& light, const detail::SweepLattice& lattice, const Medium& medium, const Rim& rim,
+    const DirectLightOptions& options, std::vector<openvdb::Vec3f>& phi, std::vector<openvdb::Vec3f>* flux)
 {
     using detail::SweepLattice;
     const openvdb::math::Transform& xform = medium.transform();
@@ -327,8 +337,7 @@ std::vector<openvdb::Vec3f> sweepPointLight(const LightSampler& light, const det
     const SweepLattice::SweptSoFar done(lattice, tau, &state);
 
     const double minDistance = 0.5 * medium.voxelSize();
-    std::vector<openvdb::Vec3f> phi(lattice.voxelCount(), openvdb::Vec3f(0.0f));
-    if (flux) flux->assign(lattice.voxelCount(), openvdb::Vec3f(0.0f));
+    sizeSums(lattice.voxelCount(), phi, flux);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lattice.leafCount()), [&](const tbb::blocked_range<std::size_t>& r) {
         std::vector<LightSample> samples;
         for (std::size_t n = r.begin(); n != r.end(); ++n) {
@@ -351,7 +360,6 @@ std::vector<openvdb::Vec3f> sweepPointLight(const LightSampler& light, const det
             }
         }
     });
-    return phi;
 }
 
 } // namespace vxf::detail
