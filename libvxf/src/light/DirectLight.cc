@@ -21,6 +21,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <optional>
 
 namespace vxf {
@@ -98,26 +99,38 @@ void sortLights(const std::vector<Light>& lights, DirectLightReport& report, std
     }
 }
 
-/// A grid of the light stage on the density's topology, one voxel beyond it (26-neighbourhood):
+/// The light stage's grids' topology: the density's, one voxel beyond it (26-neighbourhood):
 /// trilinear lookups of φ near the surface then blend real values, not the background 0 (which
 /// would dim the outermost half voxel).
-openvdb::Vec3SGrid::Ptr stageGrid(const openvdb::FloatGrid& density, const char* name, bool coarseTiles)
+openvdb::MaskTree stageTopology(const openvdb::FloatGrid& density, bool coarseTiles)
+{
+    openvdb::MaskTree topology(density.tree(), false, openvdb::TopologyCopy());
+    if (!coarseTiles) topology.voxelizeActiveTiles();
+    openvdb::tools::dilateActiveValues(
+        topology, 1, openvdb::tools::NN_FACE_EDGE_VERTEX, coarseTiles ? openvdb::tools::PRESERVE_TILES : openvdb::tools::IGNORE_TILES);
+    return topology;
+}
+
+using StageLeaf = openvdb::Vec3STree::LeafNodeType;
+using StageLeaves = openvdb::tree::LeafManager<const openvdb::MaskTree>;
+
+/// A grid of the light stage named @a name: @a leaves (taken) and @a tiles filled with @a tileValues.
+openvdb::Vec3SGrid::Ptr stageGrid(const openvdb::FloatGrid& density, const char* name, std::vector<std::unique_ptr<StageLeaf>>& leaves,
+    const std::vector<openvdb::CoordBBox>& tiles, const std::vector<openvdb::Vec3f>& tileValues)
 {
     auto grid = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
     grid->setTransform(density.transformPtr()->copy());
-    grid->tree().topologyUnion(density.tree());
     grid->setName(name);
-    if (!coarseTiles) grid->tree().voxelizeActiveTiles();
-    openvdb::tools::dilateActiveValues(
-        grid->tree(), 1, openvdb::tools::NN_FACE_EDGE_VERTEX, coarseTiles ? openvdb::tools::PRESERVE_TILES : openvdb::tools::IGNORE_TILES);
+    for (auto& leaf : leaves) grid->tree().addLeaf(leaf.release());
+    for (std::size_t t = 0; t < tiles.size(); ++t) grid->tree().fill(tiles[t], tileValues[t], true);
     return grid;
 }
 
 /// Σ over @a leaves' active voxels of @a fluence (per lattice voxel), and over @a tiles of the
 /// value at the tile's centre times its voxels (as the light stage's grids hold them), in a
 /// fixed order: the same for every thread count.
-openvdb::Vec3d energyOf(const std::vector<openvdb::Vec3f>& fluence, const detail::SweepLattice& lattice,
-    const openvdb::tree::LeafManager<openvdb::Vec3STree>& leaves, const std::vector<openvdb::CoordBBox>& tiles)
+openvdb::Vec3d energyOf(const detail::LeafBlocks<openvdb::Vec3f>& fluence, const detail::SweepLattice& lattice, const StageLeaves& leaves,
+    const std::vector<openvdb::CoordBBox>& tiles)
 {
     std::vector<openvdb::Vec3d> sums(leaves.leafCount() + tiles.size(), openvdb::Vec3d(0.0));
     const auto at = [&](const openvdb::Coord& ijk) {
@@ -148,11 +161,11 @@ struct SweptLights
     std::optional<detail::SweepLattice> lattice; ///< none: no light is swept
     std::vector<bool> swept; ///< per light
     std::vector<openvdb::Vec3d> energy; ///< per light, the energyOf the fluence it added
-    std::vector<openvdb::Vec3f> fluence, flux; ///< per lattice voxel, the sums (flux: anisotropic)
+    detail::LeafBlocks<openvdb::Vec3f> fluence, flux; ///< per lattice voxel, the sums (flux: anisotropic)
 };
-SweptLights sweepLights(const std::vector<LightSampler>& active, const Medium& medium, const openvdb::Vec3SGrid& direct,
-    const DirectLightOptions& options, bool anisotropic, const openvdb::tree::LeafManager<openvdb::Vec3STree>& leaves,
-    const std::vector<openvdb::CoordBBox>& tiles, Interrupter* interrupter)
+SweptLights sweepLights(const std::vector<LightSampler>& active, const Medium& medium, const openvdb::MaskTree& topology,
+    const DirectLightOptions& options, bool anisotropic, const StageLeaves& leaves, const std::vector<openvdb::CoordBBox>& tiles,
+    Interrupter* interrupter)
 {
     SweptLights out;
     out.swept.assign(active.size(), false);
@@ -163,13 +176,13 @@ SweptLights sweepLights(const std::vector<LightSampler>& active, const Medium& m
         const bool fromPoint = sweepableFromPoint(active[l].light());
         if (!sweepable(active[l].light()) && !fromPoint) continue;
         if (!out.lattice) {
-            out.lattice.emplace(medium, direct, detail::SweepLattice::Coefficients::SweepOnly);
+            out.lattice.emplace(medium, topology, detail::SweepLattice::Coefficients::SweepOnly);
             rim = rimOf(*out.lattice, medium);
         }
         // Each light adds into the sums; its energy is what it added (energyOf is a sum, and
         // the earlier lights' part is known).
         const openvdb::Vec3d before = out.fluence.empty() ? openvdb::Vec3d(0.0) : energyOf(out.fluence, *out.lattice, leaves, tiles);
-        std::vector<openvdb::Vec3f>* flux = anisotropic ? &out.flux : nullptr;
+        detail::LeafBlocks<openvdb::Vec3f>* flux = anisotropic ? &out.flux : nullptr;
         if (fromPoint)
             sweepPointLight(active[l], *out.lattice, medium, rim, options, out.fluence, flux);
         else
@@ -190,8 +203,8 @@ struct PointLighting
     const std::vector<LightSampler>& active;
     const std::optional<detail::SweepLattice>& lattice;
     const std::vector<bool>& swept; ///< per light: its fluence is in sweptFluence
-    const std::vector<openvdb::Vec3f>& sweptFluence; ///< per lattice voxel, the swept lights' sum
-    const std::vector<openvdb::Vec3f>& sweptFlux; ///< per lattice voxel, their first moment's sum (anisotropic)
+    const detail::LeafBlocks<openvdb::Vec3f>& sweptFluence; ///< per lattice voxel, the swept lights' sum
+    const detail::LeafBlocks<openvdb::Vec3f>& sweptFlux; ///< per lattice voxel, their first moment's sum (anisotropic)
     const bool anisotropic;
 
     /// At voxel @a ijk (index point @a pointIjk), adding each marched light's fluence × @a weight
@@ -250,14 +263,14 @@ DirectLightReport computeDirectLight(
     sortLights(lights, report, active, activeIndex, emission);
 
     const openvdb::FloatGrid& density = medium.density();
-    auto direct = stageGrid(density, grids::kDirect, options.coarseTiles);
+    const openvdb::MaskTree topology = stageTopology(density, options.coarseTiles);
     // An anisotropic rest of the phase (Medium: delta-M's g*): the source's mean direction of travel.
     const bool anisotropic = medium.material().phaseG != 0.0;
 
     // Work items: leaf voxels (per leaf) and active tiles (value at the tile centre).
-    openvdb::tree::LeafManager<openvdb::Vec3STree> leaves(direct->tree());
+    const StageLeaves leaves(topology);
     std::vector<openvdb::CoordBBox> tiles;
-    for (auto it = direct->tree().cbeginValueOn(); it; ++it) {
+    for (auto it = topology.cbeginValueOn(); it; ++it) {
         if (it.isTileValue()) {
             openvdb::CoordBBox box;
             it.getBoundingBox(box);
@@ -266,23 +279,33 @@ DirectLightReport computeDirectLight(
     }
     const std::size_t leafCount = leaves.leafCount();
     const std::size_t total = leafCount + tiles.size();
+    const auto tileCentre = [&](std::size_t t) { return tiles[t].min() + openvdb::Coord(tiles[t].dim().x() / 2); };
     std::vector<std::vector<openvdb::Vec3d>> perLight(total);
     std::vector<openvdb::Vec3f> tileDirect(tiles.size()), tileSource(tiles.size()), tileAnisotropy(tiles.size());
     std::atomic<std::size_t> done{0};
     std::atomic<bool> cancelled{false};
 
-    const SweptLights swept = sweepLights(active, medium, *direct, options, anisotropic, leaves, tiles, interrupter);
-    // The other grids of the stage, on direct's topology (made after the sweeps, whose arrays
-    // and optical depths were the peak).
-    auto source = stageGrid(density, grids::kScatterSource, options.coarseTiles);
-    openvdb::Vec3SGrid::Ptr anisotropy;
-    if (anisotropic) {
-        anisotropy = source->deepCopy(); // its values are all 0 yet
-        anisotropy->setName(grids::kSourceAnisotropy);
+    SweptLights swept = sweepLights(active, medium, topology, options, anisotropic, leaves, tiles, interrupter);
+    // The grids' leaves are made as each is lit, and the swept sums' blocks freed as they are read
+    // (the sweeps' arrays and the grids are never held whole at once): the lattice leaves no item
+    // reads go first.
+    std::vector<std::int64_t> latticeLeaf(total, -1); // per item: the lattice leaf it reads, or -1
+    if (swept.lattice && !swept.fluence.empty()) {
+        std::vector<char> read(swept.lattice->leafCount(), 0);
+        for (std::size_t item = 0; item < total; ++item) {
+            const openvdb::Coord at = item < leafCount ? leaves.leaf(item).origin() : tileCentre(item - leafCount);
+            const std::int64_t i = swept.lattice->indexOf(at);
+            if (i < 0) continue;
+            latticeLeaf[item] = i / detail::SweepLattice::kLeafVoxels;
+            read[std::size_t(latticeLeaf[item])] = 1;
+        }
+        for (std::size_t n = 0; n < read.size(); ++n) {
+            if (read[n]) continue;
+            swept.fluence.release(n);
+            if (anisotropic) swept.flux.release(n);
+        }
     }
-    openvdb::tree::LeafManager<openvdb::Vec3STree> sourceLeaves(source->tree());
-    std::optional<openvdb::tree::LeafManager<openvdb::Vec3STree>> anisotropyLeaves;
-    if (anisotropy) anisotropyLeaves.emplace(anisotropy->tree());
+    std::vector<std::unique_ptr<StageLeaf>> directLeaves(leafCount), sourceLeaves(leafCount), anisotropyLeaves(anisotropic ? leafCount : 0);
 
     const PointLighting evaluate{medium, options, active, swept.lattice, swept.swept, swept.fluence, swept.flux, anisotropic};
 
@@ -294,22 +317,31 @@ DirectLightReport computeDirectLight(
             auto& sums = perLight[item];
             sums.assign(active.size(), openvdb::Vec3d(0.0));
             if (item < leafCount) {
-                auto& leaf = leaves.leaf(item);
-                auto& sourceLeaf = sourceLeaves.leaf(item);
-                auto* anisotropyLeaf = anisotropyLeaves ? &anisotropyLeaves->leaf(item) : nullptr;
-                for (auto it = leaf.beginValueOn(); it; ++it) {
+                const auto& mask = leaves.leaf(item);
+                const auto made = [&](std::unique_ptr<StageLeaf>& leaf) {
+                    leaf = std::make_unique<StageLeaf>(mask.origin(), openvdb::Vec3f(0.0f), false);
+                    leaf->setValueMask(mask.getValueMask());
+                    return leaf.get();
+                };
+                StageLeaf* directLeaf = made(directLeaves[item]);
+                StageLeaf* sourceLeaf = made(sourceLeaves[item]);
+                StageLeaf* anisotropyLeaf = anisotropic ? made(anisotropyLeaves[item]) : nullptr;
+                for (auto it = mask.cbeginValueOn(); it; ++it) {
                     openvdb::Vec3f d, s, a;
                     evaluate(sampler, emitters, it.getCoord(), it.getCoord().asVec3d(), sums, d, s, a, 1.0);
-                    it.setValue(d);
-                    sourceLeaf.setValueOnly(it.pos(), s);
+                    directLeaf->setValueOnly(it.pos(), d);
+                    sourceLeaf->setValueOnly(it.pos(), s);
                     if (anisotropyLeaf) anisotropyLeaf->setValueOnly(it.pos(), a);
                 }
             } else {
                 const std::size_t t = item - leafCount;
-                const openvdb::CoordBBox& box = tiles[t];
-                const openvdb::Coord centre = box.min() + openvdb::Coord(box.dim().x() / 2);
+                const openvdb::Coord centre = tileCentre(t);
                 evaluate(sampler, emitters, centre, centre.asVec3d(), sums, tileDirect[t], tileSource[t], tileAnisotropy[t],
-                    double(box.volume()));
+                    double(tiles[t].volume()));
+            }
+            if (latticeLeaf[item] >= 0) {
+                swept.fluence.release(std::size_t(latticeLeaf[item]));
+                if (anisotropic) swept.flux.release(std::size_t(latticeLeaf[item]));
             }
             const std::size_t finished = ++done;
             if (interrupter && interrupter->wasInterrupted(int(100 * finished / std::max<std::size_t>(total, 1)))) {
@@ -318,11 +350,10 @@ DirectLightReport computeDirectLight(
         }
     });
     if (cancelled) throw Interrupted();
-    for (std::size_t t = 0; t < tiles.size(); ++t) {
-        direct->tree().fill(tiles[t], tileDirect[t], true);
-        source->tree().fill(tiles[t], tileSource[t], true);
-        if (anisotropy) anisotropy->tree().fill(tiles[t], tileAnisotropy[t], true);
-    }
+    auto direct = stageGrid(density, grids::kDirect, directLeaves, tiles, tileDirect);
+    auto source = stageGrid(density, grids::kScatterSource, sourceLeaves, tiles, tileSource);
+    openvdb::Vec3SGrid::Ptr anisotropy;
+    if (anisotropic) anisotropy = stageGrid(density, grids::kSourceAnisotropy, anisotropyLeaves, tiles, tileAnisotropy);
 
     // Per-light energy sums in a fixed order (deterministic for any thread count).
     for (std::size_t e = 0; e < report.lights.size(); ++e) {

@@ -27,11 +27,11 @@ namespace vxf::detail {
 
 namespace {
 
-/// The sums a sweep adds its light to, made zero at @a count voxels when they are empty.
-void sizeSums(std::size_t count, std::vector<openvdb::Vec3f>& fluence, std::vector<openvdb::Vec3f>* flux)
+/// The sums a sweep adds its light to, made zero over @a lattice's leaves when they are empty.
+void sizeSums(const SweepLattice& lattice, LeafBlocks<openvdb::Vec3f>& fluence, LeafBlocks<openvdb::Vec3f>* flux)
 {
-    if (fluence.empty()) fluence.assign(count, openvdb::Vec3f(0.0f));
-    if (flux && flux->empty()) flux->assign(count, openvdb::Vec3f(0.0f));
+    if (fluence.empty()) fluence.assign(lattice.leafCount(), openvdb::Vec3f(0.0f));
+    if (flux && flux->empty()) flux->assign(lattice.leafCount(), openvdb::Vec3f(0.0f));
 }
 
 } // namespace
@@ -41,8 +41,8 @@ void sizeSums(std::size_t count, std::vector<openvdb::Vec3f>& fluence, std::vect
 Rim rimOf(const detail::SweepLattice& lattice, const Medium& medium)
 {
     Rim rim;
-    rim.entry.assign(lattice.voxelCount(), -1);
     if (!medium.surface()) return rim;
+    rim.entry.assign(lattice.voxelCount(), -1);
     // Per leaf in parallel, then numbered in leaf order (the same for any thread count).
     struct Found
     {
@@ -144,7 +144,7 @@ bool sweepable(const Light& light) { return light.type == Light::Type::Direction
 /// meshes are still asked per voxel and sample. With @a flux, also the light's grey first
 /// moment per voxel (lightFluence).
 void sweepLight(const LightSampler& light, const detail::SweepLattice& lattice, const Medium& medium, const Rim& rim,
-    const DirectLightOptions& options, std::vector<openvdb::Vec3f>& phi, std::vector<openvdb::Vec3f>* flux)
+    const DirectLightOptions& options, LeafBlocks<openvdb::Vec3f>& phi, LeafBlocks<openvdb::Vec3f>* flux)
 {
     const openvdb::math::Transform& xform = medium.transform();
     const std::size_t count = lattice.voxelCount();
@@ -152,7 +152,7 @@ void sweepLight(const LightSampler& light, const detail::SweepLattice& lattice, 
     // One sampler per thread for the entering depths' marches (a sampler registers accessors).
     tbb::enumerable_thread_specific<Medium::Sampler> samplers([&] { return lightStageSampler(medium, options); });
     const double minDistance = 0.5 * medium.voxelSize();
-    sizeSums(count, phi, flux);
+    sizeSums(lattice, phi, flux);
     std::vector<openvdb::Vec3f> tau;
     const auto worldOf = [&](std::size_t i) {
         const openvdb::Coord& o = lattice.origin(i / detail::SweepLattice::kLeafVoxels);
@@ -198,7 +198,8 @@ void sweepLight(const LightSampler& light, const detail::SweepLattice& lattice, 
         });
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
             for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                if (rim.entry[i] >= 0 && rim.grazing(rim.entry[i], -travel)) continue;
+                const std::int32_t e = rim.entryOf(i);
+                if (e >= 0 && rim.grazing(e, -travel)) continue;
                 const openvdb::Vec3d t = depths.transmittanceOf(tau[i]);
                 if (t != openvdb::Vec3d(0.0) && (!options.occluders || unoccluded(options.occluders, medium, worldOf(i), s))) {
                     phi[i] += openvdb::Vec3f(s.fluence * t);
@@ -261,7 +262,7 @@ constexpr float kVacuumSpread = 0.05f;
 /// from its medium point the same way. Without a surface (a density grid's medium) every voxel
 /// the sweep can blend is swept. With @a flux, also the light's grey first moment per voxel.
 void sweepPointLight(const LightSampler& light, const detail::SweepLattice& lattice, const Medium& medium, const Rim& rim,
-    const DirectLightOptions& options, std::vector<openvdb::Vec3f>& phi, std::vector<openvdb::Vec3f>* flux)
+    const DirectLightOptions& options, LeafBlocks<openvdb::Vec3f>& phi, LeafBlocks<openvdb::Vec3f>* flux)
 {
     using detail::SweepLattice;
     const openvdb::math::Transform& xform = medium.transform();
@@ -337,14 +338,14 @@ void sweepPointLight(const LightSampler& light, const detail::SweepLattice& latt
     const SweepLattice::SweptSoFar done(lattice, tau, &state);
 
     const double minDistance = 0.5 * medium.voxelSize();
-    sizeSums(lattice.voxelCount(), phi, flux);
+    sizeSums(lattice, phi, flux);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lattice.leafCount()), [&](const tbb::blocked_range<std::size_t>& r) {
         std::vector<LightSample> samples;
         for (std::size_t n = r.begin(); n != r.end(); ++n) {
             for (int v = 0; v < SweepLattice::kLeafVoxels; ++v) {
                 const std::size_t i = n * SweepLattice::kLeafVoxels + std::size_t(v);
                 const openvdb::Coord ijk = lattice.origin(n).offsetBy(v >> 6, (v >> 3) & 7, v & 7);
-                const std::int32_t e = rim.entry[i];
+                const std::int32_t e = rim.entryOf(i);
                 const openvdb::Vec3d point = e >= 0 ? rim.points[std::size_t(e)] : ijk.asVec3d();
                 const openvdb::Vec3f depth = e >= 0 ? marchedDepth(point, done) : tau[i];
                 const openvdb::Vec3d t = depths.transmittanceOf(depth);

@@ -9,6 +9,7 @@
 #include <vxf/core/RayScene.h>
 
 #include "../transport/SweepLattice.h"
+#include "LeafBlocks.h"
 
 #include <cstdint>
 #include <vector>
@@ -26,10 +27,11 @@ inline constexpr double kRimSweptCosine = 0.45;
 
 /// The rim: per lattice voxel, its entry in `voxels`, `points` and `normals` (its per-voxel
 /// index, its medium point and the surface's outward unit normal there, index space) or −1 for
-/// a voxel not in the rim.
+/// a voxel not in the rim (`entry` is empty without a surface: no voxel is).
 struct Rim
 {
     std::vector<std::int32_t> entry;
+    std::int32_t entryOf(std::size_t voxel) const { return entry.empty() ? -1 : entry[voxel]; }
     std::vector<std::size_t> voxels;
     std::vector<openvdb::Vec3d> points, normals;
     bool grazing(std::int32_t e, const openvdb::Vec3d& towardLight) const
@@ -51,15 +53,15 @@ Medium::Sampler lightStageSampler(const Medium& medium, const DirectLightOptions
 /// Directional and environment lights: one optical-depth sweep per direction.
 bool sweepable(const Light& light);
 /// A sweepable light's fluence at every lattice voxel added to @a fluence (its first moment to
-/// @a flux when given); each is sized to the lattice first when empty. Lights add into one sum
+/// @a flux when given); each is made zero over the lattice's leaves first when empty. Lights add into one sum
 /// rather than each making its own array: 12 bytes a lattice voxel and light, 24 with a flux.
 void sweepLight(const LightSampler& light, const SweepLattice& lattice, const Medium& medium, const Rim& rim,
-    const DirectLightOptions& options, std::vector<openvdb::Vec3f>& fluence, std::vector<openvdb::Vec3f>* flux);
+    const DirectLightOptions& options, LeafBlocks<openvdb::Vec3f>& fluence, LeafBlocks<openvdb::Vec3f>* flux);
 /// Point and spot lights: one sweep around the light.
 bool sweepableFromPoint(const Light& light);
 /// A point or spot light's fluence at every lattice voxel, the voxels near the surface marched,
 /// added to @a fluence and @a flux as sweepLight does.
 void sweepPointLight(const LightSampler& light, const SweepLattice& lattice, const Medium& medium, const Rim& rim,
-    const DirectLightOptions& options, std::vector<openvdb::Vec3f>& fluence, std::vector<openvdb::Vec3f>* flux);
+    const DirectLightOptions& options, LeafBlocks<openvdb::Vec3f>& fluence, LeafBlocks<openvdb::Vec3f>* flux);
 
 } // namespace vxf::detail

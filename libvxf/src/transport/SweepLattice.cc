@@ -19,16 +19,21 @@
 namespace vxf::detail {
 
 SweepLattice::SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topology, Coefficients coefficients)
+    : SweepLattice(medium, openvdb::MaskTree(topology.tree(), false, openvdb::TopologyCopy()), coefficients)
+{
+}
+
+SweepLattice::SweepLattice(const Medium& medium, const openvdb::MaskTree& topology, Coefficients coefficients)
     : mVoxelSize(medium.voxelSize())
 {
     indexLeaves(medium, topology);
     readMedium(medium, coefficients == Coefficients::PerVoxel);
 }
 
-void SweepLattice::indexLeaves(const Medium& medium, const openvdb::Vec3SGrid& topology)
+void SweepLattice::indexLeaves(const Medium& medium, const openvdb::MaskTree& topology)
 {
     openvdb::MaskTree mask(medium.density().tree(), false, openvdb::TopologyCopy());
-    mask.topologyUnion(topology.tree());
+    mask.topologyUnion(topology);
     mask.voxelizeActiveTiles();
     for (auto it = mask.cbeginLeaf(); it; ++it) mOrigins.push_back(it->origin());
 

@@ -53,6 +53,7 @@ public:
     enum class Coefficients { PerVoxel, SweepOnly };
     /// The lattice over @a medium's active density and @a topology's active values.
     SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topology, Coefficients coefficients = Coefficients::PerVoxel);
+    SweepLattice(const Medium& medium, const openvdb::MaskTree& topology, Coefficients coefficients = Coefficients::PerVoxel);
 
     std::size_t leafCount() const { return mOrigins.size(); }
     std::size_t voxelCount() const { return mOrigins.size() * kLeafVoxels; }
@@ -288,7 +289,7 @@ public:
 private:
     /// The leaves of @a medium's density and @a topology (tiles voxelized), their neighbours and
     /// their upwind orders.
-    void indexLeaves(const Medium& medium, const openvdb::Vec3SGrid& topology);
+    void indexLeaves(const Medium& medium, const openvdb::MaskTree& topology);
     /// σt (padded), the surface's distance, 1/f and skin, and with @a perVoxel σt and σs per voxel.
     void readMedium(const Medium& medium, bool perVoxel);
     /// mDeep and mUniform from σt and the distance.

@@ -87,10 +87,11 @@ openvdb::Vec3d lightFluence(const LightSampler& light, Medium::Sampler& sampler,
     const MarchOptions& options, const RayScene* occluders = nullptr, openvdb::Vec3d* flux = nullptr);
 
 /// The light stage's peak per active voxel of the medium's density (tiles' voxels counted), the
-/// larger of the bunny's 3.67M at dim 256 (546 MiB, 127 bytes a voxel) and scripts/make-smoke's
-/// 4.59M at 256³ with a phase (590 MiB, 112) (bench/scale, docs/reports/scale.md), less the fixed
-/// part, rounded up. computeDirectLight checks it against the memory budget before it allocates.
-inline constexpr double kLightBytesPerVoxel = 140.0;
+/// larger of the bunny's 3.44M at dim 256 (433 MiB, 102 bytes a voxel, its dense copies for the
+/// marches included) and scripts/make-smoke's 4.59M at 256³ with a phase (390 MiB, 66), less the
+/// fixed part, rounded up (docs/accuracy-notes.md (ae)). computeDirectLight checks it against the
+/// memory budget before it allocates.
+inline constexpr double kLightBytesPerVoxel = 110.0;
 
 /// The light stage. Adds to @a set:
 /// - `direct` (Vec3f): φ0 = Σ lights, at every active voxel of `density` (active tiles are
