@@ -4,7 +4,9 @@
 #include "Commands.h"
 #include "OperatorOptions.h"
 
+#include <vxf/core/GridRoles.h>
 #include <vxf/io/ImageFile.h>
+#include <vxf/io/VoxelSetFile.h>
 #include <vxf/transport/Medium.h>
 #include <vxf/pipeline/Operators.h>
 #include <vxf/pipeline/SceneMedium.h>
@@ -13,6 +15,8 @@
 #include <fmt/format.h>
 
 #include <iostream>
+#include <set>
+#include <string>
 
 namespace vxf::cli {
 
@@ -42,7 +46,16 @@ public:
         const auto start = std::chrono::steady_clock::now();
         const ops::Args args = mParams->args();
         const Scene scene = stageScene(args);
-        const VoxelSet set = readVoxelSet(mVolume);
+        const RenderOptions options = renderOptions(args, scene.settings);
+        // Only the grids the render reads (its operator's declared ones; `direct` not when the
+        // lights are marched): a solved set's scatter_source and illumination, and a DCC file's
+        // other grids (velocities, temperature), stay on disk (24 bytes an active voxel of a
+        // solved set; docs/reliability.md).
+        std::set<std::string> reads = findOperator("render").grids(args).reads;
+        if (options.directFromLights) reads.erase(grids::kDirect);
+        VoxelSetReadOptions readOptions;
+        readOptions.wanted = [&reads](const std::string& name) { return reads.count(name) > 0; };
+        const VoxelSet set = readVoxelSet(mVolume, readOptions);
         Material material;
         if (set.metadata().getMetadata<openvdb::StringMetadata>(kMaterialMetaKey)) {
             material = recordedMaterial(set);
@@ -50,7 +63,6 @@ public:
             material = sceneMaterial(scene);
         }
         const Medium medium(set, material);
-        const RenderOptions options = renderOptions(args, scene.settings);
         const RenderedImage image = renderScene(set, medium, scene, options, args.flag("level_set"), &progress);
         const std::string output = args.text("image"), png = args.has("png") ? args.text("png") : std::string();
         writeExr(output, image, mHalf);

@@ -664,6 +664,28 @@ TEST_CASE("scatter with a band, render through Embree or the level set, occluder
             CHECK(exr.header().channels().findChannel(channel));
         }
     }
+    // The render reads only the grids it uses: one it does not (a DCC file's velocities, damaged
+    // here: its data, the file's last bytes, overwritten) stays on disk, and stops nothing.
+    {
+        vxf::VoxelSet withVelocity = vxf::readVoxelSet(dir.path("s.vdb"));
+        auto velocity = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
+        velocity->setName("vel");
+        velocity->setTransform(withVelocity.transform().copy());
+        velocity->tree().fill(openvdb::CoordBBox(openvdb::Coord(-16), openvdb::Coord(15)), openvdb::Vec3f(1.0f, 2.0f, 3.0f), true);
+        velocity->tree().voxelizeActiveTiles();
+        withVelocity.putAsIs(velocity);
+        vxf::writeVoxelSet(dir.path("vel.vdb"), withVelocity, vxf::VoxelSetWriteOptions{false, false});
+        std::string bytes = slurp(dir.path("vel.vdb"));
+        REQUIRE(bytes.size() > 4096);
+        for (std::size_t i = bytes.size() - 2048; i < bytes.size() - 16; ++i) bytes[i] = char(0x5a);
+        vxf::test::spit(dir.path("vel.vdb"), bytes);
+        CHECK_THROWS_WITH(vxf::readVoxelSet(dir.path("vel.vdb")), Catch::Contains("vel"));
+        const auto image = run(fmt::format("{} render {} --volume {} -o {}", binary("vxf"), dir.path("scene.json"), dir.path("vel.vdb"),
+            dir.path("v.exr")));
+        INFO(image.err);
+        CHECK(image.status == 0);
+        CHECK(slurp(dir.path("v.exr")).size() > 0);
+    }
     // The image writers past the file size limit: an error naming the file, the previous images
     // intact, no temporary file beside them.
     const std::string exrBefore = slurp(dir.path("i.exr")), pngBefore = slurp(dir.path("i.png"));

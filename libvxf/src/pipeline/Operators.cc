@@ -172,7 +172,7 @@ Operator renderOperator()
         }};
     op.grids = [](const Args&) {
         GridUse use{mediumGrids(), {}};
-        use.reads.insert({grids::kDirect, grids::kScatter, grids::kScatterAnisotropy});
+        use.reads.insert({grids::kDirect, grids::kScatter, grids::kScatterAnisotropy, grids::kSourceAnisotropy});
         return use;
     };
     return op;
