@@ -680,8 +680,8 @@ TEST_CASE("scatter with a band, render through Embree or the level set, occluder
         for (std::size_t i = bytes.size() - 2048; i < bytes.size() - 16; ++i) bytes[i] = char(0x5a);
         vxf::test::spit(dir.path("vel.vdb"), bytes);
         CHECK_THROWS_WITH(vxf::readVoxelSet(dir.path("vel.vdb")), Catch::Contains("vel"));
-        const auto image = run(fmt::format("{} render {} --volume {} -o {}", binary("vxf"), dir.path("scene.json"), dir.path("vel.vdb"),
-            dir.path("v.exr")));
+        const auto image = run(
+            fmt::format("{} render {} --volume {} -o {}", binary("vxf"), dir.path("scene.json"), dir.path("vel.vdb"), dir.path("v.exr")));
         INFO(image.err);
         CHECK(image.status == 0);
         CHECK(slurp(dir.path("v.exr")).size() > 0);
