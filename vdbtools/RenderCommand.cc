@@ -4,7 +4,6 @@
 #include "Commands.h"
 #include "OperatorOptions.h"
 
-#include <vxf/core/GridRoles.h>
 #include <vxf/io/ImageFile.h>
 #include <vxf/io/VoxelSetFile.h>
 #include <vxf/transport/Medium.h>
@@ -47,12 +46,7 @@ public:
         const ops::Args args = mParams->args();
         const Scene scene = stageScene(args);
         const RenderOptions options = renderOptions(args, scene.settings);
-        // Only the grids the render reads (its operator's declared ones; `direct` not when the
-        // lights are marched): a solved set's scatter_source and illumination, and a DCC file's
-        // other grids (velocities, temperature), stay on disk (24 bytes an active voxel of a
-        // solved set; docs/reliability.md).
-        std::set<std::string> reads = findOperator("render").grids(args).reads;
-        if (options.directFromLights) reads.erase(grids::kDirect);
+        const std::set<std::string> reads = renderGrids(options); // the others stay on disk
         VoxelSetReadOptions readOptions;
         readOptions.wanted = [&reads](const std::string& name) { return reads.count(name) > 0; };
         const VoxelSet set = readVoxelSet(mVolume, readOptions);

@@ -42,11 +42,7 @@ public:
         TerminalProgress progress;
         const auto start = std::chrono::steady_clock::now();
         const ops::Args args = mParams->args();
-        // `direct` is read after the solve, for `illumination` alone: its 12 bytes a voxel are
-        // held for none of the work.
-        VoxelSetReadOptions deferDirect;
-        deferDirect.wanted = [](const std::string& name) { return name != grids::kDirect; };
-        VoxelSet set = readVoxelSet(mInput, deferDirect);
+        VoxelSet set = readVoxelSet(mInput, scatterInputRead()); // `direct` after the solve
         const Material material = mScene.empty() ? recordedMaterial(set) : sceneMaterial(loadScene(mScene));
         const ScatterOptions options = scatterOptions(args, material);
         const ScatterReport report = [&] {

@@ -1057,9 +1057,10 @@ TEST_CASE("every crafted .vdb that overflowed OpenVDB 10.0.1's reader is a clear
     for (const char* name : {"blosc_raw_chunk_longer_than_node", "blosc_raw_chunk_longer_than_node_2"}) {
         const std::string crafted = dir.path(std::string(name) + ".vdb");
         fs::copy_file(source("tests/regress/fuzz/vdb_info/") + name, crafted);
+        // The scene's object names the crafted grid: a volume object's file is read for that grid alone.
         vxf::test::spit(dir.path("scene.json"),
             fmt::format(R"({{
-  "objects": [{{"name": "smoke", "volume": {}, "grid": "density", "material": {{"albedo": 0.9, "mean_free_path": 0.5}}}}],
+  "objects": [{{"name": "smoke", "volume": {}, "grid": "color", "material": {{"albedo": 0.9, "mean_free_path": 0.5}}}}],
   "lights": [{{"type": "directional", "direction": [0, 0, -1], "intensity": 3}}],
   "camera": {{"position": [0, -4, 0], "look_at": [0, 0, 0], "fov": 40}},
   "render": {{"width": 8, "height": 6, "samples": 1}}

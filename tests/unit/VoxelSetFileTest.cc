@@ -99,6 +99,32 @@ TEST_CASE("a read can leave grids on disk and take them later, as they were", "[
     CHECK(&partial.find("color")->transform() == &partial.transform());
 }
 
+TEST_CASE("readGrids reads the grids named, voxelGridNames lists a file's grids, neither reads the others' data", "[io][vdb]")
+{
+    TempDir dir;
+    const vxf::VoxelSet set = sampleSet();
+    const std::string path = dir.path("set.vdb");
+    vxf::writeVoxelSet(path, set);
+    const vxf::VoxelSet one = vxf::readGrids(path, {"mask", "no such grid"});
+    REQUIRE(one.grids().size() == 1);
+    CHECK(vxf::test::identicalGrids(*set.find("mask"), *one.find("mask")));
+    CHECK(one.stage() == set.stage()); // the file's metadata with it
+    std::vector<std::string> names;
+    for (const auto& grid : set.grids()) names.push_back(grid->getName());
+    CHECK(vxf::voxelGridNames(path) == names);
+    // Their data not read: a grid damaged on disk (the file's last bytes, the last grid's data)
+    // stops neither unless it is asked for.
+    std::string bytes = vxf::test::slurp(path);
+    REQUIRE(bytes.size() > 64);
+    for (std::size_t i = bytes.size() - 32; i < bytes.size() - 8; ++i) bytes[i] = char(~bytes[i]);
+    vxf::test::spit(path, bytes);
+    const std::string last = names.back();
+    CHECK_THROWS_WITH(vxf::readVoxelSet(path), Catch::Contains("'" + last + "'"));
+    CHECK(vxf::voxelGridNames(path) == names);
+    CHECK(vxf::readGrids(path, {names.front()}).grids().size() == 1);
+    CHECK_THROWS_WITH(vxf::readGrids(path, {last}), Catch::Contains("'" + last + "'"));
+}
+
 TEST_CASE("the metadata schema rejects what it should", "[io][vdb][schema]")
 {
     const std::string schema = "schemas/vxf-metadata.schema.json";

@@ -156,12 +156,29 @@ VoxelSet readVoxelSet(const std::string& path, const VoxelSetReadOptions& option
     return set;
 }
 
-void readGridsInto(VoxelSet& set, const std::string& path, const std::vector<std::string>& names)
+VoxelSet readGrids(const std::string& path, const std::vector<std::string>& names)
 {
     VoxelSetReadOptions options;
     options.wanted = [&names](const std::string& name) { return std::find(names.begin(), names.end(), name) != names.end(); };
-    const VoxelSet read = readVoxelSet(path, options);
+    return readVoxelSet(path, options);
+}
+
+void readGridsInto(VoxelSet& set, const std::string& path, const std::vector<std::string>& names)
+{
+    const VoxelSet read = readGrids(path, names);
     for (const openvdb::GridBase::Ptr& grid : read.grids()) set.put(grid);
+}
+
+std::vector<std::string> voxelGridNames(const std::string& path)
+{
+    std::vector<std::string> names;
+    VoxelSetReadOptions options;
+    options.wanted = [&names](const std::string& name) {
+        names.push_back(name);
+        return false;
+    };
+    readVoxelSet(path, options);
+    return names;
 }
 
 namespace {

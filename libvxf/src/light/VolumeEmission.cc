@@ -14,11 +14,11 @@ VolumeEmission::VolumeEmission(const Light& light)
     : mPower(light.power())
     , mKelvin(light.blackbodyKelvin)
 {
-    const VoxelSet source = readVoxelSet(light.file);
+    const VoxelSet source = readGrids(light.file, {light.grid}); // not the file's other grids
     const openvdb::GridBase::Ptr grid = source.find(light.grid);
     if (!grid) {
         std::string names;
-        for (const auto& g : source.grids()) names += (names.empty() ? "" : ", ") + g->getName();
+        for (const std::string& name : voxelGridNames(light.file)) names += (names.empty() ? "" : ", ") + name;
         throw Error(fmt::format(
             "light '{}': no grid '{}' in {} (the file has: {})", light.name, light.grid, light.file, names.empty() ? "none" : names));
     }

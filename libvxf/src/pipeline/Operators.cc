@@ -26,11 +26,7 @@ namespace {
 std::string count(const openvdb::GridBase& g) { return fmt::format("{} active voxels", g.activeVoxelCount()); }
 
 /// What the medium is made of, which every stage after voxelize reads.
-const std::set<std::string>& mediumGrids()
-{
-    static const std::set<std::string> names = {grids::kSurface, grids::kDensity, grids::kSigmaA, grids::kSigmaS};
-    return names;
-}
+const std::set<std::string>& mediumGrids() { return Medium::gridsRead(); }
 
 Operator voxelizeOperator()
 {
@@ -170,11 +166,7 @@ Operator renderOperator()
             if (ctx.args.has("png")) writePng(ctx.args.text("png"), image, ctx.args.number("exposure"));
             return fmt::format("rendered {}x{} to {}", o.width, o.height, ctx.args.text("image"));
         }};
-    op.grids = [](const Args&) {
-        GridUse use{mediumGrids(), {}};
-        use.reads.insert({grids::kDirect, grids::kScatter, grids::kScatterAnisotropy, grids::kSourceAnisotropy});
-        return use;
-    };
+    op.grids = [](const Args&) { return GridUse{renderGrids(RenderOptions{}), {}}; };
     return op;
 }
 

@@ -61,10 +61,10 @@ struct UnreadableCacheEntry
     std::string warning;
 };
 
-VoxelSet readCacheEntry(const fs::path& path)
+VoxelSet readCacheEntry(const fs::path& path, const VoxelSetReadOptions& options = {})
 {
     try {
-        return readVoxelSet(path.string());
+        return readVoxelSet(path.string(), options);
     } catch (const Error& e) {
         std::error_code ignored;
         fs::remove(path, ignored);
@@ -290,11 +290,12 @@ struct PipelineRun
             } else {
                 ScatterReport scattered;
                 const double seconds = timed([&] {
-                    VoxelSet lit = readCacheEntry(lightFile);
-                    const Medium medium(lit, material);
+                    VoxelSet lit = readCacheEntry(lightFile, scatterInputRead());
                     ScatterOptions scatterOptions = scatterOptionsFrom(s);
                     if (warm) scatterOptions.warmStart = readCacheEntry(warmFile).get<openvdb::Vec3SGrid>(grids::kScatter);
-                    scattered = scatter(lit, medium, scatterOptions, interrupter);
+                    scattered = scatter(lit, Medium(lit, material), scatterOptions, interrupter);
+                    readGridsInto(lit, lightFile.string(), {grids::kDirect});
+                    putIllumination(lit);
                     lit.setProvenance("scatter", scatterInputs.dump());
                     writeVoxelSet(volumeFile.string(), lit);
                 });
@@ -320,9 +321,12 @@ struct PipelineRun
         report.preview = (out / (stem + ".png")).string();
         std::string why = "images are always rendered from the (cached) volume";
         const double seconds = timed([&] {
-            const VoxelSet volume = readCacheEntry(volumeFile);
-            const Medium medium(volume, material);
             const RenderOptions options = renderOptionsFrom(s);
+            const std::set<std::string> reads = renderGrids(options);
+            VoxelSetReadOptions only;
+            only.wanted = [&reads](const std::string& name) { return reads.count(name) > 0; };
+            const VoxelSet volume = readCacheEntry(volumeFile, only);
+            const Medium medium(volume, material);
             const SceneRayScenes meshes = sceneRayScenes(scene);
             const RenderedImage image =
                 render(volume, medium, scene, options, {&meshes.visible, &meshes.occluders, &meshes.media}, interrupter);

@@ -42,7 +42,7 @@ Material sceneMaterial(const Scene& scene)
 void attachMaterialGrids(VoxelSet& set, const Material& material)
 {
     if (material.gridsFile.empty()) return;
-    const VoxelSet source = readVoxelSet(material.gridsFile);
+    const VoxelSet source = readGrids(material.gridsFile, {material.sigmaAGrid, material.sigmaSGrid});
     for (const auto& [role, name] :
         {std::pair<std::string, std::string>{"sigma_a", material.sigmaAGrid}, {"sigma_s", material.sigmaSGrid}}) {
         if (name.empty()) continue;
@@ -74,12 +74,12 @@ namespace {
 /// clamped to 0, without a `surface`. Throws vxf::InputError naming the file and grid.
 VoxelSet volumeMedium(const SceneObject& object)
 {
-    const VoxelSet file = readVoxelSet(object.volume);
+    const VoxelSet file = readGrids(object.volume, {object.grid}); // not the file's other grids (velocities)
     const auto fail = [&](const std::string& what) { throw InputError(object.volume, 0, 0, what); };
     const openvdb::GridBase::Ptr found = file.find(object.grid);
     if (!found) {
         std::string names;
-        for (const auto& g : file.grids()) names += (names.empty() ? "" : ", ") + g->getName();
+        for (const std::string& name : voxelGridNames(object.volume)) names += (names.empty() ? "" : ", ") + name;
         fail(
             fmt::format("no grid named '{}' for object '{}' (the file has: {})", object.grid, object.name, names.empty() ? "none" : names));
     }

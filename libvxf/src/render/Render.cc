@@ -74,6 +74,14 @@ void storePixel(RenderedImage& image, std::size_t pixel, const detail::PixelSum&
 
 } // namespace
 
+std::set<std::string> renderGrids(const RenderOptions& options)
+{
+    std::set<std::string> names = Medium::gridsRead();
+    names.insert({grids::kScatter, grids::kScatterAnisotropy, grids::kSourceAnisotropy}); // (CameraTracer)
+    if (!options.directFromLights) names.insert(grids::kDirect);
+    return names;
+}
+
 RenderedImage render(const VoxelSet& set, const Medium& medium, const Scene& scene, const RenderOptions& options,
     const RenderMeshes& meshes, Interrupter* interrupter)
 {

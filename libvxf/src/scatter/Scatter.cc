@@ -155,6 +155,13 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
     return report;
 }
 
+VoxelSetReadOptions scatterInputRead()
+{
+    VoxelSetReadOptions options;
+    options.wanted = [](const std::string& name) { return name != grids::kDirect; };
+    return options;
+}
+
 void putIllumination(VoxelSet& set)
 {
     const auto direct = set.find(grids::kDirect);

@@ -65,6 +65,12 @@ openvdb::FloatGrid::ConstPtr marchSurface(const openvdb::FloatGrid::ConstPtr& su
 
 } // namespace
 
+const std::set<std::string>& Medium::gridsRead()
+{
+    static const std::set<std::string> names = {grids::kDensity, grids::kSigmaA, grids::kSigmaS, grids::kSurface};
+    return names;
+}
+
 Medium::Medium(const VoxelSet& set, const Material& material)
     : mDensity(set.get<openvdb::FloatGrid>(grids::kDensity))
     , mMaterial(material)
@@ -72,14 +78,14 @@ Medium::Medium(const VoxelSet& set, const Material& material)
 {
     // Errors name the file the set came from, when it came from one.
     const std::string file = set.path().empty() ? "" : set.path() + ": ";
-    for (const char* name : {"sigma_a", "sigma_s"}) {
+    for (const char* name : {grids::kSigmaA, grids::kSigmaS}) {
         if (auto grid = set.find(name)) {
             auto typed = openvdb::gridConstPtrCast<openvdb::Vec3SGrid>(grid);
             if (!typed) throw Error(fmt::format("{}grid '{}' must hold vec3s values, not {}", file, name, grid->valueType()));
             if (typed->transform() != mDensity->transform()) {
                 throw Error(fmt::format("{}grid '{}' does not share the transform of 'density'", file, name));
             }
-            (std::string(name) == "sigma_a" ? mSigmaA : mSigmaS) = typed;
+            (std::string(name) == grids::kSigmaA ? mSigmaA : mSigmaS) = typed;
         }
     }
     if (auto grid = set.find(grids::kSurface)) {

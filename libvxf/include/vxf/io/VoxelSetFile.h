@@ -45,6 +45,15 @@ VoxelSet readVoxelSet(const std::string& path, const VoxelSetReadOptions& option
 /// put into @a set, replacing grids of the same names.
 void readGridsInto(VoxelSet& set, const std::string& path, const std::vector<std::string>& names);
 
+/// A set of the grids named @a names of the .vdb at @a path (those it holds) and its file
+/// metadata; the others' data stay on disk (a DCC file's velocities beside the density a scene
+/// object names).
+VoxelSet readGrids(const std::string& path, const std::vector<std::string>& names);
+
+/// The names of the voxel grids of the .vdb at @a path, in the file's order (no grid's data read):
+/// for a message naming what a file holds when a grid asked for is not there.
+std::vector<std::string> voxelGridNames(const std::string& path);
+
 /// Write @a set to @a path atomically (temporary file + rename): the grids in order, with
 /// "vxf:units" grid metadata filled in from their roles, "vxf:checksum" of each grid's data as
 /// written (halves when @a options.half), and the file metadata of the set,

@@ -8,6 +8,7 @@
 #include <vxf/core/RenderedImage.h>
 #include <vxf/core/Scene.h>
 
+#include <set>
 #include <string>
 #include <vector>
 
@@ -66,6 +67,12 @@ struct RenderMeshes
 inline constexpr double kRenderBytesPerVoxel = 120.0;
 inline constexpr double kRenderDenseBytesPerVoxel = 180.0;
 inline constexpr double kRenderBytesPerPixel = 160.0;
+
+/// The grids render() reads from its set with @a options: the medium's (Medium::gridsRead),
+/// `scatter`, its anisotropy and the source's, and `direct` unless the lights are marched. A
+/// stage reading its volume from a file reads these alone (`vxf render`, `vxf run`): a solved
+/// set's `scatter_source` and `illumination`, and a DCC file's other grids, stay on disk.
+std::set<std::string> renderGrids(const RenderOptions& options);
 
 /// Render the voxel set @a set with @a scene's camera, lights and object shading.
 /// Camera rays hit the scene's meshes through Embree (@a meshes.visible), or with no meshes

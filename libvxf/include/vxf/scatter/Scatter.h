@@ -7,6 +7,7 @@
 
 #include <vxf/core/VoxelSet.h>
 #include <vxf/core/Scene.h>
+#include <vxf/io/VoxelSetFile.h>
 
 #include <string>
 #include <vector>
@@ -128,5 +129,10 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
 /// `illumination` = `direct` + `scatter` into @a set, when it holds both (scatter does this at
 /// its end; a caller that reads `direct` only after the solve calls it then).
 void putIllumination(VoxelSet& set);
+
+/// How a scatter stage reads its input from a file: every grid but `direct`, which only
+/// `illumination` needs, at the end; read it then (readGridsInto(set, path, {grids::kDirect}))
+/// and call putIllumination. The solve holds none of its 12 bytes a voxel (`vxf scatter`, `vxf run`).
+VoxelSetReadOptions scatterInputRead();
 
 } // namespace vxf

@@ -7,6 +7,9 @@
 
 #include <openvdb/tools/Interpolation.h>
 
+#include <set>
+#include <string>
+
 namespace vxf {
 
 class RayScene;
@@ -30,6 +33,8 @@ public:
     /// Uses `density` (required) and `sigma_a`, `sigma_s`, `surface` (optional) from @a set;
     /// throws vxf::Error when an optional grid has the wrong type or another transform.
     Medium(const VoxelSet& set, const Material& material);
+    /// The grids the constructor reads: `density`, `sigma_a`, `sigma_s`, `surface`.
+    static const std::set<std::string>& gridsRead();
 
     /// The Henyey-Greenstein g of the material (0: isotropic), whichever coefficients this holds.
     double phaseG() const { return mActualMaterial.phaseG; }
