@@ -4,8 +4,10 @@
 #include "Commands.h"
 #include "OperatorOptions.h"
 
+#include <vxf/core/GridRoles.h>
 #include <vxf/core/GridStats.h>
 #include <vxf/io/VoxelPlacement.h>
+#include <vxf/io/VoxelSetFile.h>
 #include <vxf/light/DirectLight.h>
 #include <vxf/pipeline/LightScene.h>
 #include <vxf/pipeline/Operators.h>
@@ -44,6 +46,8 @@ public:
         mScene = args.text("scene");
         const Scene scene = stageScene(args);
         const DirectLightOptions options = lightOptions(args, scene.settings);
+        // Refused before the read when the file's own count says the volume will not fit.
+        if (const std::uint64_t voxels = declaredVoxels(mInput, inputDensity(scene))) requireMemory("light", lightMemory(double(voxels)));
         VoxelSet set = placedInput(scene, &progress);
         const DirectLightReport report = lightScene(set, scene, options, &progress);
         nlohmann::json params = args.json();
@@ -67,6 +71,16 @@ public:
     }
 
 private:
+    /// The input's density grid: the scene's volume object's own grid where the input is its file.
+    std::string inputDensity(const Scene& scene) const
+    {
+        std::error_code error;
+        for (const SceneObject& o : scene.objects) {
+            if (o.role == SceneObject::Role::Medium && o.isVolume() && std::filesystem::equivalent(o.volume, mInput, error)) return o.grid;
+        }
+        return grids::kDensity;
+    }
+
     /// The input set where the scene's medium lies. A volume object's own file is placed as
     /// vxf run places it (moved by the object's transform, its voxels where their writer puts
     /// them: io/VoxelPlacement.h); a set vxf run voxelized from the

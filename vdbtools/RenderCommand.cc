@@ -4,6 +4,7 @@
 #include "Commands.h"
 #include "OperatorOptions.h"
 
+#include <vxf/core/GridRoles.h>
 #include <vxf/io/ImageFile.h>
 #include <vxf/io/VoxelSetFile.h>
 #include <vxf/transport/Medium.h>
@@ -46,6 +47,9 @@ public:
         const ops::Args args = mParams->args();
         const Scene scene = stageScene(args);
         const RenderOptions options = renderOptions(args, scene.settings);
+        // Refused before the read when the file's own count says the volume will not fit.
+        if (const std::uint64_t voxels = declaredVoxels(mVolume, grids::kDensity))
+            requireMemory("render", renderMemory(double(voxels), options));
         const std::set<std::string> reads = renderGrids(options); // the others stay on disk
         VoxelSetReadOptions readOptions;
         readOptions.wanted = [&reads](const std::string& name) { return reads.count(name) > 0; };

@@ -1119,6 +1119,40 @@ TEST_CASE(
     CHECK(std::stol(huge.err.substr(peak + 5)) < 400 * 1024);
     CHECK_FALSE(fs::exists(dir.path("big.exr")));
 
+    // Refused from the file's own count (`file_voxel_count`), before its data are read: with the
+    // density's data damaged (the file's last bytes), light, scatter and render name their
+    // estimate under a small budget, and the file's damage only without one.
+    {
+        const vxf::VoxelSet read = vxf::readVoxelSet(dir.path("s.vdb"));
+        vxf::VoxelSet densityLast(read.transformPtr());
+        for (const auto& grid : read.grids()) {
+            if (grid->getName() != "density") densityLast.putAsIs(grid);
+        }
+        densityLast.putAsIs(read.find("density"));
+        vxf::writeVoxelSet(dir.path("d.vdb"), densityLast, vxf::VoxelSetWriteOptions{false, false});
+        std::string bytes = slurp(dir.path("d.vdb"));
+        REQUIRE(bytes.size() > 4096);
+        for (std::size_t i = bytes.size() - 1024; i < bytes.size() - 16; ++i) bytes[i] = char(0x5a);
+        vxf::test::spit(dir.path("d.vdb"), bytes);
+        const std::string d = quoted(dir.path("d.vdb")), scene = quoted(dir.path("s.json"));
+        for (const auto& [stage, command] : std::vector<std::pair<std::string, std::string>>{
+                 {"light", fmt::format("{} light {} --scene {} -o {}", vxf, d, scene, quoted(dir.path("l.vdb")))},
+                 {"scatter", fmt::format("{} scatter {} -o {}", vxf, d, quoted(dir.path("x.vdb")))},
+                 {"render", fmt::format("{} render {} --volume {} -o {}", vxf, scene, d, quoted(dir.path("r.exr")))}}) {
+            const auto refused = run(command + " --max-memory 50M");
+            INFO(command << "\n" << refused.err);
+            CHECK(refused.status == 1);
+            CHECK_THAT(refused.err, Catch::Contains(stage + " needs about") && Catch::Contains("(--max-memory)"));
+            const auto damaged = run(command);
+            INFO(damaged.err);
+            CHECK(damaged.status == 1);
+            CHECK_THAT(damaged.err, Catch::Contains(dir.path("d.vdb") + ": ") && !Catch::Contains("needs about")); // the damage
+        }
+        CHECK_FALSE(fs::exists(dir.path("l.vdb")));
+        CHECK_FALSE(fs::exists(dir.path("x.vdb")));
+        CHECK_FALSE(fs::exists(dir.path("r.exr")));
+    }
+
     // Under an address-space limit the default budget is what the limit leaves: a clear error,
     // not an allocation failing inside OpenVDB (which ended in std::terminate, SIGABRT).
     const auto limited =

@@ -310,7 +310,7 @@ private:
 class CheckedArchiveReader : public openvdb::io::Archive
 {
 public:
-    VdbArchive read(std::istream& in, std::uint64_t fileBytes, const std::function<bool(const std::string&)>& wanted)
+    VdbArchive read(std::istream& in, std::uint64_t fileBytes, const std::function<bool(const std::string&)>& wanted, bool headersOnly)
     {
         readHeader(in);
         if (fileVersion() < openvdb::OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION || fileVersion() > openvdb::OPENVDB_FILE_VERSION) {
@@ -365,6 +365,16 @@ public:
             openvdb::io::GridDescriptor gd;
             openvdb::GridBase::Ptr grid = gd.read(in);
             if (!grid) throw openvdb::IoError(fmt::format("grid '{}' of type {} could not be created", d.name, d.type));
+            const auto at = std::uint64_t(std::streamoff(in.tellg()));
+            if (headersOnly && d.endPos > 0 && std::uint64_t(d.endPos) >= at && std::uint64_t(d.endPos) <= fileBytes) {
+                // Its metadata (checked ahead with the head above), and on past its data.
+                readGridCompression(in);
+                grid->readMeta(in);
+                grid->removeMeta(openvdb::GridBase::META_FILE_DELAYED_LOAD);
+                in.seekg(std::streamoff(d.endPos));
+                archive.grids.push_back(grid);
+                continue;
+            }
             readGrid(in, fileBytes, gd, *grid, *layout, fileMetadata);
             // Delayed-load metadata was read as opaque bytes (initializeVdbReading); it describes
             // this file's layout, so it would be wrong in any file vxf writes.
@@ -415,10 +425,11 @@ private:
 
 } // namespace
 
-VdbArchive readVdbArchive(std::istream& in, std::uint64_t fileBytes, const std::function<bool(const std::string&)>& wanted)
+VdbArchive readVdbArchive(
+    std::istream& in, std::uint64_t fileBytes, const std::function<bool(const std::string&)>& wanted, bool headersOnly)
 {
     initializeVdbReading();
-    return CheckedArchiveReader().read(in, fileBytes, wanted);
+    return CheckedArchiveReader().read(in, fileBytes, wanted, headersOnly);
 }
 
 } // namespace vxf::detail

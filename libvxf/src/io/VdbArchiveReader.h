@@ -33,9 +33,12 @@ struct VdbArchive
 /// With @a wanted, a voxel grid whose name it refuses is skipped by its descriptor's end offset
 /// (read, then dropped, where the file gives none); a grid that is an instance of one skipped
 /// throws (its tree is that grid's).
+/// With @a headersOnly, each grid's metadata alone is read (no transform, no tree: the grids
+/// are empty), the rest skipped by the descriptor's end offset (read whole where it gives none).
 /// @a in must be seekable, with exceptions on (a read past the end throws). Throws
 /// openvdb::IoError describing the first size that does not fit.
-VdbArchive readVdbArchive(std::istream& in, std::uint64_t fileBytes, const std::function<bool(const std::string&)>& wanted = {});
+VdbArchive readVdbArchive(
+    std::istream& in, std::uint64_t fileBytes, const std::function<bool(const std::string&)>& wanted = {}, bool headersOnly = false);
 
 /// Once per process, before any .vdb is read: openvdb::initialize(), and the delayed-load
 /// metadata type unregistered (above).

@@ -81,7 +81,11 @@ private:
 
 VoxelSet readVoxelSet(const std::string& path) { return readVoxelSet(path, VoxelSetReadOptions{}); }
 
-VoxelSet readVoxelSet(const std::string& path, const VoxelSetReadOptions& options)
+namespace {
+
+/// The checked archive of the .vdb at @a path (readVdbArchive, within the read's memory
+/// budget); every failure a vxf::Error naming the file.
+detail::VdbArchive readArchive(const std::string& path, const std::function<bool(const std::string&)>& wanted, bool headersOnly)
 {
     detail::initializeVdbReading();
     // The checked chunk readers (VdbChunkReaders.cc) replace OpenVDB's by the dynamic linker;
@@ -104,7 +108,7 @@ VoxelSet readVoxelSet(const std::string& path, const VoxelSetReadOptions& option
         std::ifstream in(path, std::ios::binary);
         if (!in) throw Error(fmt::format("{}: cannot open: {}", path, std::strerror(errno)));
         in.exceptions(std::ios::failbit | std::ios::badbit);
-        archive = detail::readVdbArchive(in, bytes, options.wanted);
+        archive = detail::readVdbArchive(in, bytes, wanted, headersOnly);
     } catch (const Error&) {
         throw;
     } catch (const std::ios_base::failure&) {
@@ -118,7 +122,14 @@ VoxelSet readVoxelSet(const std::string& path, const VoxelSetReadOptions& option
     } catch (const std::exception& e) {
         throw Error(fmt::format("{}: cannot read: {}", path, e.what()));
     }
+    return archive;
+}
 
+} // namespace
+
+VoxelSet readVoxelSet(const std::string& path, const VoxelSetReadOptions& options)
+{
+    const detail::VdbArchive archive = readArchive(path, options.wanted, false);
     VoxelSet set;
     openvdb::GridBase::Ptr reference;
     for (const auto& grid : archive.grids) {
@@ -167,6 +178,18 @@ void readGridsInto(VoxelSet& set, const std::string& path, const std::vector<std
 {
     const VoxelSet read = readGrids(path, names);
     for (const openvdb::GridBase::Ptr& grid : read.grids()) set.put(grid);
+}
+
+std::uint64_t declaredVoxels(const std::string& path, const std::string& grid)
+{
+    const detail::VdbArchive archive = readArchive(
+        path, [&grid](const std::string& name) { return name == grid; }, true);
+    for (const auto& g : archive.grids) {
+        if (g->getName() != grid) continue;
+        const auto count = g->getMetadata<openvdb::Int64Metadata>(openvdb::GridBase::META_FILE_VOXEL_COUNT);
+        return count && count->value() > 0 ? std::uint64_t(count->value()) : 0;
+    }
+    return 0;
 }
 
 std::vector<std::string> voxelGridNames(const std::string& path)

@@ -152,7 +152,7 @@ openvdb::Vec3d energyOf(const detail::LeafBlocks<openvdb::Vec3f>& fluence, const
     return total;
 }
 
-/// The lights a sweep carries, swept over one lattice on @a direct's topology: their fluence at
+/// The lights a sweep carries, swept over one lattice on the stage's @a topology: their fluence at
 /// every voxel centre (at the rim, from its medium point along the directions that graze the
 /// surface there), each light added into the sums as it is swept (no array of its own: 12 bytes
 /// a voxel and light, 24 with a phase), its energy for the report what it added.
@@ -250,11 +250,13 @@ struct PointLighting
 
 } // namespace
 
+MemoryEstimate lightMemory(double voxels) { return stageMemory(kStageFixedBytes, voxels, kLightBytesPerVoxel); }
+
 DirectLightReport computeDirectLight(
     VoxelSet& set, const Medium& medium, const std::vector<Light>& lights, const DirectLightOptions& options, Interrupter* interrupter)
 {
     InterruptStep step(interrupter, "lighting");
-    requireMemory("light", stageMemory(kStageFixedBytes, double(medium.density().activeVoxelCount()), kLightBytesPerVoxel));
+    requireMemory("light", lightMemory(double(medium.density().activeVoxelCount())));
     DirectLightReport report;
     warnIfNoDensity(medium, report);
     std::vector<LightSampler> active;

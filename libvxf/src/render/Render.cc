@@ -74,6 +74,13 @@ void storePixel(RenderedImage& image, std::size_t pixel, const detail::PixelSum&
 
 } // namespace
 
+MemoryEstimate renderMemory(double voxels, const RenderOptions& options)
+{
+    const double denseCopies = std::min(4.0 * double(kDenseCopyBytes), voxels * kRenderDenseBytesPerVoxel);
+    return stageMemory(
+        kStageFixedBytes + denseCopies, voxels, kRenderBytesPerVoxel, double(options.width) * double(options.height), kRenderBytesPerPixel);
+}
+
 std::set<std::string> renderGrids(const RenderOptions& options)
 {
     std::set<std::string> names = Medium::gridsRead();
@@ -90,11 +97,7 @@ RenderedImage render(const VoxelSet& set, const Medium& medium, const Scene& sce
         throw UsageError(
             fmt::format("image size {}x{} with {} samples per pixel is empty", options.width, options.height, options.samples));
     }
-    const double voxels = double(medium.density().activeVoxelCount());
-    const double denseCopies = std::min(4.0 * double(kDenseCopyBytes), voxels * kRenderDenseBytesPerVoxel);
-    requireMemory("render",
-        stageMemory(kStageFixedBytes + denseCopies, voxels, kRenderBytesPerVoxel, double(options.width) * double(options.height),
-            kRenderBytesPerPixel));
+    requireMemory("render", renderMemory(double(medium.density().activeVoxelCount()), options));
     const detail::RenderContext context(set, medium, scene, options, meshes);
 
     RenderedImage image;

@@ -54,9 +54,11 @@ openvdb::Vec3d gridEnergy(const openvdb::Vec3SGrid& grid)
     return sum;
 }
 
+MemoryEstimate scatterMemory(double voxels) { return stageMemory(kStageFixedBytes, voxels, kScatterBytesPerVoxel); }
+
 ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptions& options, Interrupter* interrupter)
 {
-    requireMemory("scatter", stageMemory(kStageFixedBytes, double(transport.density().activeVoxelCount()), kScatterBytesPerVoxel));
+    requireMemory("scatter", scatterMemory(double(transport.density().activeVoxelCount())));
     ScatterReport report;
     const bool solveWhole = options.accelerate && options.fromPass == 0 && !options.keepPasses && options.finePasses == 0;
     const bool sweeps = options.pass.kernel == ScatterKernel::Sweep;

@@ -3,6 +3,7 @@
 
 #include <vxf/core/VoxelSet.h>
 
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
@@ -49,6 +50,11 @@ void readGridsInto(VoxelSet& set, const std::string& path, const std::vector<std
 /// metadata; the others' data stay on disk (a DCC file's velocities beside the density a scene
 /// object names).
 VoxelSet readGrids(const std::string& path, const std::vector<std::string>& names);
+
+/// The active voxels the .vdb at @a path declares for its grid @a grid (`file_voxel_count`, which
+/// OpenVDB writes with every grid), its data not read: what a stage's memory estimate needs
+/// before it reads the file. 0 where the file holds no such grid or declares no count.
+std::uint64_t declaredVoxels(const std::string& path, const std::string& grid);
 
 /// The names of the voxel grids of the .vdb at @a path, in the file's order (no grid's data read):
 /// for a message naming what a file holds when a grid asked for is not there.

@@ -1,6 +1,7 @@
 // vxf — the light stage: fluence from the lights (`direct`) and the scattering source.
 #pragma once
 
+#include <vxf/core/MemoryBudget.h>
 #include <vxf/core/Interrupter.h>
 #include <vxf/core/RayScene.h>
 #include <vxf/light/LightSampler.h>
@@ -92,6 +93,9 @@ openvdb::Vec3d lightFluence(const LightSampler& light, Medium::Sampler& sampler,
 /// fixed part, rounded up (docs/accuracy-notes.md (ae)). computeDirectLight checks it against the
 /// memory budget before it allocates.
 inline constexpr double kLightBytesPerVoxel = 110.0;
+/// The light stage's peak for a density of @a voxels active voxels: what computeDirectLight
+/// checks, and `vxf light` from the file's count before it reads.
+MemoryEstimate lightMemory(double voxels);
 
 /// The light stage. Adds to @a set:
 /// - `direct` (Vec3f): φ0 = Σ lights, at every active voxel of `density` (active tiles are

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <vxf/core/Interrupter.h>
+#include <vxf/core/MemoryBudget.h>
 #include <vxf/core/StageDefaults.h>
 #include <vxf/core/RayScene.h>
 #include <vxf/transport/Medium.h>
@@ -67,6 +68,9 @@ struct RenderMeshes
 inline constexpr double kRenderBytesPerVoxel = 120.0;
 inline constexpr double kRenderDenseBytesPerVoxel = 180.0;
 inline constexpr double kRenderBytesPerPixel = 160.0;
+/// The render's peak for a density of @a voxels active voxels at @a options' image size (the
+/// constants above): what render() checks, and `vxf render` from the file's count before it reads.
+MemoryEstimate renderMemory(double voxels, const RenderOptions& options);
 
 /// The grids render() reads from its set with @a options: the medium's (Medium::gridsRead),
 /// `scatter`, its anisotropy and the source's, and `direct` unless the lights are marched. A

@@ -6,6 +6,7 @@
 #include <vxf/scatter/SweepSolve.h>
 
 #include <vxf/core/VoxelSet.h>
+#include <vxf/core/MemoryBudget.h>
 #include <vxf/core/Scene.h>
 #include <vxf/io/VoxelSetFile.h>
 
@@ -97,6 +98,9 @@ openvdb::Vec3d gridEnergy(const openvdb::Vec3SGrid& grid);
 /// 256 is 6% above the estimate), large ones less (102M voxels at 720³: 146 bytes, 13.9 GiB).
 /// scatter checks it against the memory budget before it allocates.
 inline constexpr double kScatterBytesPerVoxel = 165.0;
+/// The scatter's peak for a density of @a voxels active voxels: what scatter() checks, and
+/// `vxf scatter` from the file's count before it reads.
+MemoryEstimate scatterMemory(double voxels);
 
 /// Run scattering passes on @a set: J_k = σs·φ_k/(4π) feeds pass k+1 (J_0 is `scatter_source`,
 /// read from the set, so an artist may have edited it). @a medium is the transport's (Medium):
