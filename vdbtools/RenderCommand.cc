@@ -15,7 +15,6 @@
 #include <fmt/format.h>
 
 #include <iostream>
-#include <set>
 #include <string>
 
 namespace vxf::cli {
@@ -50,10 +49,7 @@ public:
         // Refused before the read when the file's own count says the volume will not fit.
         if (const std::uint64_t voxels = declaredVoxels(mVolume, grids::kDensity))
             requireMemory("render", renderMemory(double(voxels), options));
-        const std::set<std::string> reads = renderGrids(options); // the others stay on disk
-        VoxelSetReadOptions readOptions;
-        readOptions.wanted = [&reads](const std::string& name) { return reads.count(name) > 0; };
-        const VoxelSet set = readVoxelSet(mVolume, readOptions);
+        const VoxelSet set = readVoxelSet(mVolume, renderInputRead(options)); // its grids alone
         Material material;
         if (set.metadata().getMetadata<openvdb::StringMetadata>(kMaterialMetaKey)) {
             material = recordedMaterial(set);

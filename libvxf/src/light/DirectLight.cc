@@ -172,6 +172,7 @@ SweptLights sweepLights(const std::vector<LightSampler>& active, const Medium& m
     out.energy.assign(active.size(), openvdb::Vec3d(0.0));
     if (!options.sweep) return out;
     Rim rim;
+    openvdb::Vec3d before(0.0); // the sums' energyOf so far
     for (std::size_t l = 0; l < active.size(); ++l) {
         const bool fromPoint = sweepableFromPoint(active[l].light());
         if (!sweepable(active[l].light()) && !fromPoint) continue;
@@ -179,16 +180,17 @@ SweptLights sweepLights(const std::vector<LightSampler>& active, const Medium& m
             out.lattice.emplace(medium, topology, detail::SweepLattice::Coefficients::SweepOnly);
             rim = rimOf(*out.lattice, medium);
         }
-        // Each light adds into the sums; its energy is what it added (energyOf is a sum, and
-        // the earlier lights' part is known).
-        const openvdb::Vec3d before = out.fluence.empty() ? openvdb::Vec3d(0.0) : energyOf(out.fluence, *out.lattice, leaves, tiles);
+        // Each light adds into the sums; its energy is what it added (energyOf is a sum: the
+        // sums' energy after the light less the earlier lights').
         detail::LeafBlocks<openvdb::Vec3f>* flux = anisotropic ? &out.flux : nullptr;
         if (fromPoint)
             sweepPointLight(active[l], *out.lattice, medium, rim, options, out.fluence, flux);
         else
             sweepLight(active[l], *out.lattice, medium, rim, options, out.fluence, flux);
         out.swept[l] = true;
-        out.energy[l] = energyOf(out.fluence, *out.lattice, leaves, tiles) - before;
+        const openvdb::Vec3d after = energyOf(out.fluence, *out.lattice, leaves, tiles);
+        out.energy[l] = after - before;
+        before = after;
         checkInterrupt(interrupter);
     }
     return out;

@@ -322,10 +322,7 @@ struct PipelineRun
         std::string why = "images are always rendered from the (cached) volume";
         const double seconds = timed([&] {
             const RenderOptions options = renderOptionsFrom(s);
-            const std::set<std::string> reads = renderGrids(options);
-            VoxelSetReadOptions only;
-            only.wanted = [&reads](const std::string& name) { return reads.count(name) > 0; };
-            const VoxelSet volume = readCacheEntry(volumeFile, only);
+            const VoxelSet volume = readCacheEntry(volumeFile, renderInputRead(options)); // its grids alone
             const Medium medium(volume, material);
             const SceneRayScenes meshes = sceneRayScenes(scene);
             const RenderedImage image =

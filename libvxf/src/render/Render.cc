@@ -89,6 +89,13 @@ std::set<std::string> renderGrids(const RenderOptions& options)
     return names;
 }
 
+VoxelSetReadOptions renderInputRead(const RenderOptions& options)
+{
+    VoxelSetReadOptions read;
+    read.wanted = [names = renderGrids(options)](const std::string& name) { return names.count(name) > 0; };
+    return read;
+}
+
 RenderedImage render(const VoxelSet& set, const Medium& medium, const Scene& scene, const RenderOptions& options,
     const RenderMeshes& meshes, Interrupter* interrupter)
 {

@@ -8,6 +8,7 @@
 #include <vxf/transport/Medium.h>
 #include <vxf/core/RenderedImage.h>
 #include <vxf/core/Scene.h>
+#include <vxf/io/VoxelSetFile.h>
 
 #include <set>
 #include <string>
@@ -77,6 +78,8 @@ MemoryEstimate renderMemory(double voxels, const RenderOptions& options);
 /// stage reading its volume from a file reads these alone (`vxf render`, `vxf run`): a solved
 /// set's `scatter_source` and `illumination`, and a DCC file's other grids, stay on disk.
 std::set<std::string> renderGrids(const RenderOptions& options);
+/// A read of those grids alone (readVoxelSet's options).
+VoxelSetReadOptions renderInputRead(const RenderOptions& options);
 
 /// Render the voxel set @a set with @a scene's camera, lights and object shading.
 /// Camera rays hit the scene's meshes through Embree (@a meshes.visible), or with no meshes
