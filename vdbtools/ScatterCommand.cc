@@ -47,10 +47,7 @@ public:
         VoxelSet set = readVoxelSet(mInput, scatterInputRead()); // `direct` after the solve
         const Material material = mScene.empty() ? recordedMaterial(set) : sceneMaterial(loadScene(mScene));
         const ScatterOptions options = scatterOptions(args, material);
-        const ScatterReport report = [&] {
-            const Medium medium(set, material);
-            return scatter(set, medium, options, &progress);
-        }();
+        const ScatterReport report = scatter(set, scatterMedium(set, material, options), options, &progress);
         readGridsInto(set, mInput, {grids::kDirect});
         putIllumination(set);
         nlohmann::json params = args.json();

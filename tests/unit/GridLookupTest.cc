@@ -4,6 +4,9 @@
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/LevelSetSphere.h>
 
+#include <cmath>
+#include <limits>
+
 TEST_CASE("a dense copy reads what the tree holds, inside and outside its box", "[gridlookup]")
 {
     // A level set: active voxels in a narrow band, the inside an inactive −background, the
@@ -60,4 +63,39 @@ TEST_CASE("block reads interpolate as OpenVDB's samplers do, across the dense co
     CHECK(checked > 100);
     CHECK(straddling > 0);
     CHECK(differ == 0);
+}
+
+TEST_CASE("at a voxel's centre a lookup reads the voxel alone, whatever its neighbours hold", "[gridlookup]")
+{
+    // The sweep lattice reads every voxel at its centre (through the tree when there is no
+    // dense copy): the interpolation's weights are then the voxel's alone. Where the neighbours
+    // are finite that is BoxSampler's and QuadraticSampler's value to the bit; a non-finite
+    // neighbour, weighted 0, does not turn it into NaN.
+    const auto sphere = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(6.0f, openvdb::Vec3f(0.0f), 1.0f, 3.0f);
+    const auto dense = vxf::DenseCopy<openvdb::FloatGrid>::create(*sphere, 1, vxf::kDenseCopyBytes);
+    REQUIRE(dense);
+    const vxf::GridLookup<openvdb::FloatGrid> fast(*sphere, dense.get()), tree(*sphere, nullptr);
+    auto acc = sphere->getConstAccessor();
+    int differ = 0, checked = 0;
+    for (auto it = sphere->cbeginValueOn(); it; ++it) {
+        const openvdb::Vec3d centre = it.getCoord().asVec3d();
+        for (const auto* lookup : {&fast, &tree}) {
+            differ += lookup->sampleTrilinear(centre) != openvdb::tools::BoxSampler::sample(acc, centre);
+            differ += lookup->sampleTriquadratic(centre) != openvdb::tools::QuadraticSampler::sample(acc, centre);
+            differ += lookup->sampleTrilinear(centre) != *it;
+        }
+        ++checked;
+    }
+    CHECK(checked > 500);
+    CHECK(differ == 0);
+
+    auto grid = openvdb::FloatGrid::create(0.0f);
+    grid->tree().setValue(openvdb::Coord(0, 0, 0), 2.5f);
+    grid->tree().setValue(openvdb::Coord(1, 0, 0), std::numeric_limits<float>::infinity());
+    grid->tree().setValue(openvdb::Coord(0, 0, -1), std::numeric_limits<float>::quiet_NaN());
+    const vxf::GridLookup<openvdb::FloatGrid> lookup(*grid, nullptr);
+    CHECK(std::isnan(openvdb::tools::BoxSampler::sample(grid->getConstAccessor(), openvdb::Vec3d(0.0))));
+    CHECK(lookup.sampleTrilinear(openvdb::Vec3d(0.0)) == 2.5f);
+    CHECK(lookup.sampleTriquadratic(openvdb::Vec3d(0.0)) == 2.5f);
+    CHECK_FALSE(std::isfinite(lookup.sampleTrilinear(openvdb::Vec3d(0.5, 0.0, 0.0)))); // between them, as OpenVDB's
 }

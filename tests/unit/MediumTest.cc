@@ -9,6 +9,7 @@
 #include "TestSupport.h"
 
 #include <catch2/catch.hpp>
+#include <openvdb/tools/LevelSetSphere.h>
 
 TEST_CASE("a medium's coefficients: the transport's, the isotropic stages' and the actual ones", "[transport][medium]")
 {
@@ -43,4 +44,40 @@ TEST_CASE("a medium's coefficients: the transport's, the isotropic stages' and t
     // No density: named.
     vxf::VoxelSet empty(openvdb::math::Transform::createLinearTransform(0.1));
     CHECK_THROWS_WITH(vxf::Medium(empty, m), Catch::Contains("density"));
+}
+
+TEST_CASE("a medium read through its trees gives what its dense copies give", "[transport][medium]")
+{
+    // Lookups::Trees (the sweep kernel's scatter: no dense copy held through the solve) reads
+    // the same values as the dense copies, at voxel centres and between them, and has no
+    // bricks for marches to cross.
+    const vxf::Material m = vxf::test::greyMaterial(2.0, 6.0);
+    vxf::VoxelSet set = vxf::test::uniformSphere(m, 1.0, 8);
+    auto surface = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(0.9f, openvdb::Vec3f(0.0f), 1.0f / 8.0f, 3.0f);
+    surface->setName("surface");
+    set.put(surface);
+    const vxf::Medium dense(set, m), trees(set, m, vxf::Medium::Lookups::Trees);
+    CHECK(dense.uniformBricks() != nullptr);
+    CHECK(trees.uniformBricks() == nullptr);
+    REQUIRE(trees.surface() != nullptr);
+    vxf::Medium::Sampler a(dense), b(trees);
+    int differ = 0, checked = 0, skins = 0;
+    for (double x = -9.0; x <= 9.0; x += 0.5) {
+        for (double y = -9.0; y <= 9.0; y += 1.25) {
+            const openvdb::Vec3d p(x, y, 0.5 * x - 1.0);
+            differ += a.sigmaT(p) != b.sigmaT(p);
+            differ += a.sigmaS(p) != b.sigmaS(p);
+            differ += a.signedDistance(p) != b.signedDistance(p);
+            differ += a.interiorScale(p) != b.interiorScale(p);
+            const openvdb::Coord c = openvdb::Coord::floor(p);
+            openvdb::Vec3d pa, na, pb, nb;
+            const bool sa = a.skinPoint(c, pa, na), sb = b.skinPoint(c, pb, nb);
+            differ += sa != sb || (sa && (pa != pb || na != nb));
+            skins += sa;
+            ++checked;
+        }
+    }
+    CHECK(checked > 500);
+    CHECK(skins > 10);
+    CHECK(differ == 0);
 }

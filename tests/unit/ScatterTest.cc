@@ -316,3 +316,40 @@ TEST_CASE("passes 0 runs none: scatter zero, illumination the direct light, for 
         }
     }
 }
+
+TEST_CASE("the accelerated sweeps read the medium through its trees, to the same sums", "[scatter]")
+{
+    // scatterMedium leaves out the dense copies where the sweeps solve the whole sum (their
+    // lattice reads each voxel once); the gathers' marches keep them. The sums are the same
+    // bits either way, with an isotropic and a forward-scattering phase.
+    for (const double g : {0.0, 0.6}) {
+        vxf::Material m = vxf::test::albedoMaterial(12.0, 0.95);
+        m.phaseG = g;
+        vxf::ScatterOptions options;
+        options.passes = 8;
+        options.pass.kernel = vxf::ScatterKernel::Sweep;
+        options.pass.directions = 8;
+        vxf::VoxelSet lit = uniformSphere(m, 1.0);
+        if (g != 0.0) { // the first moment's path: the source's mean direction (none)
+            auto a0 = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
+            a0->setName("scatter_source_anisotropy");
+            a0->setTransform(lit.transformPtr());
+            a0->tree().topologyUnion(lit.get<openvdb::Vec3SGrid>("scatter_source")->tree());
+            lit.put(a0);
+        }
+        CHECK(vxf::scatterMedium(lit, m, options).uniformBricks() == nullptr);
+        vxf::ScatterOptions gathers = options;
+        gathers.pass.kernel = vxf::ScatterKernel::Gather;
+        CHECK(vxf::scatterMedium(lit, m, gathers).uniformBricks() != nullptr);
+
+        vxf::VoxelSet viaTrees = lit, viaCopies = lit;
+        vxf::scatter(viaTrees, vxf::scatterMedium(viaTrees, m, options), options);
+        vxf::scatter(viaCopies, vxf::Medium(viaCopies, m), options);
+        std::string why;
+        INFO("g " << g);
+        CHECK(vxf::test::identicalGrids(*viaTrees.find("scatter"), *viaCopies.find("scatter"), &why));
+        INFO(why);
+        CHECK(vxf::gridEnergy(*viaTrees.get<openvdb::Vec3SGrid>("scatter"))[0] > 0.0);
+        CHECK(bool(viaTrees.find("scatter_anisotropy")) == (g != 0.0));
+    }
+}

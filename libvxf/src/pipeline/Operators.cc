@@ -117,8 +117,9 @@ Operator scatterOperator()
                 "fine_passes need the orders and imply this"),
             flag("fixed_directions", "the same direction set at every voxel (banding instead of noise)")},
         [](OpContext& ctx) {
-            const Medium medium(ctx.set, recordedMaterial(ctx.set));
-            const auto report = scatter(ctx.set, medium, scatterOptions(ctx.args, medium.material()), ctx.interrupter);
+            const Material material = recordedMaterial(ctx.set);
+            const ScatterOptions options = scatterOptions(ctx.args, material);
+            const auto report = scatter(ctx.set, scatterMedium(ctx.set, material, options), options, ctx.interrupter);
             return fmt::format("{} passes ({})", report.passes.size(), report.stopReason);
         }};
     op.grids = [](const Args& a) {

@@ -293,7 +293,7 @@ struct PipelineRun
                     VoxelSet lit = readCacheEntry(lightFile, scatterInputRead());
                     ScatterOptions scatterOptions = scatterOptionsFrom(s);
                     if (warm) scatterOptions.warmStart = readCacheEntry(warmFile).get<openvdb::Vec3SGrid>(grids::kScatter);
-                    scattered = scatter(lit, Medium(lit, material), scatterOptions, interrupter);
+                    scattered = scatter(lit, scatterMedium(lit, material, scatterOptions), scatterOptions, interrupter);
                     readGridsInto(lit, lightFile.string(), {grids::kDirect});
                     putIllumination(lit);
                     lit.setProvenance("scatter", scatterInputs.dump());

@@ -56,11 +56,28 @@ openvdb::Vec3d gridEnergy(const openvdb::Vec3SGrid& grid)
 
 MemoryEstimate scatterMemory(double voxels) { return stageMemory(kStageFixedBytes, voxels, kScatterBytesPerVoxel); }
 
+namespace {
+
+/// Whether scatter() solves the whole sum at once (sweeps or gathers with acceleration), not
+/// pass by pass.
+bool solvesWhole(const ScatterOptions& options)
+{
+    return options.accelerate && options.fromPass == 0 && !options.keepPasses && options.finePasses == 0;
+}
+
+} // namespace
+
+Medium scatterMedium(const VoxelSet& set, const Material& material, const ScatterOptions& options)
+{
+    const bool latticeOnly = solvesWhole(options) && options.pass.kernel == ScatterKernel::Sweep;
+    return Medium(set, material, latticeOnly ? Medium::Lookups::Trees : Medium::Lookups::Dense);
+}
+
 ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptions& options, Interrupter* interrupter)
 {
     requireMemory("scatter", scatterMemory(double(transport.density().activeVoxelCount())));
     ScatterReport report;
-    const bool solveWhole = options.accelerate && options.fromPass == 0 && !options.keepPasses && options.finePasses == 0;
+    const bool solveWhole = solvesWhole(options);
     const bool sweeps = options.pass.kernel == ScatterKernel::Sweep;
     // An anisotropic rest of the phase (g* ≠ 0, Phase.h) only the accelerated sweep solve
     // carries, as a first moment, from a source lit with it (`scatter_source_anisotropy`). Every
@@ -82,9 +99,6 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
                 j->beginValueAll(), [sourceScale](const openvdb::Vec3SGrid::ValueAllIter& it) { it.setValue(*it * sourceScale); });
         }
         report.band = coarsenBeyondBand(*j, medium.density(), options.band);
-        sum = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
-        sum->setTransform(j->transformPtr());
-        sum->tree().topologyUnion(j->tree());
     } else {
         sum = set.get<openvdb::Vec3SGrid>("scatter_pass_1")->deepCopy();
         for (int p = 2; p <= k; ++p) {
@@ -99,11 +113,21 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
     if (options.finePasses > 0 && options.coarseFactor != 2 && options.coarseFactor != 4 && options.coarseFactor != 8) {
         throw UsageError(fmt::format("coarse factor must be 2, 4 or 8, got {}", options.coarseFactor));
     }
+    // A sum of zeros on the source's voxels, made only where it is used (a whole solve makes its
+    // own: holding this one through it took 12 bytes a voxel).
+    const auto zeroSum = [&j] {
+        openvdb::Vec3SGrid::Ptr zeros = openvdb::Vec3SGrid::create(openvdb::Vec3f(0.0f));
+        zeros->setTransform(j->transformPtr());
+        zeros->tree().topologyUnion(j->tree());
+        return zeros;
+    };
     SweepMoments moments; // of an anisotropic rest
     if (!scatters) {
+        if (k == 0) sum = zeroSum();
         report.stopReason = "the medium does not scatter (sigma_s = 0)";
     } else if (options.passes == 0 && options.fromPass == 0) {
         // No pass: single scattering alone (the image's direct layer), `scatter` zero.
+        sum = zeroSum();
         report.stopReason = "passes 0: no multiple scattering (single scattering alone)";
     } else if (solveWhole) {
         // The whole sum at once: sweeps or gathers with diffusion synthetic acceleration.
@@ -143,6 +167,7 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
         report.stopReason = fmt::format("accelerated {} (each {} corrects the whole sum; it is not one scattering order): {}",
             sweeps ? "sweeps" : "gathers", sweeps ? "sweep" : "pass", solved.stopReason);
     } else {
+        if (k == 0) sum = zeroSum();
         detail::iterateSources(set, medium, options, report, interrupter, sum, j, k);
     }
 

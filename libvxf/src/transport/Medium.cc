@@ -71,7 +71,7 @@ const std::set<std::string>& Medium::gridsRead()
     return names;
 }
 
-Medium::Medium(const VoxelSet& set, const Material& material)
+Medium::Medium(const VoxelSet& set, const Material& material, Lookups lookups)
     : mDensity(set.get<openvdb::FloatGrid>(grids::kDensity))
     , mMaterial(material)
     , mActualMaterial(material)
@@ -100,14 +100,16 @@ Medium::Medium(const VoxelSet& set, const Material& material)
         }
     }
     mActualSigmaS = mSigmaS;
-    if (mSigmaA) mSigmaADense = DenseCopy<openvdb::Vec3SGrid>::create(*mSigmaA, 2, kDenseCopyBytes);
-    if (mSigmaS) mSigmaSDense = mActualSigmaSDense = DenseCopy<openvdb::Vec3SGrid>::create(*mSigmaS, 2, kDenseCopyBytes);
+    mBounds = mDensity->evalActiveVoxelBoundingBox();
+    const bool dense = lookups == Lookups::Dense;
+    if (dense && mSigmaA) mSigmaADense = DenseCopy<openvdb::Vec3SGrid>::create(*mSigmaA, 2, kDenseCopyBytes);
+    if (dense && mSigmaS) mSigmaSDense = mActualSigmaSDense = DenseCopy<openvdb::Vec3SGrid>::create(*mSigmaS, 2, kDenseCopyBytes);
     if (material.phaseG != 0.0) {
         // The transport's medium: σs* = (1 − f)·σs, σa as it is, the rest's g* (Phase.h).
         const PhaseScaling scaling = transportScaling(material.phaseG);
         scaleScattering(1.0 - scaling.forward, scaling.restG());
     }
-    mBounds = mDensity->evalActiveVoxelBoundingBox();
+    if (!dense) return;
     // Trilinear lookups reach a voxel beyond the active voxels (marchBounds).
     mDensityDense = DenseCopy<openvdb::FloatGrid>::create(*mDensity, 2, kDenseCopyBytes);
     if (mSurface) mSurfaceDense = DenseCopy<openvdb::FloatGrid>::create(*mSurface, 2, kDenseCopyBytes);

@@ -98,22 +98,29 @@ public:
     /// Trilinear interpolation at index-space point @a ijk: openvdb::tools::BoxSampler's
     /// arithmetic (the same result to the bit), its eight values read as one block, not eight
     /// bounds-checked getValue calls (the thick bunny at 64 voxels across: scatter 22.4 → 16.5 s).
+    /// At a voxel's centre, the voxel's own value, one read (what the arithmetic gives there,
+    /// but for a non-finite neighbour, whose weight 0 it would turn into NaN): the sweep
+    /// lattice reads every voxel so, through the tree when there is no dense copy.
     ValueType sampleTrilinear(const openvdb::Vec3d& ijk) const
     {
         const openvdb::Coord base = openvdb::Coord::floor(ijk);
+        const openvdb::Vec3d fraction = ijk - base.asVec3d();
+        if (fraction.isZero()) return getValue(base);
         ValueType data[2][2][2];
         getBlock(base, data);
-        return openvdb::tools::BoxSampler::trilinearInterpolation(data, ijk - base.asVec3d());
+        return openvdb::tools::BoxSampler::trilinearInterpolation(data, fraction);
     }
 
     /// Triquadratic interpolation at @a ijk: openvdb::tools::QuadraticSampler's arithmetic,
-    /// its 27 values read as one block.
+    /// its 27 values read as one block; at a voxel's centre its own value (as sampleTrilinear).
     ValueType sampleTriquadratic(const openvdb::Vec3d& ijk) const
     {
         const openvdb::Coord base = openvdb::Coord::floor(ijk);
+        const openvdb::Vec3d fraction = ijk - base.asVec3d();
+        if (fraction.isZero()) return getValue(base);
         ValueType data[3][3][3];
         getBlock(base.offsetBy(-1), data);
-        return openvdb::tools::QuadraticSampler::triquadraticInterpolation(data, ijk - base.asVec3d());
+        return openvdb::tools::QuadraticSampler::triquadraticInterpolation(data, fraction);
     }
 
 private:

@@ -102,6 +102,12 @@ inline constexpr double kScatterBytesPerVoxel = 165.0;
 /// `vxf scatter` from the file's count before it reads.
 MemoryEstimate scatterMemory(double voxels);
 
+/// The transport's medium of @a set and @a material for scatter() with @a options: read
+/// through its trees (Medium::Lookups::Trees) where the accelerated sweeps solve the whole sum,
+/// whose lattice reads each voxel once, so that no dense copy is held through the solve; with
+/// dense copies where gathers or passes march through it.
+Medium scatterMedium(const VoxelSet& set, const Material& material, const ScatterOptions& options);
+
 /// Run scattering passes on @a set: J_k = σs·φ_k/(4π) feeds pass k+1 (J_0 is `scatter_source`,
 /// read from the set, so an artist may have edited it). @a medium is the transport's (Medium):
 /// with a forward phase (material().phaseG = g* ≠ 0) and a source lit with its moment
