@@ -93,11 +93,12 @@ openvdb::Vec3d gridEnergy(const openvdb::Vec3SGrid& grid);
 /// The scatter stage's peak per active voxel of the medium's density beyond the fixed part: what
 /// each added voxel took between the two largest of bench/scale's rows (docs/reports/scale.md),
 /// the larger medium's, rounded up: scripts/make-smoke's puff with a Henyey-Greenstein phase, 256³
-/// to 384³ (831 → 2510 MiB for 4.59M → 15.5M voxels: 161 bytes); the bunny's dims 256 to 512 took
-/// 131. Small volumes hold more a voxel (the dense copies, up to 256 MiB each: the bunny at dim
-/// 256 is 6% above the estimate), large ones less (102M voxels at 720³: 146 bytes, 13.9 GiB).
+/// to 384³ (720 → 2154 MiB for 4.59M → 15.5M voxels: 138 bytes); the bunny's dims 256 to 512 took
+/// 123. Small volumes hold more a voxel (the smoke at 256³ is within 2% of the estimate), large
+/// ones less (102M voxels at 720³ took 146 bytes, measured before the solve stopped holding a
+/// zero sum of 12 bytes a voxel: docs/accuracy-notes.md (af)).
 /// scatter checks it against the memory budget before it allocates.
-inline constexpr double kScatterBytesPerVoxel = 165.0;
+inline constexpr double kScatterBytesPerVoxel = 145.0;
 /// The scatter's peak for a density of @a voxels active voxels: what scatter() checks, and
 /// `vxf scatter` from the file's count before it reads.
 MemoryEstimate scatterMemory(double voxels);
