@@ -24,9 +24,9 @@ openvdb::Vec3f SweepLattice::depthStep(std::size_t leaf, int p, const openvdb::V
     openvdb::Vec3f tauIn(0.0f), stIn(0.0f);
     for (int k = 0; k < 4; ++k) {
         tauIn += weight[k] * tauUpwind[k];
-        stIn += weight[k] * paddedSigmaT(first + std::size_t(p + offset[k]));
+        stIn += weight[k] * paddedSigmaT(leaf, p + offset[k]);
     }
-    const openvdb::Vec3f here = paddedSigmaT(first + std::size_t(p));
+    const openvdb::Vec3f here = paddedSigmaT(leaf, p);
     if (mDistance.empty()) {
         // No surface: every step whole (as insidePart of two negative distances).
         return tauIn + float(0.5 * length * mVoxelSize) * (stIn + here);
@@ -84,7 +84,7 @@ void SweepLattice::opticalDepthAlong(const openvdb::Vec3d& omega, std::vector<op
                 // One σt over the padded block: every step adds the same (its upwind blend of σt
                 // the same sum at every voxel), the block's σt not read (it is most of a sweep's
                 // memory traffic).
-                const openvdb::Vec3f sigmaT = paddedSigmaT(n * kPaddedVoxels);
+                const openvdb::Vec3f sigmaT = paddedSigmaT(n, 0);
                 openvdb::Vec3f stIn(0.0f);
                 for (int k = 0; k < 4; ++k) stIn += c.weight[k] * sigmaT;
                 const openvdb::Vec3f own = halfStep * (stIn + sigmaT);

@@ -135,12 +135,61 @@ void SweepLattice::readMedium(const Medium& medium, bool perVoxel)
     }
     if (surface) mDistance = padded(distance);
     classifyLeaves();
-    mSkinIndex.assign(surface ? voxelCount() : 0, -1);
+    compactLeaves();
+    mSkinIndex.assign(mInterior.size(), -1);
     for (std::size_t i = 0; i < skin.size(); ++i) {
         if (!skin[i]) continue;
-        mSkinIndex[i] = std::int32_t(mSkin.size());
+        // A skin voxel's centre lies within half a voxel of the surface: never in a deep leaf.
+        const std::size_t at = shallowIndex(i);
+        if (at == kNone) throw Error("sweep lattice: a skin voxel in a deep leaf");
+        mSkinIndex[at] = std::int32_t(mSkin.size());
         mSkin.push_back({std::uint32_t(i), skinNormal[i], float(std::max(-double(distance[i]), 0.0) * mVoxelSize)});
     }
+}
+
+namespace {
+
+/// @a values made of @a count(n) of each leaf n's block of @a block values (its first ones),
+/// the blocks one after another from @a start (as compactLeaves counts them), in place.
+template <typename T, typename Count>
+void keepBlocks(std::vector<T>& values, std::size_t block, const std::vector<std::size_t>& start, Count&& count)
+{
+    if (values.empty()) return;
+    std::size_t size = 0;
+    for (std::size_t n = 0; n < start.size(); ++n) {
+        const std::size_t kept = count(n);
+        if (kept == 0) continue;
+        // start[n] ≤ n·block: each block moves toward the front, past what is already moved.
+        std::copy(values.begin() + std::ptrdiff_t(n * block), values.begin() + std::ptrdiff_t(n * block + kept),
+            values.begin() + std::ptrdiff_t(start[n]));
+        size = start[n] + kept;
+    }
+    std::vector<T>(values.begin(), values.begin() + std::ptrdiff_t(size)).swap(values);
+}
+
+} // namespace
+
+void SweepLattice::compactLeaves()
+{
+    const std::size_t leaves = mOrigins.size();
+    mSigmaTStart.resize(leaves);
+    std::size_t next = 0;
+    for (std::size_t n = 0; n < leaves; ++n) {
+        mSigmaTStart[n] = next;
+        next += mUniform[n] ? 1 : std::size_t(kPaddedVoxels);
+    }
+    const auto sigmaTCount = [&](std::size_t n) { return mUniform[n] ? std::size_t(1) : std::size_t(kPaddedVoxels); };
+    keepBlocks(mSigmaTGrey, kPaddedVoxels, mSigmaTStart, sigmaTCount);
+    keepBlocks(mSigmaT, kPaddedVoxels, mSigmaTStart, sigmaTCount);
+    if (mInterior.empty()) return; // no surface: every leaf deep, f = 1
+    mShallowStart.assign(leaves, kNone);
+    next = 0;
+    for (std::size_t n = 0; n < leaves; ++n) {
+        if (mDeep[n]) continue;
+        mShallowStart[n] = next;
+        next += kLeafVoxels;
+    }
+    keepBlocks(mInterior, kLeafVoxels, mShallowStart, [&](std::size_t n) { return mDeep[n] ? std::size_t(0) : std::size_t(kLeafVoxels); });
 }
 
 void SweepLattice::classifyLeaves()
@@ -198,7 +247,8 @@ std::size_t SweepLattice::bytes() const
 {
     const auto of = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
     std::size_t sum = of(mOrigins) + of(mNeighbours) + of(mSigmaT) + of(mSigmaTGrey) + of(mDistance) + of(mDeep) + of(mUniform) +
-        of(mInterior) + of(mSigmaTVoxel) + of(mSigmaS) + of(mDensityVoxel) + of(mSkin) + of(mSkinIndex);
+        of(mSigmaTStart) + of(mShallowStart) + of(mInterior) + of(mSigmaTVoxel) + of(mSigmaS) + of(mDensityVoxel) + of(mSkin) +
+        of(mSkinIndex);
     for (int o = 0; o < 8; ++o) sum += of(mOrder[o]) + of(mWavefronts[o]);
     return sum + mLeafIndex.size() * (sizeof(openvdb::Coord) + sizeof(std::int32_t) + 2 * sizeof(void*)) +
         mLeafIndex.bucket_count() * sizeof(void*);
@@ -221,7 +271,7 @@ void SweepLattice::skinAtCentres(
             const std::uint32_t v = mSkin[s].voxel;
             const int local = int(v % kLeafVoxels);
             const openvdb::Coord c = mOrigins[v / kLeafVoxels].offsetBy(local >> 6, (local >> 3) & 7, local & 7);
-            values[v] = centre(c) / mInterior[v]; // (skin voxels: a surface, so mInterior is there)
+            values[v] = centre(c) / interiorOf(v);
         }
     });
 }
@@ -234,7 +284,7 @@ SweepLattice::SweepSource SweepLattice::sweepSource(std::vector<openvdb::Vec3f> 
 SweepLattice::SweepSource SweepLattice::sweepSource(
     const std::function<openvdb::Vec3f(std::size_t)>& sourceAt, SweepSource::Layout layout) const
 {
-    const auto inside = [&](std::size_t v) { return mInterior.empty() ? sourceAt(v) : sourceAt(v) * mInterior[v]; };
+    const auto inside = [&](std::size_t v) { return mInterior.empty() ? sourceAt(v) : sourceAt(v) * interiorOf(v); };
     SweepSource out;
     out.layout = layout;
     if (layout == SweepSource::Layout::PerVoxel) {

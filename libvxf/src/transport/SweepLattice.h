@@ -265,7 +265,7 @@ public:
     /// centre outside), and drops those entering (no light comes from outside).
     std::size_t skinCount() const { return mSkin.size(); }
     /// Whether voxel @a voxel (per-voxel index) is a skin voxel.
-    bool isSkin(std::size_t voxel) const { return !mSkinIndex.empty() && mSkinIndex[voxel] >= 0; }
+    bool isSkin(std::size_t voxel) const { return skinIndexOf(voxel) >= 0; }
     /// @a fluence's (per voxel) skin voxels' values replaced by @a skinFluence plus @a shift at
     /// the voxel (e.g. a diffusion correction; null: none), in place.
     void putSkin(std::vector<openvdb::Vec3f>& fluence, const std::vector<openvdb::Vec3f>& skinFluence,
@@ -294,6 +294,9 @@ private:
     void readMedium(const Medium& medium, bool perVoxel);
     /// mDeep and mUniform from σt and the distance.
     void classifyLeaves();
+    /// After classifyLeaves: σt kept as one value for each uniform leaf (mSigmaTStart), 1/f
+    /// only for the leaves that are not deep (mShallowStart).
+    void compactLeaves();
     /// A Coefficient of @a held values, or of the density times @a perDensity (@a nonNegative:
     /// negative values read 0).
     Coefficient coefficient(const std::vector<openvdb::Vec3f>& held, const openvdb::Vec3d& perDensity, bool nonNegative) const;
@@ -337,8 +340,32 @@ private:
     void sweepLeaf(std::size_t leaf, const Sigma* st, const openvdb::Vec3d& omega, const UpwindVoxel* voxels, const openvdb::Vec3f* j,
         openvdb::Vec3f* buffer, float weight, openvdb::Vec3f* phi, openvdb::Vec3f* flux, const openvdb::Vec3f& worldOmega,
         std::vector<openvdb::Vec3f>* skinFluence) const;
-    /// σt at padded index @a q (of the whole padded array).
-    openvdb::Vec3f paddedSigmaT(std::size_t q) const { return mSigmaTGrey.empty() ? mSigmaT[q] : openvdb::Vec3f(mSigmaTGrey[q]); }
+    /// σt at padded index @a p of leaf @a leaf (a uniform leaf's one value for every @a p).
+    openvdb::Vec3f paddedSigmaT(std::size_t leaf, int p) const
+    {
+        const std::size_t q = mSigmaTStart[leaf] + (mUniform[leaf] ? 0 : std::size_t(p));
+        return mSigmaTGrey.empty() ? mSigmaT[q] : openvdb::Vec3f(mSigmaTGrey[q]);
+    }
+    /// Per-voxel index @a voxel's place in the arrays held only for leaves that are not deep
+    /// (mInterior, mSkinIndex), or kNone in a deep leaf.
+    static constexpr std::size_t kNone = ~std::size_t(0);
+    std::size_t shallowIndex(std::size_t voxel) const
+    {
+        const std::size_t start = mShallowStart.empty() ? kNone : mShallowStart[voxel / kLeafVoxels];
+        return start == kNone ? kNone : start + voxel % kLeafVoxels;
+    }
+    /// 1/f at voxel @a voxel: 1 without a surface and in a deep leaf (every voxel whole).
+    float interiorOf(std::size_t voxel) const
+    {
+        const std::size_t i = shallowIndex(voxel);
+        return i == kNone ? 1.0f : mInterior[i];
+    }
+    /// Voxel @a voxel's entry in mSkin, or −1.
+    std::int32_t skinIndexOf(std::size_t voxel) const
+    {
+        const std::size_t i = shallowIndex(voxel);
+        return i == kNone || mSkinIndex.empty() ? -1 : mSkinIndex[i];
+    }
     /// The signed distance at padded index @a q (−1 without a surface).
     float paddedDistance(std::size_t q) const { return mDistance.empty() ? -1.0f : mDistance[q]; }
 
@@ -355,12 +382,19 @@ private:
     /// otherwise; the other array empty.
     std::vector<openvdb::Vec3f> mSigmaT;
     std::vector<float> mSigmaTGrey;
+    /// Per leaf, where its σt starts in mSigmaT or mSigmaTGrey: a block of kPaddedVoxels, or
+    /// one value for a uniform leaf (its sweeps read that one: about half the thick bunny's
+    /// leaves at dim 256, more as the interior grows).
+    std::vector<std::size_t> mSigmaTStart;
     /// Padded, signed distance to the surface (voxels); empty without a surface (a volume
     /// object's medium: every voxel whole, f = 1, as if −1 everywhere).
     std::vector<float> mDistance;
     std::vector<std::uint8_t> mDeep; ///< per leaf: its padded block more than half a voxel inside the surface
     std::vector<std::uint8_t> mUniform; ///< per leaf: deep, and one σt over its padded block (sweep's short path)
-    std::vector<float> mInterior; ///< per voxel, 1/f; empty without a surface (f = 1)
+    /// Per leaf with a surface, where its 512 voxels start in mInterior and mSkinIndex, or kNone
+    /// for a deep leaf (f = 1 and no skin there); empty without a surface.
+    std::vector<std::size_t> mShallowStart;
+    std::vector<float> mInterior; ///< per voxel of the leaves that are not deep, 1/f; empty without a surface (f = 1)
     /// σt and σs per voxel (Coefficients::PerVoxel): held (the medium's σa/σs grids), or the
     /// voxel's density with the material's coefficients (the other arrays empty).
     std::vector<openvdb::Vec3f> mSigmaTVoxel, mSigmaS;
@@ -373,7 +407,7 @@ private:
         float depth; ///< world units from the centre to the surface (0 for a centre outside)
     };
     std::vector<Skin> mSkin;
-    std::vector<std::int32_t> mSkinIndex; ///< per voxel, its entry in mSkin or −1
+    std::vector<std::int32_t> mSkinIndex; ///< per voxel of the leaves that are not deep, its entry in mSkin or −1
 };
 
 /// What a sweep in progress has finished, as an EnteringDepth or MarchedDepth sees it while a

@@ -134,10 +134,10 @@ void SweepLattice::sweep(const SweepSource& source, const std::vector<openvdb::V
                 openvdb::Vec3f* fluxHere = flux ? &(*flux)[n * kLeafVoxels] : nullptr;
                 std::vector<openvdb::Vec3f>* skinHere = skins ? skinFluence : nullptr;
                 if (mSigmaTGrey.empty()) {
-                    sweepLeaf(n, &mSigmaT[n * kPaddedVoxels], omega, voxels, j, buffer, w, &fluence[n * kLeafVoxels], fluxHere, worldOmega,
+                    sweepLeaf(n, &mSigmaT[mSigmaTStart[n]], omega, voxels, j, buffer, w, &fluence[n * kLeafVoxels], fluxHere, worldOmega,
                         skinHere);
                 } else {
-                    sweepLeaf(n, &mSigmaTGrey[n * kPaddedVoxels], omega, voxels, j, buffer, w, &fluence[n * kLeafVoxels], fluxHere,
+                    sweepLeaf(n, &mSigmaTGrey[mSigmaTStart[n]], omega, voxels, j, buffer, w, &fluence[n * kLeafVoxels], fluxHere,
                         worldOmega, skinHere);
                 }
                 openvdb::Vec3f* leafFaces = &faces[(slot * leaves + n) * kFaceVoxels];
@@ -189,7 +189,7 @@ void SweepLattice::sweepLeaf(std::size_t n, const Sigma* leafSigmaT, const openv
         return;
     }
     const bool deep = mDeep[n] != 0; // no surface within reach: every step whole, no skin
-    const std::int32_t* skinIndex = skinFluence && !deep ? &mSkinIndex[n * kLeafVoxels] : nullptr;
+    const std::int32_t* skinIndex = skinFluence && !deep && !mSkinIndex.empty() ? &mSkinIndex[mShallowStart[n]] : nullptr;
     for (int k = 0; k < kLeafVoxels; ++k) {
         const int p = voxels[k].padded, v = voxels[k].local;
         openvdb::Vec3f psiIn(0.0f), jIn(0.0f), stIn(0.0f);
