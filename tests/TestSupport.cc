@@ -6,6 +6,7 @@
 #include <vxf/io/JsonDocument.h>
 
 #include <fmt/format.h>
+#include <openvdb/tools/LevelSetSphere.h>
 #include <openvdb/tools/Morphology.h>
 
 #include <cstdlib>
@@ -167,6 +168,13 @@ void putConstantFluence(vxf::VoxelSet& set, const std::string& name, double phi)
     openvdb::tools::dilateActiveValues(grid->tree(), 1, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::IGNORE_TILES);
     for (auto it = grid->beginValueOn(); it; ++it) it.setValue(openvdb::Vec3f(float(phi)));
     set.put(grid);
+}
+
+void putSphereSurface(vxf::VoxelSet& set, double radius, int cells)
+{
+    auto surface = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(float(radius), openvdb::Vec3f(0.0f), 1.0f / float(cells), 3.0f);
+    surface->setName("surface");
+    set.put(surface);
 }
 
 vxf::VoxelSet uniformSphere(const vxf::Material& m, double phi0, int cells)

@@ -68,6 +68,10 @@ void putConstantFluence(vxf::VoxelSet& set, const std::string& name, double phi)
 /// for uniform light.
 vxf::VoxelSet uniformSphere(const vxf::Material& m, double phi0, int cells = 16);
 
+/// Put a `surface` into @a set: the level set of a sphere of @a radius about the origin on the
+/// set's voxels (voxel size 1/@a cells, as uniformSphere's), a sharp boundary for its medium.
+void putSphereSurface(vxf::VoxelSet& set, double radius, int cells);
+
 /// Whether two grids are identical: type, class, background, transform, and every stored
 /// value and active state (tiles compared voxel by voxel, so pruning does not matter).
 /// On a difference, @a why says where.

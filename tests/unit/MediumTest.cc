@@ -9,7 +9,6 @@
 #include "TestSupport.h"
 
 #include <catch2/catch.hpp>
-#include <openvdb/tools/LevelSetSphere.h>
 
 TEST_CASE("a medium's coefficients: the transport's, the isotropic stages' and the actual ones", "[transport][medium]")
 {
@@ -53,9 +52,7 @@ TEST_CASE("a medium read through its trees gives what its dense copies give", "[
     // bricks for marches to cross.
     const vxf::Material m = vxf::test::greyMaterial(2.0, 6.0);
     vxf::VoxelSet set = vxf::test::uniformSphere(m, 1.0, 8);
-    auto surface = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(0.9f, openvdb::Vec3f(0.0f), 1.0f / 8.0f, 3.0f);
-    surface->setName("surface");
-    set.put(surface);
+    vxf::test::putSphereSurface(set, 0.9, 8);
     const vxf::Medium dense(set, m), trees(set, m, vxf::Medium::Lookups::Trees);
     CHECK(dense.uniformBricks() != nullptr);
     CHECK(trees.uniformBricks() == nullptr);

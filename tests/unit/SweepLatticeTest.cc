@@ -8,7 +8,6 @@
 #include "TestSupport.h"
 
 #include <catch2/catch.hpp>
-#include <openvdb/tools/LevelSetSphere.h>
 
 #include <cmath>
 
@@ -172,9 +171,7 @@ TEST_CASE("a uniform leaf holds one sigma_t and a deep leaf neither 1/f nor a sk
     // the 23.6 bytes a voxel of σt and the distance padded with 1/f and a skin index per voxel.
     const vxf::Material m = vxf::test::albedoMaterial(30.0, 0.9);
     vxf::VoxelSet set = vxf::test::uniformSphere(m, 1.0, 48);
-    auto surface = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(1.0f, openvdb::Vec3f(0.0f), 1.0f / 48.0f, 3.0f);
-    surface->setName("surface");
-    set.put(surface);
+    vxf::test::putSphereSurface(set, 1.0, 48);
     const auto& source = *set.get<openvdb::Vec3SGrid>("scatter_source");
     const vxf::Medium medium(set, m);
     REQUIRE(medium.surface() != nullptr);

@@ -93,8 +93,8 @@ openvdb::Vec3d gridEnergy(const openvdb::Vec3SGrid& grid);
 /// The scatter stage's peak per active voxel of the medium's density beyond the fixed part: what
 /// each added voxel took between the two largest of bench/scale's rows (docs/reports/scale.md),
 /// the larger medium's, rounded up: scripts/make-smoke's puff with a Henyey-Greenstein phase, 256³
-/// to 384³ (720 → 2154 MiB for 4.59M → 15.5M voxels: 138 bytes); the bunny's dims 256 to 512 took
-/// 123. Small volumes hold more a voxel (the smoke at 256³ is within 2% of the estimate), large
+/// to 384³ (718 → 2144 MiB for 4.59M → 15.5M voxels: 137 bytes); the bunny's dims 256 to 512 took
+/// 109. Small volumes hold more a voxel (the smoke at 256³ is within 2% of the estimate), large
 /// ones less (102M voxels at 720³ took 146 bytes, measured before the solve stopped holding a
 /// zero sum of 12 bytes a voxel: docs/accuracy-notes.md (af)).
 /// scatter checks it against the memory budget before it allocates.
