@@ -331,14 +331,15 @@ private:
     /// the step of opticalDepthAlong and opticalDepthFrom.
     openvdb::Vec3f depthStep(std::size_t leaf, int p, const openvdb::Vec3d& omega, const float (&weight)[4], const int (&offset)[4],
         double length, const openvdb::Vec3f (&tauUpwind)[4]) const;
-    /// One leaf of a transport sweep along @a omega (sweep): its voxels in the order @a voxels,
-    /// the upwind ghosts already in @a buffer (padded), the source @a j (padded, the leaf's);
+    /// One leaf of a transport sweep along @a omega (sweep): its voxels a row at a time in
+    /// upwind order (forRows in SweepTransport.cc), the upwind ghosts already in @a buffer
+    /// (padded), the source @a j (padded, the leaf's);
     /// each voxel's ψ into @a buffer, @a weight·ψ added to @a phi (the leaf's, per voxel) and, with
     /// @a flux, @a weight·grey(ψ)·@a worldOmega to it; with @a skinFluence, the skin's too.
     /// @a st: the leaf's padded σt (mSigmaTGrey's or mSigmaT's: float or Vec3f).
     template <typename Sigma>
-    void sweepLeaf(std::size_t leaf, const Sigma* st, const openvdb::Vec3d& omega, const UpwindVoxel* voxels, const openvdb::Vec3f* j,
-        openvdb::Vec3f* buffer, float weight, openvdb::Vec3f* phi, openvdb::Vec3f* flux, const openvdb::Vec3f& worldOmega,
+    void sweepLeaf(std::size_t leaf, const Sigma* st, const openvdb::Vec3d& omega, const openvdb::Vec3f* j, openvdb::Vec3f* buffer,
+        float weight, openvdb::Vec3f* phi, openvdb::Vec3f* flux, const openvdb::Vec3f& worldOmega,
         std::vector<openvdb::Vec3f>* skinFluence) const;
     /// σt at padded index @a p of leaf @a leaf (a uniform leaf's one value for every @a p).
     openvdb::Vec3f paddedSigmaT(std::size_t leaf, int p) const

@@ -34,6 +34,87 @@ void forUpwindBlock(int octant, F&& f)
     }
 }
 
+/// A leaf's voxels a row at a time, for the transport sweep along a direction of dominant axis
+/// @a major in @a octant: the 8 layers across @a major in upwind order, each as 8 rows of 8
+/// voxels that read only the layer before (a short characteristic starts on it), so a row's
+/// voxels are blended side by side, the compiler's vectors over their floats. A row runs along
+/// z (stride 1 in the padded block and the leaf: major x or y) or along y (stride 10 and 8:
+/// major z). visit(p, v, along) with the padded and leaf index of the row's first voxel and
+/// RowAxis<2> or RowAxis<1>.
+template <int kAxis>
+struct RowAxis
+{
+    static constexpr int kPadded = kAxis == 2 ? 1 : 10, kLocal = kAxis == 2 ? 1 : 8; ///< strides between a row's voxels
+};
+
+template <typename Visit>
+void forRows(int octant, int major, Visit&& visit)
+{
+    const int along = major == 2 ? 1 : 2, across = 3 - major - along;
+    const bool backward = (octant >> major) & 1;
+    const auto layers = [&](auto axis) {
+        for (int layer = 0; layer < 8; ++layer) {
+            for (int i = 0; i < 8; ++i) {
+                int x[3] = {0, 0, 0};
+                x[major] = backward ? 7 - layer : layer;
+                x[across] = i;
+                visit(SweepLattice::paddedIndex(x[0], x[1], x[2]), SweepLattice::localIndex(x[0], x[1], x[2]), axis);
+            }
+        }
+    };
+    if (along == 2) {
+        layers(RowAxis<2>{});
+    } else {
+        layers(RowAxis<1>{});
+    }
+}
+
+/// The blend of the four upwind values a row's voxels read, @a kWidth floats a voxel (3: ψ or
+/// J; 1: grey σt or the distance) at padded stride @a kStride: ((0 + w₀a₀) + w₁a₁ + w₂a₂) + w₃a₃,
+/// in the order the voxel-by-voxel loop added them (the same bits).
+template <int kWidth, int kStride>
+VXF_ALWAYS_INLINE inline void blendUpwindRow(const float* values, int p, const float* wt, const int* off, float (&out)[8 * kWidth])
+{
+    const float *a0 = values + kWidth * (p + off[0]), *a1 = values + kWidth * (p + off[1]), *a2 = values + kWidth * (p + off[2]),
+                *a3 = values + kWidth * (p + off[3]);
+    if constexpr (kStride == 1) {
+        for (int e = 0; e < 8 * kWidth; ++e) out[e] = ((0.0f + wt[0] * a0[e]) + wt[1] * a1[e] + wt[2] * a2[e]) + wt[3] * a3[e];
+    } else {
+        for (int k = 0; k < 8; ++k) {
+            for (int c = 0; c < kWidth; ++c) {
+                const int e = kWidth * kStride * k + c;
+                out[kWidth * k + c] = ((0.0f + wt[0] * a0[e]) + wt[1] * a1[e] + wt[2] * a2[e]) + wt[3] * a3[e];
+            }
+        }
+    }
+}
+
+/// A uniform leaf's sweep (sweepLeaf's short path: every step whole, one σt) a row at a time,
+/// with per channel @a transmittance, @a in and @a own (uniformWeights).
+void sweepUniformLeaf(const openvdb::Vec3d& omega, const float (&transmittance)[3], const float (&in)[3], const float (&own)[3],
+    const float* wt, const int* off, const openvdb::Vec3f* j, openvdb::Vec3f* buffer, float w, openvdb::Vec3f* phi,
+    openvdb::Vec3f* fluxHere, const openvdb::Vec3f& worldOmega)
+{
+    const float* jf = j->asPointer();
+    float* bf = buffer->asPointer();
+    forRows(octantOf(omega), dominantAxis(omega), [&](int p, int v, auto axis) {
+        constexpr int kPadded = decltype(axis)::kPadded, kLocal = decltype(axis)::kLocal;
+        float psiIn[24], jIn[24];
+        blendUpwindRow<3, kPadded>(bf, p, wt, off, psiIn);
+        blendUpwindRow<3, kPadded>(jf, p, wt, off, jIn);
+        for (int k = 0; k < 8; ++k) {
+            openvdb::Vec3f result;
+            const float* jHere = jf + 3 * (p + kPadded * k);
+            for (int ch = 0; ch < 3; ++ch)
+                result[ch] = transmittance[ch] * psiIn[3 * k + ch] + in[ch] * jIn[3 * k + ch] + own[ch] * jHere[ch];
+            const int q = v + kLocal * k;
+            buffer[p + kPadded * k] = result;
+            phi[q] += w * result;
+            if (fluxHere) fluxHere[q] += (w * (result[0] + result[1] + result[2]) / 3.0f) * worldOmega;
+        }
+    });
+}
+
 } // namespace
 
 void SweepLattice::sweep(const SweepSource& source, const std::vector<openvdb::Vec3d>& directions, double weight,
@@ -130,15 +211,13 @@ void SweepLattice::sweep(const SweepSource& source, const std::vector<openvdb::V
                     }
                     j = toward;
                 }
-                const UpwindVoxel* voxels = upwindVoxels(octant, dominantAxis(omega)).data();
                 openvdb::Vec3f* fluxHere = flux ? &(*flux)[n * kLeafVoxels] : nullptr;
                 std::vector<openvdb::Vec3f>* skinHere = skins ? skinFluence : nullptr;
                 if (mSigmaTGrey.empty()) {
-                    sweepLeaf(n, &mSigmaT[mSigmaTStart[n]], omega, voxels, j, buffer, w, &fluence[n * kLeafVoxels], fluxHere, worldOmega,
-                        skinHere);
+                    sweepLeaf(n, &mSigmaT[mSigmaTStart[n]], omega, j, buffer, w, &fluence[n * kLeafVoxels], fluxHere, worldOmega, skinHere);
                 } else {
-                    sweepLeaf(n, &mSigmaTGrey[mSigmaTStart[n]], omega, voxels, j, buffer, w, &fluence[n * kLeafVoxels], fluxHere,
-                        worldOmega, skinHere);
+                    sweepLeaf(
+                        n, &mSigmaTGrey[mSigmaTStart[n]], omega, j, buffer, w, &fluence[n * kLeafVoxels], fluxHere, worldOmega, skinHere);
                 }
                 openvdb::Vec3f* leafFaces = &faces[(slot * leaves + n) * kFaceVoxels];
                 for (int k = 0; k < kFaceVoxels; ++k) leafFaces[k] = buffer[downwind[std::size_t(k)]];
@@ -150,9 +229,9 @@ void SweepLattice::sweep(const SweepSource& source, const std::vector<openvdb::V
 }
 
 template <typename Sigma>
-void SweepLattice::sweepLeaf(std::size_t n, const Sigma* leafSigmaT, const openvdb::Vec3d& omega, const UpwindVoxel* voxels,
-    const openvdb::Vec3f* j, openvdb::Vec3f* buffer, float w, openvdb::Vec3f* phi, openvdb::Vec3f* fluxHere,
-    const openvdb::Vec3f& worldOmega, std::vector<openvdb::Vec3f>* skinFluence) const
+void SweepLattice::sweepLeaf(std::size_t n, const Sigma* leafSigmaT, const openvdb::Vec3d& omega, const openvdb::Vec3f* j,
+    openvdb::Vec3f* buffer, float w, openvdb::Vec3f* phi, openvdb::Vec3f* fluxHere, const openvdb::Vec3f& worldOmega,
+    std::vector<openvdb::Vec3f>* skinFluence) const
 {
     const Characteristic path = characteristic(omega);
     const float* wt = path.weight;
@@ -171,66 +250,56 @@ void SweepLattice::sweepLeaf(std::size_t n, const Sigma* leafSigmaT, const openv
         // both ends, no skin), to the bit, without its tests, the step's weights once a leaf.
         const openvdb::Vec3f sigmaT = st[0]; // the leaf's one σt: its padded block is not streamed
         for (int ch = 0; ch < 3; ++ch) uniformWeights(sigmaT[ch], len, uw[ch]);
-        const openvdb::Vec3f transmittance(uw[0].transmittance, uw[1].transmittance, uw[2].transmittance), in(uw[0].in, uw[1].in, uw[2].in),
-            own(uw[0].own, uw[1].own, uw[2].own);
-        for (int k = 0; k < kLeafVoxels; ++k) {
-            const int p = voxels[k].padded, v = voxels[k].local;
-            openvdb::Vec3f psiIn(0.0f), jIn(0.0f);
-            for (int i = 0; i < 4; ++i) {
-                psiIn += wt[i] * buffer[p + off[i]];
-                jIn += wt[i] * j[p + off[i]];
-            }
-            openvdb::Vec3f result;
-            for (int ch = 0; ch < 3; ++ch) result[ch] = transmittance[ch] * psiIn[ch] + in[ch] * jIn[ch] + own[ch] * j[p][ch];
-            buffer[p] = result;
-            phi[v] += w * result;
-            if (fluxHere) fluxHere[v] += (w * (result[0] + result[1] + result[2]) / 3.0f) * worldOmega;
-        }
+        const float transmittance[3] = {uw[0].transmittance, uw[1].transmittance, uw[2].transmittance},
+                    in[3] = {uw[0].in, uw[1].in, uw[2].in}, own[3] = {uw[0].own, uw[1].own, uw[2].own};
+        sweepUniformLeaf(omega, transmittance, in, own, wt, off, j, buffer, w, phi, fluxHere, worldOmega);
         return;
     }
     const bool deep = mDeep[n] != 0; // no surface within reach: every step whole, no skin
     const std::int32_t* skinIndex = skinFluence && !deep && !mSkinIndex.empty() ? &mSkinIndex[mShallowStart[n]] : nullptr;
-    for (int k = 0; k < kLeafVoxels; ++k) {
-        const int p = voxels[k].padded, v = voxels[k].local;
-        openvdb::Vec3f psiIn(0.0f), jIn(0.0f), stIn(0.0f);
-        float dIn = -1.0f;
-        bool uniform = true; // σt the same upwind as here: then exactly so, and the step's weights repeat
-        for (int i = 0; i < 4; ++i) {
-            psiIn += wt[i] * buffer[p + off[i]];
-            jIn += wt[i] * j[p + off[i]];
-            stIn += wt[i] * st[p + off[i]];
-            uniform = uniform && st[p + off[i]] == st[p];
-        }
-        if (!deep) {
-            dIn = 0.0f;
-            for (int i = 0; i < 4; ++i) dIn += wt[i] * distance[p + off[i]];
-        }
-        if (uniform) stIn = st[p];
-        // The step's part inside the surface (signed distance linear along it):
-        // all of it, none, or the part next to the end inside, whose σt and J
-        // then hold over that part.
-        const InsidePart part = deep ? InsidePart{} : insidePart(dIn, distance[p]);
-        const double inside = part.fraction;
-        openvdb::Vec3f sigmaStart = stIn, sigmaEnd = st[p], jStart = jIn, jEnd = j[p];
-        if (part.endOutside) {
-            sigmaEnd = stIn;
-            jEnd = jIn;
-        } else if (part.startOutside) {
-            sigmaStart = st[p];
-            jStart = j[p];
-        }
-        openvdb::Vec3f result = psiIn;
-        if (inside > 0.0) {
-            const double h = len * inside;
+    // A voxel's step from its upwind reads: ψ, J, σt and the signed distance blended at the
+    // characteristic's crossing (dIn −1 in a deep leaf), and whether σt is the same upwind as here.
+    const auto step = [&](int p, int v, const openvdb::Vec3f& psiIn, const openvdb::Vec3f& jIn, openvdb::Vec3f stIn, float dIn,
+                          bool uniform) VXF_ALWAYS_INLINE {
+        openvdb::Vec3f result;
+        const float dHere = deep ? -1.0f : distance[p];
+        if (dHere >= 0.0f && dIn >= 0.0f) {
+            result = psiIn; // the step outside the surface: vacuum
+        } else if (uniform && dHere < 0.0f && dIn < 0.0f) {
+            // The common case inside: the whole step, σt the same at both ends (what the general
+            // case below gives there, without its tests: J linear, no division).
+            const openvdb::Vec3f& sigma = st[p];
+            const openvdb::Vec3f& jHere = j[p];
             for (int ch = 0; ch < 3; ++ch) {
-                const double sa = sigmaStart[ch], sb = sigmaEnd[ch];
-                // No extinction, or the common case inside, σt the same at both ends (S linear
-                // is J linear, no division).
-                if ((sa <= 0.0 && sb <= 0.0) || sa == sb) {
-                    result[ch] = uniformStep(psiIn[ch], jStart[ch], jEnd[ch], std::max(sa, sb), h, uw[kGrey ? 0 : ch]);
-                    continue;
+                const UniformWeights& u = uniformWeights(sigma[ch], len, uw[kGrey ? 0 : ch]);
+                result[ch] = u.transmittance * psiIn[ch] + u.in * jIn[ch] + u.own * jHere[ch];
+            }
+        } else {
+            if (uniform) stIn = st[p];
+            // The step's part inside the surface (signed distance linear along it): all of it,
+            // none, or the part next to the end inside, whose σt and J then hold over that part.
+            const InsidePart part = deep ? InsidePart{} : insidePart(dIn, dHere);
+            const double inside = part.fraction;
+            openvdb::Vec3f sigmaStart = stIn, sigmaEnd = st[p], jStart = jIn, jEnd = j[p];
+            if (part.endOutside) {
+                sigmaEnd = stIn;
+                jEnd = jIn;
+            } else if (part.startOutside) {
+                sigmaStart = st[p];
+                jStart = j[p];
+            }
+            result = psiIn;
+            if (inside > 0.0) {
+                const double h = len * inside;
+                for (int ch = 0; ch < 3; ++ch) {
+                    const double sa = sigmaStart[ch], sb = sigmaEnd[ch];
+                    // No extinction, or σt the same at both ends.
+                    if ((sa <= 0.0 && sb <= 0.0) || sa == sb) {
+                        result[ch] = uniformStep(psiIn[ch], jStart[ch], jEnd[ch], std::max(sa, sb), h, uw[kGrey ? 0 : ch]);
+                        continue;
+                    }
+                    result[ch] = float(varyingStep(psiIn[ch], jStart[ch], jEnd[ch], sa, sb, h, vw));
                 }
-                result[ch] = float(varyingStep(psiIn[ch], jStart[ch], jEnd[ch], sa, sb, h, vw));
             }
         }
         buffer[p] = result;
@@ -252,7 +321,30 @@ void SweepLattice::sweepLeaf(std::size_t n, const Sigma* leafSigmaT, const openv
                 (*skinFluence)[std::size_t(s)] += w * onSurface;
             }
         }
-    }
+    };
+    constexpr int kSigma = kGrey ? 1 : 3; // floats of σt a voxel
+    const float* bf = buffer->asPointer();
+    const float* jf = j->asPointer();
+    const float* sf = reinterpret_cast<const float*>(leafSigmaT);
+    forRows(octantOf(omega), dominantAxis(omega), [&](int p, int v, auto axis) {
+        constexpr int kPadded = decltype(axis)::kPadded, kLocal = decltype(axis)::kLocal;
+        float psiIn[24], jIn[24], stIn[8 * kSigma], dIn[8];
+        blendUpwindRow<3, kPadded>(bf, p, wt, off, psiIn);
+        blendUpwindRow<3, kPadded>(jf, p, wt, off, jIn);
+        blendUpwindRow<kSigma, kPadded>(sf, p, wt, off, stIn);
+        if (deep) {
+            std::fill(dIn, dIn + 8, -1.0f);
+        } else {
+            blendUpwindRow<1, kPadded>(distance, p, wt, off, dIn);
+        }
+        for (int k = 0; k < 8; ++k) {
+            const int q = p + kPadded * k;
+            bool uniform = true; // σt the same upwind as here: then exactly so, and the step's weights repeat
+            for (int i = 0; i < 4; ++i) uniform = uniform && st[q + off[i]] == st[q];
+            const openvdb::Vec3f sigmaIn = kGrey ? openvdb::Vec3f(stIn[k]) : openvdb::Vec3f(stIn + kSigma * k);
+            step(q, v + kLocal * k, openvdb::Vec3f(psiIn + 3 * k), openvdb::Vec3f(jIn + 3 * k), sigmaIn, dIn[k], uniform);
+        }
+    });
 }
 
 } // namespace vxf::detail
