@@ -298,7 +298,13 @@ void SweepLattice::sweepLeaf(std::size_t n, const Sigma* leafSigmaT, const openv
                         result[ch] = uniformStep(psiIn[ch], jStart[ch], jEnd[ch], std::max(sa, sb), h, uw[kGrey ? 0 : ch]);
                         continue;
                     }
-                    result[ch] = float(varyingStep(psiIn[ch], jStart[ch], jEnd[ch], sa, sb, h, vw));
+                    if (kGrey) {
+                        // The channels share σt: the step's weights once, the rest per channel.
+                        const VaryingWeights& weights = varyingWeights(sa, sb, h, vw);
+                        for (int c = 0; c < 3; ++c) result[c] = float(varyingStep(psiIn[c], jStart[c], jEnd[c], weights));
+                        break;
+                    }
+                    result[ch] = float(varyingStep(psiIn[ch], jStart[ch], jEnd[ch], varyingWeights(sa, sb, h, vw)));
                 }
             }
         }
