@@ -88,14 +88,17 @@ void SweepLattice::opticalDepthAlong(const openvdb::Vec3d& omega, std::vector<op
                 openvdb::Vec3f stIn(0.0f);
                 for (int k = 0; k < 4; ++k) stIn += c.weight[k] * sigmaT;
                 const openvdb::Vec3f own = halfStep * (stIn + sigmaT);
-                for (int voxel = 0; voxel < kLeafVoxels; ++voxel) {
-                    const int p = voxels[voxel].padded;
-                    openvdb::Vec3f tauIn(0.0f);
-                    for (int k = 0; k < 4; ++k) tauIn += c.weight[k] * buffer[p + c.offset[k]];
-                    const openvdb::Vec3f result = tauIn + own;
-                    buffer[p] = result;
-                    out[voxels[voxel].local] = result;
-                }
+                // A row at a time (forRows): the upwind blends of a row's 8 voxels side by side.
+                forRows(octantOf(omega), dominantAxis(omega), [&](int p, int v, auto axis) {
+                    constexpr int kPadded = decltype(axis)::kPadded, kLocal = decltype(axis)::kLocal;
+                    float tauIn[24];
+                    blendUpwindRow<3, kPadded>(buffer->asPointer(), p, c.weight, c.offset, tauIn);
+                    for (int k = 0; k < 8; ++k) {
+                        const openvdb::Vec3f result = openvdb::Vec3f(tauIn + 3 * k) + own;
+                        buffer[p + kPadded * k] = result;
+                        out[v + kLocal * k] = result;
+                    }
+                });
                 return;
             }
             for (int voxel = 0; voxel < kLeafVoxels; ++voxel) {

@@ -34,61 +34,6 @@ void forUpwindBlock(int octant, F&& f)
     }
 }
 
-/// A leaf's voxels a row at a time, for the transport sweep along a direction of dominant axis
-/// @a major in @a octant: the 8 layers across @a major in upwind order, each as 8 rows of 8
-/// voxels that read only the layer before (a short characteristic starts on it), so a row's
-/// voxels are blended side by side, the compiler's vectors over their floats. A row runs along
-/// z (stride 1 in the padded block and the leaf: major x or y) or along y (stride 10 and 8:
-/// major z). visit(p, v, along) with the padded and leaf index of the row's first voxel and
-/// RowAxis<2> or RowAxis<1>.
-template <int kAxis>
-struct RowAxis
-{
-    static constexpr int kPadded = kAxis == 2 ? 1 : 10, kLocal = kAxis == 2 ? 1 : 8; ///< strides between a row's voxels
-};
-
-template <typename Visit>
-void forRows(int octant, int major, Visit&& visit)
-{
-    const int along = major == 2 ? 1 : 2, across = 3 - major - along;
-    const bool backward = (octant >> major) & 1;
-    const auto layers = [&](auto axis) {
-        for (int layer = 0; layer < 8; ++layer) {
-            for (int i = 0; i < 8; ++i) {
-                int x[3] = {0, 0, 0};
-                x[major] = backward ? 7 - layer : layer;
-                x[across] = i;
-                visit(SweepLattice::paddedIndex(x[0], x[1], x[2]), SweepLattice::localIndex(x[0], x[1], x[2]), axis);
-            }
-        }
-    };
-    if (along == 2) {
-        layers(RowAxis<2>{});
-    } else {
-        layers(RowAxis<1>{});
-    }
-}
-
-/// The blend of the four upwind values a row's voxels read, @a kWidth floats a voxel (3: ψ or
-/// J; 1: grey σt or the distance) at padded stride @a kStride: ((0 + w₀a₀) + w₁a₁ + w₂a₂) + w₃a₃,
-/// in the order the voxel-by-voxel loop added them (the same bits).
-template <int kWidth, int kStride>
-VXF_ALWAYS_INLINE inline void blendUpwindRow(const float* values, int p, const float* wt, const int* off, float (&out)[8 * kWidth])
-{
-    const float *a0 = values + kWidth * (p + off[0]), *a1 = values + kWidth * (p + off[1]), *a2 = values + kWidth * (p + off[2]),
-                *a3 = values + kWidth * (p + off[3]);
-    if constexpr (kStride == 1) {
-        for (int e = 0; e < 8 * kWidth; ++e) out[e] = ((0.0f + wt[0] * a0[e]) + wt[1] * a1[e] + wt[2] * a2[e]) + wt[3] * a3[e];
-    } else {
-        for (int k = 0; k < 8; ++k) {
-            for (int c = 0; c < kWidth; ++c) {
-                const int e = kWidth * kStride * k + c;
-                out[kWidth * k + c] = ((0.0f + wt[0] * a0[e]) + wt[1] * a1[e] + wt[2] * a2[e]) + wt[3] * a3[e];
-            }
-        }
-    }
-}
-
 /// A uniform leaf's sweep (sweepLeaf's short path: every step whole, one σt) a row at a time,
 /// with per channel @a transmittance, @a in and @a own (uniformWeights).
 void sweepUniformLeaf(const openvdb::Vec3d& omega, const float (&transmittance)[3], const float (&in)[3], const float (&own)[3],
