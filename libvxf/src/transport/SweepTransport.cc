@@ -185,8 +185,8 @@ void SweepLattice::sweepLeaf(std::size_t n, const Sigma* leafSigmaT, const openv
     const PaddedSigma<Sigma> st{leafSigmaT};
     constexpr bool kGrey = std::is_same_v<Sigma, float>; // the channels' steps share their weights
     const float* distance = mDistance.empty() ? nullptr : &mDistance[n * kPaddedVoxels]; // (deep leaves do not read it)
-    // Per channel, the last step's weights (uniformWeights); the last varying step's, shared
-    // by the channels (varyingStep).
+    // Per channel, the last step's weights (uniformWeights); the last varying step's
+    // (varyingWeights), shared by a grey medium's channels.
     UniformWeights uw[3];
     VaryingWeights vw;
     if (mUniform[n]) {
