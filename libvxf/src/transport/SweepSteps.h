@@ -14,8 +14,9 @@
 #include <optional>
 #include <vector>
 
-/// On a lambda the sweeps call per voxel from more than one loop: inlined into each (a call a
-/// voxel, its arguments spilled, costs the kernel a tenth of its time).
+/// On what the sweeps call per voxel (the step lambda called from more than one loop, the
+/// weights and blends): inlined into each caller (a call a voxel, its arguments spilled, cost
+/// the kernel a tenth of its time).
 #if defined(__GNUC__)
 #define VXF_ALWAYS_INLINE __attribute__((always_inline))
 #else
@@ -209,7 +210,7 @@ VXF_ALWAYS_INLINE inline const UniformWeights& uniformWeights(double sigma, doub
 
 /// ψ at the end of a step of length @a h through a constant σt = @a sigma with J linear from
 /// @a jStart to @a jEnd (uniformWeights, kept in @a weights).
-inline float uniformStep(float psiIn, float jStart, float jEnd, double sigma, double h, UniformWeights& weights)
+VXF_ALWAYS_INLINE inline float uniformStep(float psiIn, float jStart, float jEnd, double sigma, double h, UniformWeights& weights)
 {
     const UniformWeights& w = uniformWeights(sigma, h, weights);
     return w.transmittance * psiIn + w.in * jStart + w.own * jEnd;
@@ -294,7 +295,7 @@ struct PaddedSigma<openvdb::Vec3f>
 /// voxels that read only the layer before (a short characteristic starts on it), so a row's
 /// voxels are blended side by side, the compiler's vectors over their floats. A row runs along
 /// z (stride 1 in the padded block and the leaf: major x or y) or along y (stride 10 and 8:
-/// major z). visit(p, v, along) with the padded and leaf index of the row's first voxel and
+/// major z). visit(p, v, axis) with the padded and leaf index of the row's first voxel and
 /// RowAxis<2> or RowAxis<1>.
 template <int kAxis>
 struct RowAxis
@@ -333,6 +334,7 @@ VXF_ALWAYS_INLINE inline void blendUpwindRow(const float* values, int p, const f
     const float *a0 = values + kWidth * (p + off[0]), *a1 = values + kWidth * (p + off[1]), *a2 = values + kWidth * (p + off[2]),
                 *a3 = values + kWidth * (p + off[3]);
     if constexpr (kStride == 1) {
+        // The same sums as below, as one flat loop: the form the compiler vectorizes.
         for (int e = 0; e < 8 * kWidth; ++e) out[e] = ((0.0f + wt[0] * a0[e]) + wt[1] * a1[e] + wt[2] * a2[e]) + wt[3] * a3[e];
     } else {
         for (int k = 0; k < 8; ++k) {
