@@ -3,6 +3,7 @@
 // sweep's fixed point deep in a homogeneous medium.
 #include "transport/SweepLattice.h"
 
+#include <vxf/scatter/AdaptiveBand.h>
 #include <vxf/scatter/SweepPass.h>
 
 #include "TestSupport.h"
@@ -193,4 +194,84 @@ TEST_CASE("a uniform leaf holds one sigma_t and a deep leaf neither 1/f nor a sk
     const auto grid = lattice.write(fluence, source);
     const double sigmaT = m.sigmaT()[0], j = source.tree().getValue(openvdb::Coord(0))[0];
     CHECK(grid->tree().getValue(openvdb::Coord(0))[0] == Approx(4.0 * M_PI * j / sigmaT).epsilon(1e-3));
+}
+
+TEST_CASE(
+    "a lattice sweeps the source's deep tiles as coarse cells: 8^3 voxels one value, the fixed point kept", "[transport][lattice][band]")
+{
+    // A sphere of 48 voxels' radius with its surface, its source made tiles beyond 8 voxels of
+    // the medium's edge (scatter's band): those blocks become coarse leaves, one value each.
+    // 2.5 mean free paths a voxel: the band's fine voxels next to the cells see no edge either.
+    const vxf::Material m = vxf::test::albedoMaterial(120.0, 0.9);
+    vxf::VoxelSet set = vxf::test::uniformSphere(m, 1.0, 48);
+    vxf::test::putSphereSurface(set, 1.0, 48);
+    auto source = set.get<openvdb::Vec3SGrid>("scatter_source")->deepCopy();
+    const vxf::Medium medium(set, m);
+    const auto band = vxf::coarsenBeyondBand(*source, medium.density(), 8.0 / 48.0);
+    REQUIRE(band.leafTiles > 100);
+    using Lattice = vxf::detail::SweepLattice;
+    const Lattice fine(medium, *source), coarse(medium, *source, Lattice::Coefficients::PerVoxel, Lattice::Tiles::Coarse);
+    CHECK(fine.fineLeafCount() == fine.leafCount());
+    const std::size_t cells = coarse.leafCount() - coarse.fineLeafCount();
+    CHECK(cells == band.leafTiles); // every tile lies deep inside the surface here
+    CHECK(coarse.voxelCount() == coarse.fineLeafCount() * Lattice::kLeafVoxels + cells);
+    CHECK(coarse.leafCount() == fine.leafCount());
+    CHECK(coarse.sigmaS().size() == coarse.voxelCount()); // the per-voxel arrays a cell's one value
+    // A coarse cell's index stands for each of its voxels; the source reads and writes back as it was.
+    const openvdb::Coord centre(0);
+    REQUIRE(coarse.indexOf(centre) >= 0);
+    CHECK(coarse.indexOf(centre) == coarse.indexOf(openvdb::Coord(7)));
+    CHECK(coarse.voxelsAt(std::size_t(coarse.indexOf(centre))) == 512.0);
+    std::string why;
+    CHECK(vxf::test::identicalGrids(*coarse.write(coarse.read(*source), *source), *source, &why));
+    INFO(why);
+    // The sweep's fixed point deep inside, 4πJ/σt, in a coarse cell (each chord's step keeps
+    // it: T + τ·g = 1 and g + τ·own = 1) and in a fine voxel next to one.
+    const std::vector<openvdb::Vec3d> directions = vxf::sweepDirections(8, 0);
+    std::vector<openvdb::Vec3f> fluence(coarse.voxelCount(), openvdb::Vec3f(0.0f)), skin;
+    coarse.sweep(coarse.sweepSource(coarse.read(*source)), directions, 4.0 * M_PI / 8.0, fluence, &skin);
+    const double sigmaT = m.sigmaT()[0], j = source->tree().getValue(centre)[0];
+    CHECK(fluence[std::size_t(coarse.indexOf(centre))][0] == Approx(4.0 * M_PI * j / sigmaT).epsilon(1e-4));
+    openvdb::Coord nextToCell(0); // the first fine voxel along −x, next to a coarse cell
+    while (coarse.indexOf(nextToCell) >= 0 && coarse.voxelsAt(std::size_t(coarse.indexOf(nextToCell))) > 1.0) nextToCell.x() -= 1;
+    REQUIRE(coarse.indexOf(nextToCell) >= 0);
+    CHECK(nextToCell.x() < -8);
+    CHECK(fluence[std::size_t(coarse.indexOf(nextToCell))][0] == Approx(4.0 * M_PI * j / sigmaT).epsilon(1e-4));
+    // The optical-depth sweeps (the light stage's, voxel by voxel) take no coarse cell.
+    std::vector<openvdb::Vec3f> tau;
+    CHECK_THROWS_WITH(coarse.opticalDepthAlong(openvdb::Vec3d(0.0, 0.0, -1.0), tau), Catch::Contains("no coarse leaves"));
+}
+
+TEST_CASE(
+    "a coarse cell carries light as its voxels would: a uniform source's fluence in an absorbing sphere", "[transport][lattice][band]")
+{
+    // J = 1 in a sphere of 48 voxels' radius, no scattering: the fluence at the centre is
+    // 4πJ(1 − e^{−σt R})/σt. Cells half a mean free path thick (σt = 3) and 2 (σt = 12): the
+    // cells' chords, each face's light its own, keep the centre within 1% of the voxels' sweep.
+    for (const double sigmaT : {3.0, 12.0}) {
+        INFO("sigma_t " << sigmaT);
+        const vxf::Material m = vxf::test::albedoMaterial(sigmaT, 0.0);
+        vxf::VoxelSet set = vxf::test::uniformSphere(m, 1.0, 48);
+        vxf::test::putSphereSurface(set, 1.0, 48);
+        auto source = set.get<openvdb::Vec3SGrid>("scatter_source")->deepCopy();
+        for (auto it = source->tree().beginValueOn(); it; ++it) it.setValue(openvdb::Vec3f(1.0f));
+        const vxf::Medium medium(set, m);
+        vxf::coarsenBeyondBand(*source, medium.density(), 8.0 / 48.0);
+        using Lattice = vxf::detail::SweepLattice;
+        const Lattice fine(medium, *source), coarse(medium, *source, Lattice::Coefficients::PerVoxel, Lattice::Tiles::Coarse);
+        REQUIRE(coarse.fineLeafCount() < coarse.leafCount());
+        const std::vector<openvdb::Vec3d> directions = vxf::sweepDirections(64, 0);
+        std::vector<openvdb::Vec3f> a(fine.voxelCount(), openvdb::Vec3f(0.0f)), b(coarse.voxelCount(), openvdb::Vec3f(0.0f)), skin;
+        fine.sweep(fine.sweepSource(fine.read(*source)), directions, 4.0 * M_PI / 64.0, a, &skin);
+        coarse.sweep(coarse.sweepSource(coarse.read(*source)), directions, 4.0 * M_PI / 64.0, b, &skin);
+        const double exact = 4.0 * M_PI * (1.0 - std::exp(-sigmaT)) / sigmaT;
+        const auto at = [](const Lattice& l, const std::vector<openvdb::Vec3f>& f, const openvdb::Coord& c) {
+            return double(f[std::size_t(l.indexOf(c))][0]);
+        };
+        CHECK(at(fine, a, openvdb::Coord(0)) == Approx(exact).epsilon(0.002));
+        CHECK(at(coarse, b, openvdb::Coord(0)) == Approx(exact).epsilon(0.01));
+        // The band's voxels, between the cells and the surface, as the voxels' sweep has them.
+        for (const int x : {36, 40, 44})
+            CHECK(at(coarse, b, openvdb::Coord(x, 0, 0)) == Approx(at(fine, a, openvdb::Coord(x, 0, 0))).epsilon(0.01));
+    }
 }

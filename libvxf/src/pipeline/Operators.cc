@@ -96,7 +96,7 @@ Operator scatterOperator()
                 defaults::kTolerance, 0.0, 1.0),
             number("band",
                 "adaptive narrow band, world units: full resolution within this distance of the surface, the tree's 8^3 and 128^3 "
-                "tiles deeper (0: full resolution everywhere)",
+                "tiles deeper, each 8^3 block one cell of the accelerated sweeps (0: full resolution everywhere)",
                 0.0, 0.0),
             flag("extrapolate", "after the last pass add the geometric tail phi_K r/(1-r), r = phi_K/phi_(K-1) per voxel"),
             flag("keep_passes", "keep each pass as scatter_pass_K"),

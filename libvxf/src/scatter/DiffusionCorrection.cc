@@ -18,38 +18,30 @@ int DiffusionCorrection::coarseningFor(const SweepLattice& lattice)
 {
     // The mean optical thickness σt·dx of the domain's voxels (the thickest channel).
     const SweepLattice::Coefficient sigmaT = lattice.sigmaT();
-    double sum = 0.0;
-    std::size_t count = 0;
+    double sum = 0.0, count = 0.0; // (a coarse cell weighs as its voxels)
     for (std::size_t v = 0; v < sigmaT.size(); ++v) {
         const openvdb::Vec3f t = sigmaT[v];
         if (std::min({t[0], t[1], t[2]}) * lattice.voxelSize() < kThinVoxel) continue;
-        sum += std::max({t[0], t[1], t[2]}) * lattice.voxelSize();
-        ++count;
+        sum += std::max({t[0], t[1], t[2]}) * lattice.voxelSize() * lattice.voxelsAt(v);
+        count += lattice.voxelsAt(v);
     }
     int factor = 1;
-    while (count > 0 && factor < kMaxCoarsening && 2 * factor * sum <= kCoarseThickness * double(count)) factor *= 2;
+    while (count > 0.0 && factor < kMaxCoarsening && 2 * factor * sum <= kCoarseThickness * count) factor *= 2;
     return factor;
 }
 
-DiffusionCorrection::DiffusionCorrection(const SweepLattice& lattice, int coarsening, double restG)
-    : mLattice(lattice)
-    , mFactor(std::max(coarsening, 1))
+std::vector<openvdb::Coord> DiffusionCorrection::indexCells(
+    int shift, std::unordered_map<openvdb::Coord, std::int32_t, CoordHash>& cellIndex)
 {
     constexpr int L = SweepLattice::kLeafVoxels;
+    const SweepLattice& lattice = mLattice;
+    const SweepLattice::Coefficient sigmaT = lattice.sigmaT();
     const double dx = lattice.voxelSize();
-    int shift = 0; // log2 of the coarsening (1, 2, 4, …)
-    while ((2 << shift) <= mFactor) ++shift;
-    mFactor = 1 << shift;
-    const double h = dx * mFactor; // a cell's width
-    const SweepLattice::Coefficient sigmaT = lattice.sigmaT(), sigmaS = lattice.sigmaS();
     const auto inDomain = [&](const openvdb::Vec3f& t) { return std::min({t[0], t[1], t[2]}) * dx >= kThinVoxel; };
-    // Cells (blocks of mFactor³ voxels holding a voxel of the domain) in lattice order, and
-    // each voxel's cell.
-    std::unordered_map<openvdb::Coord, std::int32_t, CoordHash> cellIndex;
     std::vector<openvdb::Coord> cells;
-    std::vector<std::uint32_t> voxels; // the domain's, in lattice order
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> members; // (cell, voxel) of the domain, in lattice order
     mCellOf.assign(lattice.voxelCount(), -1);
-    for (std::size_t n = 0; n < lattice.leafCount(); ++n) {
+    for (std::size_t n = 0; n < lattice.fineLeafCount(); ++n) {
         for (int v = 0; v < L; ++v) {
             if (!inDomain(sigmaT[n * L + v])) continue;
             const openvdb::Coord c = lattice.origin(n).offsetBy(v >> 6, (v >> 3) & 7, v & 7);
@@ -57,19 +49,54 @@ DiffusionCorrection::DiffusionCorrection(const SweepLattice& lattice, int coarse
             const auto [it, added] = cellIndex.emplace(cell, std::int32_t(cells.size()));
             if (added) cells.push_back(cell);
             mCellOf[n * L + v] = it->second;
-            voxels.push_back(std::uint32_t(n * L + v));
+            members.emplace_back(std::uint32_t(it->second), std::uint32_t(n * L + v));
         }
     }
-    if (cells.empty()) return;
+    // A coarse leaf's cell: the cells of its block (each of its one value; the diffusion's
+    // grid stays uniform), its correction their mean.
+    const int side = std::max(1, 8 >> shift);
+    for (std::size_t n = lattice.fineLeafCount(); n < lattice.leafCount(); ++n) {
+        const auto v = std::uint32_t(lattice.voxelStart(n));
+        if (!inDomain(sigmaT[v])) continue;
+        const openvdb::Coord first(lattice.origin(n)[0] >> shift, lattice.origin(n)[1] >> shift, lattice.origin(n)[2] >> shift);
+        mCoarse.push_back({v, std::uint32_t(cells.size()), std::uint32_t(side * side * side)});
+        for (int a = 0; a < side; ++a) {
+            for (int b = 0; b < side; ++b) {
+                for (int c = 0; c < side; ++c) {
+                    const auto cell = std::int32_t(cells.size());
+                    cellIndex.emplace(first.offsetBy(a, b, c), cell); // (new: the blocks are apart)
+                    cells.push_back(first.offsetBy(a, b, c));
+                    members.emplace_back(std::uint32_t(cell), v);
+                }
+            }
+        }
+    }
+    if (cells.empty()) return cells;
     // Each cell's voxels, contiguous: mMembers[mStart[c] .. mStart[c + 1]).
     mStart.assign(cells.size() + 1, 0);
-    for (const std::uint32_t v : voxels) ++mStart[std::size_t(mCellOf[v]) + 1];
+    for (const auto& [cell, v] : members) ++mStart[std::size_t(cell) + 1];
     for (std::size_t c = 0; c < cells.size(); ++c) mStart[c + 1] += mStart[c];
-    mMembers.resize(voxels.size());
+    mMembers.resize(members.size());
     {
         std::vector<std::uint32_t> next(mStart.begin(), mStart.end() - 1);
-        for (const std::uint32_t v : voxels) mMembers[next[std::size_t(mCellOf[v])]++] = v;
+        for (const auto& [cell, v] : members) mMembers[next[cell]++] = v;
     }
+    return cells;
+}
+
+DiffusionCorrection::DiffusionCorrection(const SweepLattice& lattice, int coarsening, double restG)
+    : mLattice(lattice)
+    , mFactor(std::max(coarsening, 1))
+{
+    const double dx = lattice.voxelSize();
+    int shift = 0; // log2 of the coarsening (1, 2, 4, …)
+    while ((2 << shift) <= mFactor) ++shift;
+    mFactor = 1 << shift;
+    const double h = dx * mFactor; // a cell's width
+    const SweepLattice::Coefficient sigmaT = lattice.sigmaT(), sigmaS = lattice.sigmaS();
+    std::unordered_map<openvdb::Coord, std::int32_t, CoordHash> cellIndex;
+    const std::vector<openvdb::Coord> cells = indexCells(shift, cellIndex);
+    if (cells.empty()) return;
     // A cell's coefficients: the means over its voxels of the domain.
     std::vector<openvdb::Vec3d> cellSigmaT(cells.size(), openvdb::Vec3d(0.0)), cellSigmaA(cells.size(), openvdb::Vec3d(0.0));
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells.size()), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -250,9 +277,21 @@ void DiffusionCorrection::addTo(std::vector<openvdb::Vec3f>& values, double weig
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mMembers.size()), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t i = r.begin(); i != r.end(); ++i) {
             const std::uint32_t v = mMembers[i];
+            if (mCellOf[v] < 0) continue; // a coarse cell's: below
             const std::size_t c = std::size_t(mCellOf[v]);
             for (int ch = 0; ch < 3; ++ch) {
                 if (mSolution[ch].size() > c) values[v][ch] += float(weight * mSolution[ch][c]);
+            }
+        }
+    });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mCoarse.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+            const CoarseCell& cell = mCoarse[i];
+            for (int ch = 0; ch < 3; ++ch) {
+                if (mSolution[ch].size() < std::size_t(cell.first) + cell.count) continue;
+                double sum = 0.0;
+                for (std::uint32_t c = cell.first; c < cell.first + cell.count; ++c) sum += mSolution[ch][c];
+                values[cell.voxel][ch] += float(weight * sum / double(cell.count));
             }
         }
     });

@@ -5,7 +5,9 @@
 
 #include <openvdb/math/ConjGradient.h>
 
+#include <cstdint>
 #include <memory>
+#include <unordered_map>
 #include <vector>
 
 namespace vxf::detail {
@@ -21,7 +23,9 @@ namespace vxf::detail {
 /// means over those voxels and each voxel taking its cell's correction: the error the sweeps
 /// leave at high albedo is smooth over a mean free path, and where voxels are optically thin the
 /// coarse cells still resolve it (Morel and Larsen's coarse-mesh DSA), at an eighth of the
-/// unknowns and about half the iterations (the condition number goes with 1/(σt·h)²).
+/// unknowns and about half the iterations (the condition number goes with 1/(σt·h)²). A coarse
+/// leaf of the lattice (one value for 8³ voxels) fills the cells of its block, each with its
+/// value, and takes their mean correction.
 /// The matrix is symmetric and positive definite (σa ≥ 0 and every connected part touches a
 /// vacuum face), built once per channel with distinct coefficients (grey media: once) as
 /// OpenVDB's 7-point SparseStencilMatrix, and solved by OpenVDB's preconditioned conjugate
@@ -83,6 +87,11 @@ public:
     void addTo(std::vector<openvdb::Vec3f>& values, double weight = 1.0) const;
 
 private:
+    /// The cells (blocks of 2^@a shift voxels a side holding a voxel of the domain) in lattice
+    /// order, each one's index in @a cellIndex; each voxel's cell (mCellOf, mCoarse) and each
+    /// cell's voxels (mStart, mMembers).
+    std::vector<openvdb::Coord> indexCells(int shift, std::unordered_map<openvdb::Coord, std::int32_t, CoordHash>& cellIndex);
+
     using Matrix = openvdb::math::pcg::SparseStencilMatrix<double, 7>;
     struct Channel
     {
@@ -92,7 +101,13 @@ private:
     };
     const SweepLattice& mLattice;
     int mFactor = 1;
-    std::vector<std::int32_t> mCellOf; ///< per voxel, its cell (−1: not in the domain)
+    std::vector<std::int32_t> mCellOf; ///< per voxel, its cell (−1: not in the domain, or a coarse cell's)
+    /// A coarse leaf's value: a member of the `count` cells of its block from `first`.
+    struct CoarseCell
+    {
+        std::uint32_t voxel, first, count;
+    };
+    std::vector<CoarseCell> mCoarse;
     std::vector<std::uint32_t> mStart; ///< cell c's voxels: mMembers[mStart[c] … mStart[c + 1])
     std::vector<std::uint32_t> mMembers; ///< the domain's voxels (per-voxel indices), cell by cell
     Channel mChannels[3];

@@ -137,6 +137,7 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
         solve.directions = options.pass.directions;
         solve.kernel = options.pass.kernel;
         solve.gather = options.pass;
+        solve.coarseTiles = options.band > 0.0; // the band's tiles swept as cells
         if (options.warmStart && options.warmStart->transform() == j->transform()) solve.initial = options.warmStart.get();
         report.warmStarted = solve.initial != nullptr;
         SweepSolveReport solved;

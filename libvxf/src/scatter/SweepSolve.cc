@@ -104,11 +104,27 @@ private:
     std::vector<openvdb::Vec3f> mG, mF; // the last G(φ) and f
 };
 
-/// Σ |v| per channel, in a fixed order (the same for every thread count).
-openvdb::Vec3d l1(const std::vector<openvdb::Vec3f>& values)
+/// Σ |v| per channel over the medium's voxels (a coarse cell's value for each of its voxels),
+/// in a fixed order (the same for every thread count).
+openvdb::Vec3d l1(const detail::SweepLattice& lattice, const std::vector<openvdb::Vec3f>& values)
 {
     openvdb::Vec3d sum(0.0);
-    for (const openvdb::Vec3f& v : values) sum += openvdb::Vec3d(std::abs(v[0]), std::abs(v[1]), std::abs(v[2]));
+    for (std::size_t i = 0; i < values.size(); ++i) {
+        const openvdb::Vec3f& v = values[i];
+        sum += openvdb::Vec3d(std::abs(v[0]), std::abs(v[1]), std::abs(v[2])) * lattice.voxelsAt(i);
+    }
+    return sum;
+}
+
+/// |@a next − @a phi|₁ per channel, as l1.
+openvdb::Vec3d l1Change(
+    const detail::SweepLattice& lattice, const std::vector<openvdb::Vec3f>& next, const std::vector<openvdb::Vec3f>& phi)
+{
+    openvdb::Vec3d sum(0.0);
+    for (std::size_t i = 0; i < next.size(); ++i) {
+        const openvdb::Vec3f d = next[i] - phi[i];
+        sum += openvdb::Vec3d(std::abs(d[0]), std::abs(d[1]), std::abs(d[2])) * lattice.voxelsAt(i);
+    }
     return sum;
 }
 
@@ -128,7 +144,7 @@ public:
         , moments(moments_)
         , restG(medium_.material().phaseG)
         , gather(options_.kernel == ScatterKernel::Gather)
-        , lattice(checkedLattice(medium_, source_, gather, restG))
+        , lattice(checkedLattice(medium_, source_, gather, restG, options_.coarseTiles))
         , count(lattice.voxelCount())
         , accelerate(options_.accelerate)
         , iterations(gather ? "gathers" : "sweeps")
@@ -194,10 +210,13 @@ public:
     }
 
 private:
-    static detail::SweepLattice checkedLattice(const Medium& medium, const openvdb::Vec3SGrid& source, bool gather, double restG)
+    static detail::SweepLattice checkedLattice(
+        const Medium& medium, const openvdb::Vec3SGrid& source, bool gather, double restG, bool coarseTiles)
     {
         if (gather && restG != 0.0) throw UsageError("the accelerated gather carries no anisotropic phase: solve Medium::isotropic()");
-        return detail::SweepLattice(medium, source);
+        using Lattice = detail::SweepLattice;
+        return Lattice(medium, source, Lattice::Coefficients::PerVoxel,
+            coarseTiles && !gather ? Lattice::Tiles::Coarse : Lattice::Tiles::Voxelized); // (the gathers read voxels)
     }
 
     /// Iteration @a l; true when the solve stops after it.
@@ -215,19 +234,15 @@ private:
         if (accelerate) correct(it);
         if (accelerate && gather) mixing.mix(phi, next);
         // How far this sweep moved the sum, per channel relative to it.
-        openvdb::Vec3d moved(0.0);
-        for (std::size_t v = 0; v < count; ++v) {
-            const openvdb::Vec3f d = next[v] - phi[v];
-            moved += openvdb::Vec3d(std::abs(d[0]), std::abs(d[1]), std::abs(d[2]));
-        }
-        const openvdb::Vec3d size = l1(next);
+        const openvdb::Vec3d moved = l1Change(lattice, next, phi);
+        const openvdb::Vec3d size = l1(lattice, next);
         it.change = 0.0;
         for (int ch = 0; ch < 3; ++ch) {
             if (size[ch] > 0.0) it.change = std::max(it.change, moved[ch] / size[ch]);
         }
         phi.swap(next);
         it.energy = openvdb::Vec3d(0.0);
-        for (const openvdb::Vec3f& v : phi) it.energy += openvdb::Vec3d(v);
+        for (std::size_t v = 0; v < count; ++v) it.energy += openvdb::Vec3d(phi[v]) * lattice.voxelsAt(v);
         it.ratio = previousChange > 0.0 ? it.change / previousChange : 0.0;
         previousChange = it.change;
         it.error = it.ratio > 0.0 && it.ratio < 1.0 ? it.change * it.ratio / (1.0 - it.ratio) : it.change;
@@ -372,11 +387,7 @@ private:
             // Start from the last correction scaled as the change shrank: near albedo 1 the
             // error left is the slowest mode, its shape the same from sweep to sweep.
             // The change φ_{l+½} − φ_l is read as next − phi where it is needed (no array of it).
-            openvdb::Vec3d moved(0.0);
-            for (std::size_t v = 0; v < count; ++v) {
-                const openvdb::Vec3f d = next[v] - phi[v];
-                moved += openvdb::Vec3d(std::abs(d[0]), std::abs(d[1]), std::abs(d[2]));
-            }
+            const openvdb::Vec3d moved = l1Change(lattice, next, phi);
             const double largest = std::max({moved[0], moved[1], moved[2]});
             const double scale = previousChange > 0.0 ? std::min(1.0, largest / std::max(previousMoved, 1e-300)) : 0.0;
             previousMoved = largest;

@@ -73,6 +73,7 @@ openvdb::Vec3f SweepLattice::depthStep(std::size_t leaf, int p, const openvdb::V
 
 void SweepLattice::opticalDepthAlong(const openvdb::Vec3d& omega, std::vector<openvdb::Vec3f>& tau, const EnteringDepth& entering) const
 {
+    requireFine("opticalDepthAlong");
     tau.assign(voxelCount(), openvdb::Vec3f(0.0f));
     const Characteristic c = characteristic(omega);
     const float halfStep = float(0.5 * c.length * mVoxelSize);
@@ -121,6 +122,7 @@ int SweepLattice::octantAround(const openvdb::Coord& ijk, const openvdb::Vec3d& 
 void SweepLattice::opticalDepthFrom(
     const openvdb::Vec3d& point, std::vector<openvdb::Vec3f>& tau, std::vector<std::uint8_t>& state, const MarchedDepth& marched) const
 {
+    requireFine("opticalDepthFrom");
     tau.assign(voxelCount(), openvdb::Vec3f(0.0f));
     state.assign(voxelCount(), kPending);
     for (int octant = 0; octant < 8; ++octant) {

@@ -3,7 +3,10 @@
 #include <vxf/core/Error.h>
 #include <vxf/core/Hash.h>
 
+#include <openvdb/tools/FindActiveValues.h>
 #include <openvdb/tree/LeafManager.h>
+
+#include <fmt/format.h>
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -18,24 +21,83 @@
 
 namespace vxf::detail {
 
-SweepLattice::SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topology, Coefficients coefficients)
-    : SweepLattice(medium, openvdb::MaskTree(topology.tree(), false, openvdb::TopologyCopy()), coefficients)
+SweepLattice::SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topology, Coefficients coefficients, Tiles tiles)
+    : SweepLattice(medium, openvdb::MaskTree(topology.tree(), false, openvdb::TopologyCopy()), coefficients, tiles)
 {
 }
 
-SweepLattice::SweepLattice(const Medium& medium, const openvdb::MaskTree& topology, Coefficients coefficients)
+SweepLattice::SweepLattice(const Medium& medium, const openvdb::MaskTree& topology, Coefficients coefficients, Tiles tiles)
     : mVoxelSize(medium.voxelSize())
 {
-    indexLeaves(medium, topology);
+    indexLeaves(medium, topology, tiles);
     readMedium(medium, coefficients == Coefficients::PerVoxel);
 }
 
-void SweepLattice::indexLeaves(const Medium& medium, const openvdb::MaskTree& topology)
+std::vector<openvdb::Coord> SweepLattice::coarseBlocks(const Medium& medium, const openvdb::MaskTree& topology)
+{
+    std::vector<openvdb::CoordBBox> tiles;
+    for (auto it = topology.cbeginValueOn(); it; ++it) {
+        if (!it.isTileValue()) continue;
+        openvdb::CoordBBox box;
+        it.getBoundingBox(box);
+        tiles.push_back(box);
+    }
+    const openvdb::FloatGrid* surface = medium.surface();
+    std::optional<openvdb::tools::FindActiveValues<openvdb::FloatTree>> band;
+    if (surface) band.emplace(surface->tree());
+    tbb::enumerable_thread_specific<std::vector<openvdb::Coord>> found;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tiles.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
+        std::vector<openvdb::Coord>& mine = found.local();
+        auto distance = surface ? std::optional<openvdb::FloatGrid::ConstAccessor>(surface->getConstAccessor()) : std::nullopt;
+        for (std::size_t t = r.begin(); t != r.end(); ++t) {
+            const openvdb::CoordBBox& box = tiles[t];
+            for (int x = box.min().x(); x <= box.max().x(); x += 8) {
+                for (int y = box.min().y(); y <= box.max().y(); y += 8) {
+                    for (int z = box.min().z(); z <= box.max().z(); z += 8) {
+                        const openvdb::Coord origin(x, y, z);
+                        // Deep: no voxel of the surface's band within a voxel of the block, and
+                        // the block inside it (the level set's inactive values hold its sign).
+                        if (surface &&
+                            (band->anyActiveValues(openvdb::CoordBBox(origin.offsetBy(-1), origin.offsetBy(8))) ||
+                                distance->getValue(origin.offsetBy(4)) >= 0.0f)) {
+                            continue;
+                        }
+                        mine.push_back(origin);
+                    }
+                }
+            }
+        }
+    });
+    std::vector<openvdb::Coord> blocks;
+    for (const std::vector<openvdb::Coord>& mine : found) blocks.insert(blocks.end(), mine.begin(), mine.end());
+    // In the tree's order, whatever the thread count.
+    std::sort(blocks.begin(), blocks.end(), [](const openvdb::Coord& a, const openvdb::Coord& b) { return a < b; });
+    return blocks;
+}
+
+void SweepLattice::requireFine(const char* what) const
+{
+    if (mFineLeaves != mOrigins.size()) throw Error(fmt::format("sweep lattice: {} takes no coarse leaves", what));
+}
+
+void SweepLattice::indexLeaves(const Medium& medium, const openvdb::MaskTree& topology, Tiles tiles)
 {
     openvdb::MaskTree mask(medium.density().tree(), false, openvdb::TopologyCopy());
     mask.topologyUnion(topology);
+    const std::vector<openvdb::Coord> coarseOrigins =
+        tiles == Tiles::Coarse ? coarseBlocks(medium, topology) : std::vector<openvdb::Coord>{};
+    for (const openvdb::Coord& origin : coarseOrigins) {
+        mask.fill(openvdb::CoordBBox(origin, origin.offsetBy(7)), false, false); // swept as a cell, not as voxels
+    }
     mask.voxelizeActiveTiles();
-    for (auto it = mask.cbeginLeaf(); it; ++it) mOrigins.push_back(it->origin());
+    const auto isCoarse = [&](const openvdb::Coord& origin) {
+        return std::binary_search(coarseOrigins.begin(), coarseOrigins.end(), origin, [](const auto& a, const auto& b) { return a < b; });
+    };
+    for (auto it = mask.cbeginLeaf(); it; ++it) {
+        if (coarseOrigins.empty() || !isCoarse(it->origin())) mOrigins.push_back(it->origin());
+    }
+    mFineLeaves = mOrigins.size();
+    mOrigins.insert(mOrigins.end(), coarseOrigins.begin(), coarseOrigins.end());
 
     mLeafIndex.reserve(mOrigins.size());
     for (std::size_t n = 0; n < mOrigins.size(); ++n) mLeafIndex.emplace(mOrigins[n], std::int32_t(n));
@@ -89,6 +151,10 @@ void SweepLattice::readMedium(const Medium& medium, bool perVoxel)
         Medium::Sampler sampler(medium);
         openvdb::FloatGrid::ConstAccessor density = densityAccessor;
         for (std::size_t n = r.begin(); n != r.end(); ++n) {
+            if (coarse(n)) {
+                readCoarseCell(n, medium, sampler, perVoxel, fromDensity, inside, distance);
+                continue;
+            }
             for (int v = 0; v < kLeafVoxels; ++v) {
                 const openvdb::Coord c = mOrigins[n].offsetBy(v >> 6, (v >> 3) & 7, v & 7);
                 // A voxel's own coefficients (a trilinear read at its centre weighs it alone).
@@ -125,6 +191,8 @@ void SweepLattice::readMedium(const Medium& medium, bool perVoxel)
             return all;
         },
         [](bool a, bool b) { return a && b; });
+    // The coarse cells' σt, kept (one value a cell) past the padded blocks' compaction.
+    std::vector<openvdb::Vec3f> coarseSigmaT(inside.begin() + std::ptrdiff_t(mFineLeaves * kLeafVoxels), inside.end());
     if (grey) {
         std::vector<float> scalar(inside.size());
         for (std::size_t i = 0; i < inside.size(); ++i) scalar[i] = inside[i][0];
@@ -135,7 +203,7 @@ void SweepLattice::readMedium(const Medium& medium, bool perVoxel)
     }
     if (surface) mDistance = padded(distance);
     classifyLeaves();
-    compactLeaves();
+    compactLeaves(coarseSigmaT);
     mSkinIndex.assign(mInterior.size(), -1);
     for (std::size_t i = 0; i < skin.size(); ++i) {
         if (!skin[i]) continue;
@@ -147,7 +215,45 @@ void SweepLattice::readMedium(const Medium& medium, bool perVoxel)
     }
 }
 
+void SweepLattice::readCoarseCell(std::size_t n, const Medium& medium, Medium::Sampler& sampler, bool perVoxel, bool fromDensity,
+    std::vector<openvdb::Vec3f>& inside, std::vector<float>& distance)
+{
+    // The means over the block's voxels: one read where the density holds the block as a tile.
+    const openvdb::Coord& origin = mOrigins[n];
+    const int samples = medium.density().tree().probeConstLeaf(origin) ? kLeafVoxels : 1;
+    openvdb::Vec3d t(0.0), s(0.0);
+    double density = 0.0;
+    for (int v = 0; v < samples; ++v) {
+        const openvdb::Coord c = origin.offsetBy(v >> 6, (v >> 3) & 7, v & 7);
+        t += finiteCoefficient(sampler.sigmaT(c.asVec3d()), true);
+        s += finiteCoefficient(sampler.sigmaS(c), false);
+        density += double(medium.density().tree().getValue(c));
+    }
+    const std::size_t i = voxelStart(n);
+    inside[i] = openvdb::Vec3f(t / double(samples)); // (deep: wholly inside, f = 1)
+    if (perVoxel && fromDensity) {
+        mDensityVoxel[i] = float(density / double(samples));
+    } else if (perVoxel) {
+        mSigmaTVoxel[i] = inside[i];
+        mSigmaS[i] = openvdb::Vec3f(s / double(samples));
+    }
+    if (!distance.empty()) distance[i] = std::min(-1.0f, float(sampler.signedDistance(origin.offsetBy(4).asVec3d())));
+}
+
 namespace {
+
+/// The mean of a grid's values over the 8³ block at @a origin, 0 where it is not active (a
+/// coarse cell's value read from a grid).
+openvdb::Vec3f blockMean(const openvdb::Vec3SGrid::ConstAccessor& acc, const openvdb::Coord& origin)
+{
+    openvdb::Vec3f value;
+    if (const openvdb::Vec3STree::LeafNodeType* leaf = acc.probeConstLeaf(origin)) {
+        openvdb::Vec3d sum(0.0);
+        for (auto it = leaf->cbeginValueOn(); it; ++it) sum += openvdb::Vec3d(*it);
+        return openvdb::Vec3f(sum / double(SweepLattice::kLeafVoxels));
+    }
+    return acc.probeValue(origin, value) ? value : openvdb::Vec3f(0.0f);
+}
 
 /// @a values made of @a count(n) of each leaf n's block of @a block values (its first ones),
 /// the blocks one after another from @a start (as compactLeaves counts them), in place.
@@ -169,18 +275,29 @@ void keepBlocks(std::vector<T>& values, std::size_t block, const std::vector<std
 
 } // namespace
 
-void SweepLattice::compactLeaves()
+void SweepLattice::compactLeaves(const std::vector<openvdb::Vec3f>& coarseSigmaT)
 {
     const std::size_t leaves = mOrigins.size();
-    mSigmaTStart.resize(leaves);
+    mSigmaTStart.resize(mFineLeaves);
     std::size_t next = 0;
-    for (std::size_t n = 0; n < leaves; ++n) {
+    for (std::size_t n = 0; n < mFineLeaves; ++n) {
         mSigmaTStart[n] = next;
         next += mUniform[n] ? 1 : std::size_t(kPaddedVoxels);
     }
     const auto sigmaTCount = [&](std::size_t n) { return mUniform[n] ? std::size_t(1) : std::size_t(kPaddedVoxels); };
     keepBlocks(mSigmaTGrey, kPaddedVoxels, mSigmaTStart, sigmaTCount);
     keepBlocks(mSigmaT, kPaddedVoxels, mSigmaTStart, sigmaTCount);
+    // A coarse leaf's one σt after the fine leaves' blocks.
+    mSigmaTGrey.reserve(mSigmaTGrey.empty() ? 0 : mSigmaTGrey.size() + coarseSigmaT.size());
+    mSigmaT.reserve(mSigmaT.empty() ? 0 : mSigmaT.size() + coarseSigmaT.size());
+    for (std::size_t c = 0; c < coarseSigmaT.size(); ++c) {
+        mSigmaTStart.push_back(mSigmaTGrey.empty() ? mSigmaT.size() : mSigmaTGrey.size());
+        if (mSigmaTGrey.empty()) {
+            mSigmaT.push_back(coarseSigmaT[c]);
+        } else {
+            mSigmaTGrey.push_back(coarseSigmaT[c][0]);
+        }
+    }
     if (mInterior.empty()) return; // no surface: every leaf deep, f = 1
     mShallowStart.assign(leaves, kNone);
     next = 0;
@@ -197,9 +314,10 @@ void SweepLattice::classifyLeaves()
     const bool surface = !mDistance.empty(), grey = !mSigmaTGrey.empty();
     // Leaves whose padded block lies wholly inside the surface (or without one): a sweep there
     // needs no cut of its steps and holds no skin voxel.
-    mDeep.assign(mOrigins.size(), surface ? 0 : 1);
+    // A coarse leaf: deep (coarseBlocks) and of one σt.
+    mDeep.assign(mOrigins.size(), 1);
     if (surface) {
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mOrigins.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mFineLeaves), [&](const tbb::blocked_range<std::size_t>& r) {
             for (std::size_t n = r.begin(); n != r.end(); ++n) {
                 const float* d = &mDistance[n * kPaddedVoxels];
                 mDeep[n] = std::all_of(d, d + kPaddedVoxels, [](float v) { return v < -0.5f; }) ? 1 : 0;
@@ -207,9 +325,10 @@ void SweepLattice::classifyLeaves()
         });
     }
     // Deep leaves of one σt (a voxelized mesh's interior): every step of a sweep there is alike.
-    mUniform.assign(mOrigins.size(), 0);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mOrigins.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+    mUniform.assign(mOrigins.size(), 1);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mFineLeaves), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t n = r.begin(); n != r.end(); ++n) {
+            mUniform[n] = 0;
             if (!mDeep[n]) continue;
             const std::size_t first = n * kPaddedVoxels;
             bool one = true;
@@ -286,8 +405,8 @@ SweepLattice::SweepSource SweepLattice::sweepSource(
 {
     const auto inside = [&](std::size_t v) { return mInterior.empty() ? sourceAt(v) : sourceAt(v) * interiorOf(v); };
     SweepSource out;
-    out.layout = layout;
-    if (layout == SweepSource::Layout::PerVoxel) {
+    out.layout = mFineLeaves == mOrigins.size() ? layout : SweepSource::Layout::PerVoxel; // (a coarse leaf has no padded block)
+    if (out.layout == SweepSource::Layout::PerVoxel) {
         out.values.resize(voxelCount());
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, voxelCount()), [&](const tbb::blocked_range<std::size_t>& r) {
             for (std::size_t v = r.begin(); v != r.end(); ++v) out.values[v] = inside(v);
@@ -312,6 +431,10 @@ std::vector<openvdb::Vec3f> SweepLattice::read(const openvdb::Vec3SGrid& grid) c
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mOrigins.size()), [&](const tbb::blocked_range<std::size_t>& r) {
         auto acc = grid.getConstAccessor();
         for (std::size_t n = r.begin(); n != r.end(); ++n) {
+            if (coarse(n)) {
+                values[voxelStart(n)] = blockMean(acc, mOrigins[n]);
+                continue;
+            }
             for (int v = 0; v < kLeafVoxels; ++v) {
                 openvdb::Vec3f value;
                 if (acc.probeValue(mOrigins[n].offsetBy(v >> 6, (v >> 3) & 7, v & 7), value)) values[n * kLeafVoxels + v] = value;
@@ -331,13 +454,19 @@ void SweepLattice::paddedVoxels(std::size_t n, std::int64_t* index) const
 }
 
 SweepLattice::GridView::GridView(const SweepLattice& lattice, const openvdb::Vec3SGrid& grid)
-    : mLeaves(lattice.leafCount(), nullptr)
+    : mLeaves(lattice.fineLeafCount(), nullptr)
     , mTiles(lattice.leafCount(), openvdb::Vec3f(0.0f))
+    , mFineLeaves(lattice.fineLeafCount())
+    , mFineVoxels(lattice.fineLeafCount() * kLeafVoxels)
 {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lattice.leafCount()), [&](const tbb::blocked_range<std::size_t>& r) {
         auto acc = grid.getConstAccessor();
         for (std::size_t n = r.begin(); n != r.end(); ++n) {
             const openvdb::Coord& origin = lattice.origin(n);
+            if (lattice.coarse(n)) {
+                mTiles[n] = blockMean(acc, origin);
+                continue;
+            }
             mLeaves[n] = acc.probeConstLeaf(origin);
             openvdb::Vec3f value;
             if (!mLeaves[n] && acc.probeValue(origin, value)) mTiles[n] = value; // an active tile holds the whole leaf
@@ -348,8 +477,8 @@ SweepLattice::GridView::GridView(const SweepLattice& lattice, const openvdb::Vec
 template <typename T>
 std::vector<T> SweepLattice::padded(const std::vector<T>& values) const
 {
-    std::vector<T> out(mOrigins.size() * kPaddedVoxels);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mOrigins.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+    std::vector<T> out(mFineLeaves * kPaddedVoxels);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mFineLeaves), [&](const tbb::blocked_range<std::size_t>& r) {
         std::int64_t index[kPaddedVoxels];
         for (std::size_t n = r.begin(); n != r.end(); ++n) {
             T* block = &out[n * kPaddedVoxels];
@@ -389,9 +518,23 @@ openvdb::Vec3SGrid::Ptr SweepLattice::write(const std::vector<openvdb::Vec3f>& v
     }
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tiles.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t t = r.begin(); t != r.end(); ++t) {
+            // 8³ blocks at a time (a tile's are whole): a coarse cell's value holds for its block.
+            const openvdb::CoordBBox& box = tiles[t].first;
             openvdb::Vec3d sum(0.0);
-            for (auto c = tiles[t].first.begin(); c; ++c) sum += openvdb::Vec3d(valueAt(*c));
-            tiles[t].second = openvdb::Vec3f(sum / double(tiles[t].first.volume()));
+            for (int x = box.min().x(); x <= box.max().x(); x += 8) {
+                for (int y = box.min().y(); y <= box.max().y(); y += 8) {
+                    for (int z = box.min().z(); z <= box.max().z(); z += 8) {
+                        const openvdb::Coord origin(x, y, z);
+                        const std::int64_t i = indexOf(origin);
+                        if (i >= 0 && coarse(leafOf(std::size_t(i)))) {
+                            sum += openvdb::Vec3d(valueAt(origin)) * double(kLeafVoxels);
+                            continue;
+                        }
+                        for (auto c = openvdb::CoordBBox(origin, origin.offsetBy(7)).begin(); c; ++c) sum += openvdb::Vec3d(valueAt(*c));
+                    }
+                }
+            }
+            tiles[t].second = openvdb::Vec3f(sum / double(box.volume()));
         }
     });
     for (const auto& [box, value] : tiles) grid->tree().fill(box, value, true);

@@ -32,10 +32,53 @@ namespace vxf::detail {
 /// only over its part inside the surface (the signed distance linear along the step). Without
 /// a surface every voxel is whole (f = 1) and the density's own ramp is the edge.
 ///
-/// Arrays "per voxel" hold leafCount()·512 values, voxel (x, y, z) of leaf n at
-/// n·512 + x·64 + y·8 + z. "Padded" arrays hold 1000 per leaf: the leaf and one voxel of each
-/// neighbour around it, local coordinates −1…8 (paddedIndex), so that a voxel's upwind reads
-/// stay inside its leaf's block. Voxels of no leaf read as vacuum (σt = 0, J = 0).
+/// Arrays "per voxel" hold voxelCount() values: voxel (x, y, z) of fine leaf n at
+/// n·512 + x·64 + y·8 + z, then one value for each coarse leaf (Tiles::Coarse: an 8³ block of
+/// a tile swept as one cell), after the fine leaves' (voxelStart). "Padded" arrays hold 1000 per
+/// fine leaf: the leaf and one voxel of each neighbour around it, local coordinates −1…8
+/// (paddedIndex), so that a voxel's upwind reads stay inside its leaf's block (a coarse
+/// neighbour's voxels all its one value). Voxels of no leaf read as vacuum (σt = 0, J = 0).
+///
+/// Coarse cells (variable resolution, the thesis's future work): deep inside a thick medium the
+/// light is smooth over a mean free path, and a tile's 512 voxels hold one value of the source
+/// anyway (scatter's `band` makes them so beyond it). A coarse leaf is swept as one cube of
+/// side 8 voxels: the light entering through its upwind faces (the neighbours' downwind faces'
+/// means, each face by its share |ω_a|/|ω|₁ of the flow), carried over the cube's mean chord
+/// 8/|ω|₁ voxels, leaves through its downwind faces as one value and gives the cell its mean,
+/// conserving what enters, is absorbed and leaves (see sweep). Only the transport sweeps take
+/// coarse leaves (the scatter stage); the optical-depth sweeps refuse them.
+/// The chords of a coarse cell (a cube of 8 voxels a side) along a direction: from exit points
+/// on a grid over its downwind faces back to the upwind face each entered by, with the share of
+/// the light leaving there (each face's |ω_a|/|ω|₁, evenly over it). Their mean is 8/|ω|₁ voxels.
+struct CubeChords
+{
+    static constexpr int kSide = 4; ///< exit points a face, a side
+    explicit CubeChords(const openvdb::Vec3d& omega);
+    struct Chord
+    {
+        double length, weight; ///< voxels; the share of the light leaving (all sum to 1)
+        int exit, entry; ///< faces by their axis
+    };
+    std::vector<Chord> chords;
+    double share[3] = {0.0, 0.0, 0.0}; ///< of the light leaving through each downwind face
+    double mean = 0.0; ///< voxels
+};
+
+/// A CubeChords per direction.
+std::vector<CubeChords> cubeChords(const std::vector<openvdb::Vec3d>& directions);
+
+/// A coarse cell's step weights for one σt (1/world unit) along one direction's chords: the
+/// light leaving through face a is Σ_e out[a][e]·in_e + outJ[a]·J, the cell's mean
+/// Σ_e meanIn[e]·in_e + meanJ·J (in_e: the light entering through upwind face e; lengths in
+/// world units); kept for the next cell of the same σt.
+struct CoarseWeights
+{
+    double sigma = -1.0;
+    const CubeChords* cube = nullptr;
+    double out[3][3] = {}, outJ[3] = {}, meanIn[3] = {}, meanJ = 0.0;
+};
+const CoarseWeights& coarseWeights(double sigma, double voxelSize, const CubeChords& cube, CoarseWeights& cache);
+
 class SweepLattice
 {
 public:
@@ -51,12 +94,36 @@ public:
     /// correction and the passes' sources (the scatter stage), or not (the light stage's sweeps:
     /// 24 bytes a voxel saved, 108 MB for the bunny at dim 256).
     enum class Coefficients { PerVoxel, SweepOnly };
+    /// What the lattice makes of @a topology's active tiles: their voxels (Voxelized), or each
+    /// 8³ block of a tile lying more than half a voxel inside the surface one coarse cell
+    /// (Coarse; a block the density holds as voxels takes their means).
+    enum class Tiles { Voxelized, Coarse };
     /// The lattice over @a medium's active density and @a topology's active values.
-    SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topology, Coefficients coefficients = Coefficients::PerVoxel);
-    SweepLattice(const Medium& medium, const openvdb::MaskTree& topology, Coefficients coefficients = Coefficients::PerVoxel);
+    SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topology, Coefficients coefficients = Coefficients::PerVoxel,
+        Tiles tiles = Tiles::Voxelized);
+    SweepLattice(const Medium& medium, const openvdb::MaskTree& topology, Coefficients coefficients = Coefficients::PerVoxel,
+        Tiles tiles = Tiles::Voxelized);
 
+    /// Leaves, fine ones (512 voxels) first, then coarse ones (one cell of 8³ voxels).
     std::size_t leafCount() const { return mOrigins.size(); }
-    std::size_t voxelCount() const { return mOrigins.size() * kLeafVoxels; }
+    std::size_t fineLeafCount() const { return mFineLeaves; }
+    bool coarse(std::size_t leaf) const { return leaf >= mFineLeaves; }
+    /// Values of a per-voxel array: 512 a fine leaf, one a coarse leaf.
+    std::size_t voxelCount() const { return mFineLeaves * kLeafVoxels + (mOrigins.size() - mFineLeaves); }
+    /// Where leaf @a leaf's values start in a per-voxel array.
+    std::size_t voxelStart(std::size_t leaf) const
+    {
+        return leaf < mFineLeaves ? leaf * kLeafVoxels : mFineLeaves * kLeafVoxels + (leaf - mFineLeaves);
+    }
+    /// The leaf holding per-voxel index @a voxel.
+    std::size_t leafOf(std::size_t voxel) const
+    {
+        const std::size_t fine = mFineLeaves * kLeafVoxels;
+        return voxel < fine ? voxel / kLeafVoxels : mFineLeaves + (voxel - fine);
+    }
+    /// The voxels per-voxel index @a voxel stands for: 1, or 512 for a coarse cell (the weight
+    /// of its value in a sum over the medium).
+    double voxelsAt(std::size_t voxel) const { return voxel < mFineLeaves * kLeafVoxels ? 1.0 : double(kLeafVoxels); }
     double voxelSize() const { return mVoxelSize; }
     const openvdb::Coord& origin(std::size_t leaf) const { return mOrigins[leaf]; }
 
@@ -114,7 +181,9 @@ public:
     {
         const int dx = x < 0 ? -1 : (x > 7 ? 1 : 0), dy = y < 0 ? -1 : (y > 7 ? 1 : 0), dz = z < 0 ? -1 : (z > 7 ? 1 : 0);
         const int n = neighbour(leaf, dx, dy, dz);
-        return n < 0 ? -1 : std::int64_t(n) * kLeafVoxels + localIndex(x - 8 * dx, y - 8 * dy, z - 8 * dz);
+        if (n < 0) return -1;
+        return coarse(std::size_t(n)) ? std::int64_t(voxelStart(std::size_t(n)))
+                                      : std::int64_t(n) * kLeafVoxels + localIndex(x - 8 * dx, y - 8 * dy, z - 8 * dz);
     }
 
     /// @a grid's values at the lattice's voxels (per voxel; tiles and inactive values as the
@@ -127,9 +196,11 @@ public:
     {
     public:
         GridView(const SweepLattice& lattice, const openvdb::Vec3SGrid& grid);
-        /// The value at per-voxel index @a v (0 where the grid is not active).
+        /// The value at per-voxel index @a v (0 where the grid is not active; a coarse cell's
+        /// the mean over its voxels).
         openvdb::Vec3f operator[](std::size_t v) const
         {
+            if (v >= mFineVoxels) return mTiles[mFineLeaves + (v - mFineVoxels)];
             const std::size_t n = v / kLeafVoxels;
             const auto i = openvdb::Index(v % kLeafVoxels);
             if (const openvdb::Vec3STree::LeafNodeType* leaf = mLeaves[n])
@@ -138,8 +209,10 @@ public:
         }
 
     private:
-        std::vector<const openvdb::Vec3STree::LeafNodeType*> mLeaves; ///< per lattice leaf, or null
-        std::vector<openvdb::Vec3f> mTiles; ///< per lattice leaf without a grid leaf: its active tile's value, or 0
+        std::vector<const openvdb::Vec3STree::LeafNodeType*> mLeaves; ///< per fine lattice leaf, or null
+        /// per lattice leaf without a grid leaf: its active tile's value, or 0; a coarse leaf's mean
+        std::vector<openvdb::Vec3f> mTiles;
+        std::size_t mFineLeaves = 0, mFineVoxels = 0;
     };
 
     /// A Vec3f grid on @a topology's active topology and transform holding @a values (per
@@ -152,7 +225,8 @@ public:
     /// @a values (per voxel) padded with their neighbours' values.
     template <typename T>
     std::vector<T> padded(const std::vector<T>& values) const;
-    /// A source J as a sweep reads it, inside the surface (J/f): padded (each leaf's block with
+    /// A source J as a sweep reads it, inside the surface (J/f): padded (a lattice without coarse
+    /// leaves only: each leaf's block with
     /// its neighbours' values, read as it is by every direction: 23.4 bytes a voxel), or per
     /// voxel (12 bytes a voxel, a leaf's block gathered through its padded index when the sweep
     /// visits it: free where the sweep makes a block per direction anyway, the first moment's
@@ -247,7 +321,9 @@ public:
     std::int64_t indexOf(const openvdb::Coord& ijk) const
     {
         const auto found = mLeafIndex.find(ijk & ~7);
-        return found == mLeafIndex.end() ? -1 : std::int64_t(found->second) * kLeafVoxels + localIndex(ijk[0] & 7, ijk[1] & 7, ijk[2] & 7);
+        if (found == mLeafIndex.end()) return -1;
+        const auto n = std::size_t(found->second);
+        return coarse(n) ? std::int64_t(voxelStart(n)) : std::int64_t(n) * kLeafVoxels + localIndex(ijk[0] & 7, ijk[1] & 7, ijk[2] & 7);
     }
 
     /// @a values (per voxel) with each skin voxel's replaced by centre(voxel)·f: for a source made
@@ -287,16 +363,38 @@ public:
     }
 
 private:
-    /// The leaves of @a medium's density and @a topology (tiles voxelized), their neighbours and
-    /// their upwind orders.
-    void indexLeaves(const Medium& medium, const openvdb::MaskTree& topology);
+    /// The leaves of @a medium's density and @a topology (tiles voxelized, or coarse as @a tiles
+    /// says), their neighbours and their upwind orders.
+    void indexLeaves(const Medium& medium, const openvdb::MaskTree& topology, Tiles tiles);
+    /// The origins of the 8³ blocks of @a topology's active tiles that lie more than half a voxel
+    /// inside @a medium's surface (all of them without one): the coarse leaves.
+    static std::vector<openvdb::Coord> coarseBlocks(const Medium& medium, const openvdb::MaskTree& topology);
+    /// A coarse leaf's one cell: its σt (inside, the mean over its voxels), σs or density and
+    /// distance, at its per-voxel index.
+    void readCoarseCell(std::size_t leaf, const Medium& medium, Medium::Sampler& sampler, bool perVoxel, bool fromDensity,
+        std::vector<openvdb::Vec3f>& inside, std::vector<float>& distance);
+    /// Coarse leaf @a leaf of a transport sweep along @a directions[@a d] (@a chords, its
+    /// cube's): the light entering it from what its upwind neighbours handed on (@a faces: the
+    /// fine leaves' downwind faces; @a leaving: the coarse leaves' light, of this direction), its
+    /// step (sweepCoarseCell) into @a fluence (and a moment's flux), and what it hands on into
+    /// @a leaving.
+    void sweepCoarseLeaf(std::size_t leaf, const std::vector<openvdb::Vec3d>& directions, std::size_t d, const CubeChords& chords,
+        const openvdb::Vec3f* faces, openvdb::Vec3f* leaving, const SweepSource& source, float weight, std::vector<openvdb::Vec3f>& fluence,
+        const FirstMoment* moment, CoarseWeights& cache) const;
+    /// One coarse leaf of a transport sweep: @a in the light entering it through each upwind
+    /// face (by axis), @a j its source; the light leaving through each downwind face into
+    /// @a out, @a weight times its mean added to @a phi (and the flux's).
+    void sweepCoarseCell(std::size_t leaf, const CubeChords& cube, const openvdb::Vec3f (&in)[3], const openvdb::Vec3f& j, float weight,
+        openvdb::Vec3f& phi, openvdb::Vec3f* flux, const openvdb::Vec3f& worldOmega, CoarseWeights& cache, openvdb::Vec3f* out) const;
+    /// Throws unless every leaf is fine (the optical-depth sweeps, whose voxels the light stage writes one by one).
+    void requireFine(const char* what) const;
     /// σt (padded), the surface's distance, 1/f and skin, and with @a perVoxel σt and σs per voxel.
     void readMedium(const Medium& medium, bool perVoxel);
     /// mDeep and mUniform from σt and the distance.
     void classifyLeaves();
-    /// After classifyLeaves: σt kept as one value for each uniform leaf (mSigmaTStart), 1/f
-    /// only for the leaves that are not deep (mShallowStart).
-    void compactLeaves();
+    /// After classifyLeaves: σt kept as one value for each uniform leaf (mSigmaTStart), then
+    /// @a coarseSigmaT's (one a coarse leaf), 1/f only for the leaves that are not deep (mShallowStart).
+    void compactLeaves(const std::vector<openvdb::Vec3f>& coarseSigmaT);
     /// A Coefficient of @a held values, or of the density times @a perDensity (@a nonNegative:
     /// negative values read 0).
     Coefficient coefficient(const std::vector<openvdb::Vec3f>& held, const openvdb::Vec3d& perDensity, bool nonNegative) const;
@@ -352,7 +450,8 @@ private:
     static constexpr std::size_t kNone = ~std::size_t(0);
     std::size_t shallowIndex(std::size_t voxel) const
     {
-        const std::size_t start = mShallowStart.empty() ? kNone : mShallowStart[voxel / kLeafVoxels];
+        if (mShallowStart.empty() || voxel >= mFineLeaves * kLeafVoxels) return kNone; // (a coarse cell is deep)
+        const std::size_t start = mShallowStart[voxel / kLeafVoxels];
         return start == kNone ? kNone : start + voxel % kLeafVoxels;
     }
     /// 1/f at voxel @a voxel: 1 without a surface and in a deep leaf (every voxel whole).
@@ -371,7 +470,8 @@ private:
     float paddedDistance(std::size_t q) const { return mDistance.empty() ? -1.0f : mDistance[q]; }
 
     double mVoxelSize = 1.0;
-    std::vector<openvdb::Coord> mOrigins;
+    std::vector<openvdb::Coord> mOrigins; ///< fine leaves first, then coarse ones
+    std::size_t mFineLeaves = 0;
     std::unordered_map<openvdb::Coord, std::int32_t, CoordHash> mLeafIndex; ///< leaf origin → n
     std::vector<std::int32_t> mNeighbours; ///< 27 per leaf
     /// Per octant (bit a set: direction negative along axis a), the leaves in upwind order,
@@ -384,13 +484,13 @@ private:
     std::vector<openvdb::Vec3f> mSigmaT;
     std::vector<float> mSigmaTGrey;
     /// Per leaf, where its σt starts in mSigmaT or mSigmaTGrey: a block of kPaddedVoxels, or
-    /// one value for a uniform leaf (its sweeps read that one: about half the thick bunny's
+    /// one value for a uniform or coarse leaf (its sweeps read that one: about half the thick bunny's
     /// leaves at dim 256, more as the interior grows).
     std::vector<std::size_t> mSigmaTStart;
     /// Padded, signed distance to the surface (voxels); empty without a surface (a volume
     /// object's medium: every voxel whole, f = 1, as if −1 everywhere).
     std::vector<float> mDistance;
-    std::vector<std::uint8_t> mDeep; ///< per leaf: its padded block more than half a voxel inside the surface
+    std::vector<std::uint8_t> mDeep; ///< per leaf: its padded block more than half a voxel inside the surface (a coarse leaf: 1)
     std::vector<std::uint8_t> mUniform; ///< per leaf: deep, and one σt over its padded block (sweep's short path)
     /// Per leaf with a surface, where its 512 voxels start in mInterior and mSkinIndex, or kNone
     /// for a deep leaf (f = 1 and no skin there); empty without a surface.

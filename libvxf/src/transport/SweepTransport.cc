@@ -97,10 +97,12 @@ void SweepLattice::sweep(const SweepSource& source, const std::vector<openvdb::V
                 inOctant.begin() + std::ptrdiff_t(i), inOctant.begin() + std::ptrdiff_t(std::min(inOctant.size(), i + kSweepBatch)));
         }
     }
-    const std::size_t leaves = mOrigins.size();
+    const std::size_t leaves = mFineLeaves, coarseLeaves = mOrigins.size() - mFineLeaves;
     std::size_t largest = 0;
     for (const std::vector<std::size_t>& batch : batches) largest = std::max(largest, batch.size());
-    std::vector<openvdb::Vec3f> faces(largest * leaves * kFaceVoxels);
+    // What a leaf hands on: a fine leaf its downwind faces, a coarse one each face's light.
+    std::vector<openvdb::Vec3f> faces(largest * leaves * kFaceVoxels), leaving(largest * coarseLeaves * 3);
+    const std::vector<CubeChords> chords = coarseLeaves > 0 ? cubeChords(directions) : std::vector<CubeChords>{};
     struct Scratch
     {
         std::vector<openvdb::Vec3f> buffer, toward;
@@ -108,10 +110,11 @@ void SweepLattice::sweep(const SweepSource& source, const std::vector<openvdb::V
         /// block's voxels (paddedVoxels), J and a over it (0 where no voxel is).
         std::vector<std::int64_t> index;
         std::vector<openvdb::Vec3f> block, anisotropy;
+        CoarseWeights coarse; ///< the last coarse cell's weights
     };
     tbb::enumerable_thread_specific<Scratch> scratches([] {
         const std::vector<openvdb::Vec3f> zeros(kPaddedVoxels, openvdb::Vec3f(0.0f));
-        return Scratch{zeros, zeros, std::vector<std::int64_t>(kPaddedVoxels), zeros, zeros};
+        return Scratch{zeros, zeros, std::vector<std::int64_t>(kPaddedVoxels), zeros, zeros, CoarseWeights{}};
     });
     std::size_t swept = 0;
     for (const std::vector<std::size_t>& batch : batches) {
@@ -119,15 +122,25 @@ void SweepLattice::sweep(const SweepSource& source, const std::vector<openvdb::V
         const std::vector<Ghost> upwind = upwindGhosts(octant);
         const std::array<std::int16_t, kFaceVoxels> downwind = downwindFaces(octant);
         leavesInUpwindOrder(octant, [&](std::size_t n) {
+            if (coarse(n)) {
+                for (std::size_t slot = 0; slot < batch.size(); ++slot) {
+                    sweepCoarseLeaf(n, directions, batch[slot], chords[batch[slot]], faces.data() + slot * leaves * kFaceVoxels,
+                        leaving.data() + slot * coarseLeaves * 3, source, w, fluence, moment, scratches.local().coarse);
+                }
+                return;
+            }
             Scratch& scratch = scratches.local();
             openvdb::Vec3f* buffer = scratch.buffer.data();
             for (std::size_t slot = 0; slot < batch.size(); ++slot) {
                 const std::size_t d = batch[slot];
                 const openvdb::Vec3d& omega = directions[d];
-                const openvdb::Vec3f* ownFaces = &faces[slot * leaves * kFaceVoxels];
+                const openvdb::Vec3f* ownFaces = faces.data() + slot * leaves * kFaceVoxels;
+                const openvdb::Vec3f* ownLeaving = leaving.data() + slot * coarseLeaves * 3;
                 for (const Ghost& g : upwind) {
                     const int leaf = mNeighbours[n * 27 + g.slot];
-                    buffer[g.padded] = leaf >= 0 ? ownFaces[std::size_t(leaf) * kFaceVoxels + std::size_t(g.face)] : openvdb::Vec3f(0.0f);
+                    buffer[g.padded] = leaf < 0     ? openvdb::Vec3f(0.0f)
+                        : coarse(std::size_t(leaf)) ? ownLeaving[(std::size_t(leaf) - mFineLeaves) * 3 + std::size_t(g.face / 64)]
+                                                    : ownFaces[std::size_t(leaf) * kFaceVoxels + std::size_t(g.face)];
                 }
                 // The leaf's padded block of J: as it is (padded, no moment), or gathered once a
                 // batch by the block's index, with a moment's a beside it; with a moment, J
@@ -171,6 +184,124 @@ void SweepLattice::sweep(const SweepSource& source, const std::vector<openvdb::V
         swept += batch.size();
         if (interrupter && interrupter->wasInterrupted(int(100 * swept / directions.size()))) throw Interrupted();
     }
+}
+
+void SweepLattice::sweepCoarseLeaf(std::size_t n, const std::vector<openvdb::Vec3d>& directions, std::size_t d, const CubeChords& chords,
+    const openvdb::Vec3f* faces, openvdb::Vec3f* leaving, const SweepSource& source, float weight, std::vector<openvdb::Vec3f>& fluence,
+    const FirstMoment* moment, CoarseWeights& cache) const
+{
+    // The light entering through each upwind face: what the neighbour there hands on through
+    // it (a fine leaf's downwind face's mean).
+    const int octant = octantOf(directions[d]);
+    openvdb::Vec3f in[3];
+    for (int a = 0; a < 3; ++a) {
+        int step[3] = {0, 0, 0};
+        step[a] = (octant >> a) & 1 ? 1 : -1;
+        const int m = neighbour(n, step[0], step[1], step[2]);
+        in[a] = openvdb::Vec3f(0.0f);
+        if (m < 0) continue;
+        if (coarse(std::size_t(m))) {
+            in[a] = leaving[(std::size_t(m) - mFineLeaves) * 3 + std::size_t(a)];
+            continue;
+        }
+        const openvdb::Vec3f* f = &faces[std::size_t(m) * kFaceVoxels + std::size_t(a) * 64];
+        for (int k = 0; k < 64; ++k) in[a] += f[k];
+        in[a] *= 1.0f / 64.0f;
+    }
+    const std::size_t i = voxelStart(n);
+    openvdb::Vec3f j = source.values[i], worldOmega(0.0f);
+    if (moment) {
+        worldOmega = openvdb::Vec3f(moment->worldDirections[d]);
+        const openvdb::Vec3f& a = (*moment->sourceAnisotropy)[i];
+        j *=
+            moment->corrections.empty() ? moment->rest(a, worldOmega) : moment->rest(a, worldOmega, moment->corrections[d].betaDotOmega(a));
+    }
+    openvdb::Vec3f* flux = moment ? &(*moment->flux)[i] : nullptr;
+    sweepCoarseCell(n, chords, in, j, weight, fluence[i], flux, worldOmega, cache, &leaving[(n - mFineLeaves) * 3]);
+}
+
+std::vector<CubeChords> cubeChords(const std::vector<openvdb::Vec3d>& directions)
+{
+    std::vector<CubeChords> chords;
+    for (const openvdb::Vec3d& omega : directions) chords.emplace_back(omega);
+    return chords;
+}
+
+CubeChords::CubeChords(const openvdb::Vec3d& omega)
+{
+    // Exit points on a grid of kSide² on each downwind face, each back along −ω to where it
+    // entered (the first upwind face the line meets), weighted by its face's share of the flow
+    // |ω_a|/|ω|₁.
+    const double flow = std::abs(omega[0]) + std::abs(omega[1]) + std::abs(omega[2]);
+    const double step = 8.0 / kSide;
+    for (int a = 0; a < 3; ++a) {
+        share[a] = std::abs(omega[a]) / flow;
+        if (omega[a] == 0.0) continue;
+        for (int p = 0; p < kSide; ++p) {
+            for (int q = 0; q < kSide; ++q) {
+                double u[3]; // the exit point's distance from the cube's upwind side along each axis
+                u[a] = 8.0;
+                u[(a + 1) % 3] = (p + 0.5) * step;
+                u[(a + 2) % 3] = (q + 0.5) * step;
+                Chord chord{std::numeric_limits<double>::infinity(), share[a] / double(kSide * kSide), a, a};
+                for (int b = 0; b < 3; ++b) {
+                    if (omega[b] != 0.0 && u[b] / std::abs(omega[b]) < chord.length) {
+                        chord.length = u[b] / std::abs(omega[b]);
+                        chord.entry = b;
+                    }
+                }
+                chords.push_back(chord);
+                mean += chord.weight * chord.length;
+            }
+        }
+    }
+}
+
+const CoarseWeights& coarseWeights(double sigma, double voxelSize, const CubeChords& cube, CoarseWeights& cache)
+{
+    if (cache.sigma == sigma && cache.cube == &cube) return cache;
+    cache = CoarseWeights{};
+    cache.sigma = sigma;
+    cache.cube = &cube;
+    const double mean = cube.mean * voxelSize;
+    for (const CubeChords::Chord& chord : cube.chords) {
+        const double c = chord.length * voxelSize, w = chord.weight;
+        const StepWeights step = stepWeights(sigma * c);
+        const double g = step.in + step.own; // (1 − T)/τ
+        cache.out[chord.exit][chord.entry] += w / cube.share[chord.exit] * step.transmittance;
+        cache.outJ[chord.exit] += w / cube.share[chord.exit] * c * g;
+        cache.meanIn[chord.entry] += w * c * g / mean;
+        cache.meanJ += w * c * c * step.own / mean;
+    }
+    return cache;
+}
+
+void SweepLattice::sweepCoarseCell(std::size_t n, const CubeChords& cube, const openvdb::Vec3f (&in)[3], const openvdb::Vec3f& j,
+    float weight, openvdb::Vec3f& phi, openvdb::Vec3f* flux, const openvdb::Vec3f& worldOmega, CoarseWeights& cache,
+    openvdb::Vec3f* out) const
+{
+    // Light entering evenly through each upwind face, J even over the cube: a chord of length c
+    // from upwind face e to downwind face a carries T(c)·in_e + c·g(c)·J out through a
+    // (stepWeights, g = in + own), and the cube's mean is its chords' path-weighted mean,
+    // g(c)·in_e + c·own(c)·J: what enters equals what is absorbed plus what leaves. Each face's
+    // own light, not one value for all three, and the chords themselves, not the step over
+    // their mean (docs/accuracy-notes.md (ah)).
+    const openvdb::Vec3f sigma = paddedSigmaT(n, 0);
+    openvdb::Vec3f mean;
+    for (int a = 0; a < 3; ++a) out[a] = openvdb::Vec3f(0.0f);
+    for (int ch = 0; ch < 3; ++ch) {
+        const CoarseWeights& w = coarseWeights(double(sigma[ch]), mVoxelSize, cube, cache);
+        double m = w.meanJ * j[ch];
+        for (int e = 0; e < 3; ++e) m += w.meanIn[e] * in[e][ch];
+        mean[ch] = float(m);
+        for (int a = 0; a < 3; ++a) {
+            double o = w.outJ[a] * j[ch];
+            for (int e = 0; e < 3; ++e) o += w.out[a][e] * in[e][ch];
+            out[a][ch] = float(o);
+        }
+    }
+    phi += weight * mean;
+    if (flux) *flux += (weight * (mean[0] + mean[1] + mean[2]) / 3.0f) * worldOmega;
 }
 
 template <typename Sigma>

@@ -38,6 +38,10 @@ struct SweepSolveOptions
     /// `scatter` on the same voxels), read where it is active, 0 elsewhere; null: from 0. Only
     /// the number of iterations changes, the stopping rule is the same.
     const openvdb::Vec3SGrid* initial = nullptr;
+    /// The sweeps take each 8³ block of the source's active tiles deep inside the surface as one
+    /// cell (SweepLattice::Tiles::Coarse: variable resolution, scatter's `band`), not as 512
+    /// voxels; the result holds the tiles' values. The gathers voxelize them whatever this says.
+    bool coarseTiles = false;
 };
 
 struct SweepSolveReport
