@@ -42,8 +42,12 @@ public:
         TerminalProgress progress;
         const auto start = std::chrono::steady_clock::now();
         const ops::Args args = mParams->args();
-        // Refused before the read when the file's own count says the volume will not fit.
-        if (const std::uint64_t voxels = declaredVoxels(mInput, grids::kDensity)) requireMemory("scatter", scatterMemory(double(voxels)));
+        // Refused before the read when the file's own count says the volume will not fit (with a
+        // band, what the sweeps hold is known once its tiles are made: scatter() checks then).
+        const bool banded = args.number("band") > 0.0;
+        if (const std::uint64_t voxels = banded ? 0 : declaredVoxels(mInput, grids::kDensity)) {
+            requireMemory("scatter", scatterMemory(double(voxels)));
+        }
         VoxelSet set = readVoxelSet(mInput, scatterInputRead()); // `direct` after the solve
         const Material material = mScene.empty() ? recordedMaterial(set) : sceneMaterial(loadScene(mScene));
         const ScatterOptions options = scatterOptions(args, material);

@@ -11,6 +11,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <limits>
 
 TEST_CASE("a sweep lattice reads a grid's voxels and writes them back as they were", "[transport][lattice]")
 {
@@ -196,6 +197,11 @@ TEST_CASE("a uniform leaf holds one sigma_t and a deep leaf neither 1/f nor a sk
     CHECK(grid->tree().getValue(openvdb::Coord(0))[0] == Approx(4.0 * M_PI * j / sigmaT).epsilon(1e-3));
 }
 
+namespace {
+/// Coarse cells of any optical size (the lattice's mechanics, not the solve's default limit).
+constexpr double kAnyDepth = std::numeric_limits<double>::infinity();
+} // namespace
+
 TEST_CASE(
     "a lattice sweeps the source's deep tiles as coarse cells: 8^3 voxels one value, the fixed point kept", "[transport][lattice][band]")
 {
@@ -210,7 +216,7 @@ TEST_CASE(
     const auto band = vxf::coarsenBeyondBand(*source, medium.density(), 8.0 / 48.0);
     REQUIRE(band.leafTiles > 100);
     using Lattice = vxf::detail::SweepLattice;
-    const Lattice fine(medium, *source), coarse(medium, *source, Lattice::Coefficients::PerVoxel, Lattice::Tiles::Coarse);
+    const Lattice fine(medium, *source), coarse(medium, *source, Lattice::Coefficients::PerVoxel, Lattice::Tiles::Coarse, kAnyDepth);
     CHECK(fine.fineLeafCount() == fine.leafCount());
     const std::size_t cells = coarse.leafCount() - coarse.fineLeafCount();
     CHECK(cells == band.leafTiles); // every tile lies deep inside the surface here
@@ -258,7 +264,7 @@ TEST_CASE(
         const vxf::Medium medium(set, m);
         vxf::coarsenBeyondBand(*source, medium.density(), 8.0 / 48.0);
         using Lattice = vxf::detail::SweepLattice;
-        const Lattice fine(medium, *source), coarse(medium, *source, Lattice::Coefficients::PerVoxel, Lattice::Tiles::Coarse);
+        const Lattice fine(medium, *source), coarse(medium, *source, Lattice::Coefficients::PerVoxel, Lattice::Tiles::Coarse, kAnyDepth);
         REQUIRE(coarse.fineLeafCount() < coarse.leafCount());
         const std::vector<openvdb::Vec3d> directions = vxf::sweepDirections(64, 0);
         std::vector<openvdb::Vec3f> a(fine.voxelCount(), openvdb::Vec3f(0.0f)), b(coarse.voxelCount(), openvdb::Vec3f(0.0f)), skin;

@@ -56,6 +56,15 @@ openvdb::Vec3d gridEnergy(const openvdb::Vec3SGrid& grid)
 
 MemoryEstimate scatterMemory(double voxels) { return stageMemory(kStageFixedBytes, voxels, kScatterBytesPerVoxel); }
 
+MemoryEstimate bandedScatterMemory(double voxels, double swept)
+{
+    MemoryEstimate e = stageMemory(kStageFixedBytes, swept, kBandedScatterBytesPerSweptVoxel);
+    e.bytes += voxels * kBandedScatterBytesPerActiveVoxel;
+    e.how = fmt::format("{:.3g} swept voxels × {:.0f} bytes + {:.3g} active voxels × {:.0f} bytes + {:.0f} MiB", swept,
+        kBandedScatterBytesPerSweptVoxel, voxels, kBandedScatterBytesPerActiveVoxel, kStageFixedBytes / (1024.0 * 1024.0));
+    return e;
+}
+
 namespace {
 
 /// Whether scatter() solves the whole sum at once (sweeps or gathers with acceleration), not
@@ -75,10 +84,12 @@ Medium scatterMedium(const VoxelSet& set, const Material& material, const Scatte
 
 ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptions& options, Interrupter* interrupter)
 {
-    requireMemory("scatter", scatterMemory(double(transport.density().activeVoxelCount())));
-    ScatterReport report;
     const bool solveWhole = solvesWhole(options);
     const bool sweeps = options.pass.kernel == ScatterKernel::Sweep;
+    const bool coarseCells = solveWhole && sweeps && options.band > 0.0 && options.fromPass == 0;
+    const double activeVoxels = double(transport.density().activeVoxelCount());
+    if (!coarseCells) requireMemory("scatter", scatterMemory(activeVoxels)); // (with coarse cells: once the band has made its tiles)
+    ScatterReport report;
     // An anisotropic rest of the phase (g* ≠ 0, Phase.h) only the accelerated sweep solve
     // carries, as a first moment, from a source lit with it (`scatter_source_anisotropy`). Every
     // other way takes the similarity relation's isotropic medium: a source lit so as it is; one
@@ -99,6 +110,11 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
                 j->beginValueAll(), [sourceScale](const openvdb::Vec3SGrid::ValueAllIter& it) { it.setValue(*it * sourceScale); });
         }
         report.band = coarsenBeyondBand(*j, medium.density(), options.band);
+        if (coarseCells) {
+            // The sweeps' voxels: the band's leaves' and one a coarse cell.
+            const double swept = double(j->tree().leafCount()) * 512.0 + double(report.band.coarseVoxels) / 512.0;
+            requireMemory("scatter", bandedScatterMemory(activeVoxels, swept));
+        }
     } else {
         sum = set.get<openvdb::Vec3SGrid>("scatter_pass_1")->deepCopy();
         for (int p = 2; p <= k; ++p) {

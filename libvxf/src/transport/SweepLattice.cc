@@ -21,19 +21,21 @@
 
 namespace vxf::detail {
 
-SweepLattice::SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topology, Coefficients coefficients, Tiles tiles)
-    : SweepLattice(medium, openvdb::MaskTree(topology.tree(), false, openvdb::TopologyCopy()), coefficients, tiles)
+SweepLattice::SweepLattice(
+    const Medium& medium, const openvdb::Vec3SGrid& topology, Coefficients coefficients, Tiles tiles, double maxCellDepth)
+    : SweepLattice(medium, openvdb::MaskTree(topology.tree(), false, openvdb::TopologyCopy()), coefficients, tiles, maxCellDepth)
 {
 }
 
-SweepLattice::SweepLattice(const Medium& medium, const openvdb::MaskTree& topology, Coefficients coefficients, Tiles tiles)
+SweepLattice::SweepLattice(
+    const Medium& medium, const openvdb::MaskTree& topology, Coefficients coefficients, Tiles tiles, double maxCellDepth)
     : mVoxelSize(medium.voxelSize())
 {
-    indexLeaves(medium, topology, tiles);
+    indexLeaves(medium, topology, tiles, maxCellDepth);
     readMedium(medium, coefficients == Coefficients::PerVoxel);
 }
 
-std::vector<openvdb::Coord> SweepLattice::coarseBlocks(const Medium& medium, const openvdb::MaskTree& topology)
+std::vector<openvdb::Coord> SweepLattice::coarseBlocks(const Medium& medium, const openvdb::MaskTree& topology, double maxCellDepth)
 {
     std::vector<openvdb::CoordBBox> tiles;
     for (auto it = topology.cbeginValueOn(); it; ++it) {
@@ -49,6 +51,8 @@ std::vector<openvdb::Coord> SweepLattice::coarseBlocks(const Medium& medium, con
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tiles.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
         std::vector<openvdb::Coord>& mine = found.local();
         auto distance = surface ? std::optional<openvdb::FloatGrid::ConstAccessor>(surface->getConstAccessor()) : std::nullopt;
+        Medium::Sampler sampler(medium);
+        const double side = 8.0 * medium.voxelSize();
         for (std::size_t t = r.begin(); t != r.end(); ++t) {
             const openvdb::CoordBBox& box = tiles[t];
             for (int x = box.min().x(); x <= box.max().x(); x += 8) {
@@ -62,6 +66,9 @@ std::vector<openvdb::Coord> SweepLattice::coarseBlocks(const Medium& medium, con
                                 distance->getValue(origin.offsetBy(4)) >= 0.0f)) {
                             continue;
                         }
+                        // Thin enough to resolve the light (σt at its centre, the thickest channel).
+                        const openvdb::Vec3d sigma = sampler.sigmaT(origin.asVec3d() + openvdb::Vec3d(3.5));
+                        if (std::max({sigma[0], sigma[1], sigma[2]}) * side > maxCellDepth) continue;
                         mine.push_back(origin);
                     }
                 }
@@ -80,12 +87,12 @@ void SweepLattice::requireFine(const char* what) const
     if (mFineLeaves != mOrigins.size()) throw Error(fmt::format("sweep lattice: {} takes no coarse leaves", what));
 }
 
-void SweepLattice::indexLeaves(const Medium& medium, const openvdb::MaskTree& topology, Tiles tiles)
+void SweepLattice::indexLeaves(const Medium& medium, const openvdb::MaskTree& topology, Tiles tiles, double maxCellDepth)
 {
     openvdb::MaskTree mask(medium.density().tree(), false, openvdb::TopologyCopy());
     mask.topologyUnion(topology);
     const std::vector<openvdb::Coord> coarseOrigins =
-        tiles == Tiles::Coarse ? coarseBlocks(medium, topology) : std::vector<openvdb::Coord>{};
+        tiles == Tiles::Coarse ? coarseBlocks(medium, topology, maxCellDepth) : std::vector<openvdb::Coord>{};
     for (const openvdb::Coord& origin : coarseOrigins) {
         mask.fill(openvdb::CoordBBox(origin, origin.offsetBy(7)), false, false); // swept as a cell, not as voxels
     }

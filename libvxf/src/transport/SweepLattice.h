@@ -95,14 +95,21 @@ public:
     /// 24 bytes a voxel saved, 108 MB for the bunny at dim 256).
     enum class Coefficients { PerVoxel, SweepOnly };
     /// What the lattice makes of @a topology's active tiles: their voxels (Voxelized), or each
-    /// 8³ block of a tile lying more than half a voxel inside the surface one coarse cell
-    /// (Coarse; a block the density holds as voxels takes their means).
+    /// 8³ block of a tile lying more than half a voxel inside the surface and at most
+    /// maxCellDepth mean free paths across one coarse cell (Coarse; a block the density holds
+    /// as voxels takes their means).
     enum class Tiles { Voxelized, Coarse };
+    /// The coarse cells' largest optical size σt·8dx by default: cells of 4 mean free paths
+    /// stalled the diffusion-accelerated solve (the thick bunny at dim 128: rate 0.97 after 40
+    /// sweeps, its correction not the cells' transport), cells of 2 left the centre of a sphere
+    /// of albedo 0.99 12% dark, cells of 1 put the bunny's image at dim 512 within 0.6% of full
+    /// resolution (docs/accuracy-notes.md (ah)).
+    static constexpr double kMaxCellDepth = 1.5;
     /// The lattice over @a medium's active density and @a topology's active values.
     SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topology, Coefficients coefficients = Coefficients::PerVoxel,
-        Tiles tiles = Tiles::Voxelized);
+        Tiles tiles = Tiles::Voxelized, double maxCellDepth = kMaxCellDepth);
     SweepLattice(const Medium& medium, const openvdb::MaskTree& topology, Coefficients coefficients = Coefficients::PerVoxel,
-        Tiles tiles = Tiles::Voxelized);
+        Tiles tiles = Tiles::Voxelized, double maxCellDepth = kMaxCellDepth);
 
     /// Leaves, fine ones (512 voxels) first, then coarse ones (one cell of 8³ voxels).
     std::size_t leafCount() const { return mOrigins.size(); }
@@ -365,10 +372,11 @@ public:
 private:
     /// The leaves of @a medium's density and @a topology (tiles voxelized, or coarse as @a tiles
     /// says), their neighbours and their upwind orders.
-    void indexLeaves(const Medium& medium, const openvdb::MaskTree& topology, Tiles tiles);
+    void indexLeaves(const Medium& medium, const openvdb::MaskTree& topology, Tiles tiles, double maxCellDepth);
     /// The origins of the 8³ blocks of @a topology's active tiles that lie more than half a voxel
-    /// inside @a medium's surface (all of them without one): the coarse leaves.
-    static std::vector<openvdb::Coord> coarseBlocks(const Medium& medium, const openvdb::MaskTree& topology);
+    /// inside @a medium's surface (all of them without one) and at most @a maxCellDepth mean
+    /// free paths across: the coarse leaves.
+    static std::vector<openvdb::Coord> coarseBlocks(const Medium& medium, const openvdb::MaskTree& topology, double maxCellDepth);
     /// A coarse leaf's one cell: its σt (inside, the mean over its voxels), σs or density and
     /// distance, at its per-voxel index.
     void readCoarseCell(std::size_t leaf, const Medium& medium, Medium::Sampler& sampler, bool perVoxel, bool fromDensity,
