@@ -34,6 +34,28 @@ void forUpwindBlock(int octant, F&& f)
     }
 }
 
+/// A leaf's upwind ghosts in its padded @a buffer: what its @a neighbours (27) handed on, a
+/// fine one's downwind faces (@a faces), a coarse one's light through the face the ghost lies
+/// across (@a leaving, null: no coarse leaves, the loop without their test), 0 where none is.
+void fillGhosts(const std::vector<Ghost>& upwind, const std::int32_t* neighbours, std::size_t fineLeaves, const openvdb::Vec3f* faces,
+    const openvdb::Vec3f* leaving, openvdb::Vec3f* buffer)
+{
+    constexpr std::size_t kFace = SweepLattice::kFaceVoxels;
+    if (!leaving) {
+        for (const Ghost& g : upwind) {
+            const int leaf = neighbours[g.slot];
+            buffer[g.padded] = leaf >= 0 ? faces[std::size_t(leaf) * kFace + std::size_t(g.face)] : openvdb::Vec3f(0.0f);
+        }
+        return;
+    }
+    for (const Ghost& g : upwind) {
+        const int leaf = neighbours[g.slot];
+        buffer[g.padded] = leaf < 0           ? openvdb::Vec3f(0.0f)
+            : std::size_t(leaf) >= fineLeaves ? leaving[(std::size_t(leaf) - fineLeaves) * 3 + std::size_t(g.face / 64)]
+                                              : faces[std::size_t(leaf) * kFace + std::size_t(g.face)];
+    }
+}
+
 /// A uniform leaf's sweep (sweepLeaf's short path: every step whole, one σt) a row at a time,
 /// with per channel @a transmittance, @a in and @a own (uniformWeights).
 void sweepUniformLeaf(const openvdb::Vec3d& omega, const float (&transmittance)[3], const float (&in)[3], const float (&own)[3],
@@ -136,12 +158,7 @@ void SweepLattice::sweep(const SweepSource& source, const std::vector<openvdb::V
                 const openvdb::Vec3d& omega = directions[d];
                 const openvdb::Vec3f* ownFaces = faces.data() + slot * leaves * kFaceVoxels;
                 const openvdb::Vec3f* ownLeaving = leaving.data() + slot * coarseLeaves * 3;
-                for (const Ghost& g : upwind) {
-                    const int leaf = mNeighbours[n * 27 + g.slot];
-                    buffer[g.padded] = leaf < 0     ? openvdb::Vec3f(0.0f)
-                        : coarse(std::size_t(leaf)) ? ownLeaving[(std::size_t(leaf) - mFineLeaves) * 3 + std::size_t(g.face / 64)]
-                                                    : ownFaces[std::size_t(leaf) * kFaceVoxels + std::size_t(g.face)];
-                }
+                fillGhosts(upwind, &mNeighbours[n * 27], mFineLeaves, ownFaces, coarseLeaves > 0 ? ownLeaving : nullptr, buffer);
                 // The leaf's padded block of J: as it is (padded, no moment), or gathered once a
                 // batch by the block's index, with a moment's a beside it; with a moment, J
                 // toward ω: J·RestPhase(a, ω, β·ω), over the gathered blocks.
