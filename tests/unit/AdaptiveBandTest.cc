@@ -1,4 +1,4 @@
-#include <vxf/scatter/AdaptiveBand.h>
+#include <vxf/transport/AdaptiveBand.h>
 #include <vxf/scatter/Scatter.h>
 
 #include <vxf/core/MemoryBudget.h>
@@ -80,6 +80,24 @@ TEST_CASE("the band keeps full resolution near the surface and tiles the deep in
         CHECK(again.leafTiles == 0);
         CHECK(again.fineVoxels == report.fineVoxels);
     }
+    SECTION("a coarsened copy: the same grid, the original untouched")
+    {
+        vxf::AdaptiveBandReport copied;
+        const auto copy = vxf::coarsenedBeyondBand(*source, *density, 0.8, copied);
+        CHECK(source->tree().leafCount() == 216); // 6³ leaves, none made a tile
+        CHECK(vxf::gridEnergy(*source) == before);
+        const auto report = vxf::coarsenBeyondBand(*source, *density, 0.8);
+        CHECK(copied.leafTiles == report.leafTiles);
+        CHECK(copied.fineVoxels == report.fineVoxels);
+        CHECK(copied.coarseVoxels == report.coarseVoxels);
+        CHECK(copy->tree().leafCount() == source->tree().leafCount());
+        CHECK(copy->transform() == source->transform());
+        CHECK(copy->tree().activeTileCount() == source->tree().activeTileCount());
+        std::string why;
+        const bool same = vxf::test::identicalGrids(*copy, *source, &why);
+        INFO(why);
+        CHECK(same);
+    }
     SECTION("a band thinner than half a leaf still keeps 4 voxels")
     {
         // max(band, 4): depth 4 means i in [-20, 19], leaves [-16, 15]: 64 again.
@@ -96,7 +114,13 @@ TEST_CASE("blocks 64 voxels deep become 128³ tiles", "[band]")
     const openvdb::Coord probe(5, 6, 7);
     source->tree().setValueOn(probe, openvdb::Vec3f(512.0f)); // one voxel of a 128³ block differs
     const openvdb::Vec3d before = vxf::gridEnergy(*source);
+    vxf::AdaptiveBandReport copied;
+    const auto copy = vxf::coarsenedBeyondBand(*source, *density, 1.0, copied);
     const auto report = vxf::coarsenBeyondBand(*source, *density, 1.0); // 1 voxel: depth max(1, 64)
+    CHECK(copied.internalTiles == report.internalTiles);
+    CHECK(copied.coarseVoxels == report.coarseVoxels);
+    CHECK(vxf::test::identicalGrids(*copy, *source));
+    CHECK(copy->tree().getValueDepth(probe) == 1);
     // Blocks [-128, -1] and [0, 127] per axis lie 64 deep: 8 of them; 7 already are tiles
     // (the fill made them), the one holding the probe becomes one.
     CHECK(report.internalTiles == 1);

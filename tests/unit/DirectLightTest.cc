@@ -1,4 +1,5 @@
 #include <vxf/light/DirectLight.h>
+#include <vxf/transport/AdaptiveBand.h>
 #include <vxf/core/ProceduralMesh.h>
 #include <vxf/core/RayScene.h>
 #include <vxf/io/ImageFile.h>
@@ -261,6 +262,48 @@ TEST_CASE("the light stage writes direct and scatter_source on the medium's topo
     CHECK(vxf::test::identicalGrids(*one.find("direct"), *direct, &why));
     INFO(why);
     CHECK(vxf::test::identicalGrids(*one.find("scatter_source"), *source, &why));
+}
+
+TEST_CASE("with a band the light stage writes the deep leaves as tiles of their means", "[light][direct][band]")
+{
+    // A cube of 64³ voxels (dx 0.02), a point light above it; a band of 10 voxels (0.2): the
+    // leaves whose voxels all lie 10 deep (L∞: voxels [-22, 21] per axis) are [-16, 15]³, 64.
+    const openvdb::CoordBBox box(openvdb::Coord(-32), openvdb::Coord(31));
+    const vxf::Material m = vxf::test::greyMaterial(0.5, 2.0);
+    const std::vector<vxf::Light> lights = {pointLight(openvdb::Vec3d(0, 0, 2), 1.0)};
+    vxf::VoxelSet full = boxMedium(box, 0.02), banded = boxMedium(box, 0.02);
+    const auto fullReport = vxf::computeDirectLight(full, vxf::Medium(full, m), lights);
+    vxf::DirectLightOptions options;
+    options.band = 0.2;
+    const auto bandReport = vxf::computeDirectLight(banded, vxf::Medium(banded, m), lights, options);
+    CHECK(bandReport.lights[0].fluenceSum.x() == Approx(fullReport.lights[0].fluenceSum.x()).epsilon(1e-12)); // lit per voxel alike
+
+    for (const char* name : {"direct", "scatter_source"}) {
+        INFO(name);
+        const auto fine = full.get<openvdb::Vec3SGrid>(name);
+        const auto coarse = banded.get<openvdb::Vec3SGrid>(name);
+        CHECK(coarse->tree().activeTileCount() == 64);
+        CHECK(coarse->activeVoxelCount() == fine->activeVoxelCount());
+        // A deep leaf: one tile, its voxels' mean (the scatter stage's band makes the same).
+        const openvdb::Coord deepLeaf(0, 0, 0), nearSurface(0, 0, 24);
+        CHECK(coarse->tree().probeConstLeaf(deepLeaf) == nullptr);
+        const auto* leaf = fine->tree().probeConstLeaf(deepLeaf);
+        REQUIRE(leaf != nullptr);
+        openvdb::Vec3d sum(0.0);
+        for (auto v = leaf->cbeginValueOn(); v; ++v) sum += openvdb::Vec3d(*v);
+        CHECK(coarse->tree().getValue(openvdb::Coord(3, 5, 7)) == openvdb::Vec3f(sum / 512.0));
+        CHECK(fine->tree().getValue(openvdb::Coord(0, 0, 7)) > fine->tree().getValue(deepLeaf)); // (the light falls across it)
+        // The band's voxels as at full resolution.
+        CHECK(coarse->tree().getValue(nearSurface) == fine->tree().getValue(nearSurface));
+        CHECK(coarse->tree().probeConstLeaf(nearSurface) != nullptr);
+        // What the scatter stage's band makes of full resolution, the light stage made already.
+        vxf::AdaptiveBandReport made;
+        const auto rebanded = vxf::coarsenedBeyondBand(*fine, *full.get<openvdb::FloatGrid>("density"), 0.2, made);
+        std::string why;
+        const bool same = vxf::test::identicalGrids(*rebanded, *coarse, &why);
+        INFO(why);
+        CHECK(same);
+    }
 }
 
 TEST_CASE("occluder meshes cast shadows in the light stage", "[light][direct][rayscene]")

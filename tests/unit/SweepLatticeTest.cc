@@ -3,7 +3,7 @@
 // sweep's fixed point deep in a homogeneous medium.
 #include "transport/SweepLattice.h"
 
-#include <vxf/scatter/AdaptiveBand.h>
+#include <vxf/transport/AdaptiveBand.h>
 #include <vxf/scatter/SweepPass.h>
 
 #include "TestSupport.h"

@@ -4,6 +4,7 @@
 #include <vxf/core/GridStats.h>
 #include <vxf/core/MemoryBudget.h>
 #include <vxf/light/VolumeEmission.h>
+#include <vxf/transport/AdaptiveBand.h>
 #include <vxf/transport/Phase.h>
 
 #include "LightSweeps.h"
@@ -17,6 +18,7 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <functional>
@@ -114,6 +116,14 @@ openvdb::MaskTree stageTopology(const openvdb::FloatGrid& density, bool coarseTi
 using StageLeaf = openvdb::Vec3STree::LeafNodeType;
 using StageLeaves = openvdb::tree::LeafManager<const openvdb::MaskTree>;
 
+/// The mean of @a leaf's active values over its voxels (as coarsenBeyondBand takes it).
+openvdb::Vec3f leafMean(const StageLeaf& leaf)
+{
+    openvdb::Vec3d sum(0.0);
+    for (auto v = leaf.cbeginValueOn(); v; ++v) sum += openvdb::Vec3d(*v);
+    return openvdb::Vec3f(sum / double(StageLeaf::SIZE));
+}
+
 /// A grid of the light stage named @a name: @a leaves (taken) and @a tiles filled with @a tileValues.
 openvdb::Vec3SGrid::Ptr stageGrid(const openvdb::FloatGrid& density, const char* name, std::vector<std::unique_ptr<StageLeaf>>& leaves,
     const std::vector<openvdb::CoordBBox>& tiles, const std::vector<openvdb::Vec3f>& tileValues)
@@ -125,6 +135,9 @@ openvdb::Vec3SGrid::Ptr stageGrid(const openvdb::FloatGrid& density, const char*
     for (std::size_t t = 0; t < tiles.size(); ++t) grid->tree().fill(tiles[t], tileValues[t], true);
     return grid;
 }
+
+/// The voxel at the centre of tile @a box (where the light stage evaluates it).
+openvdb::Coord centreOf(const openvdb::CoordBBox& box) { return box.min() + openvdb::Coord(box.dim().x() / 2); }
 
 /// Σ over @a leaves' active voxels of @a fluence (per lattice voxel), and over @a tiles of the
 /// value at the tile's centre times its voxels (as the light stage's grids hold them), in a
@@ -143,7 +156,7 @@ openvdb::Vec3d energyOf(const detail::LeafBlocks<openvdb::Vec3f>& fluence, const
                 for (auto it = leaves.leaf(item).cbeginValueOn(); it; ++it) sums[item] += at(it.getCoord());
             } else {
                 const openvdb::CoordBBox& box = tiles[item - leaves.leafCount()];
-                sums[item] += at(box.min() + openvdb::Coord(box.dim().x() / 2)) * double(box.volume());
+                sums[item] += at(centreOf(box)) * double(box.volume());
             }
         }
     });
@@ -194,6 +207,30 @@ SweptLights sweepLights(const std::vector<LightSampler>& active, const Medium& m
         checkInterrupt(interrupter);
     }
     return out;
+}
+
+/// Per work item (@a leaves, then @a tiles), the lattice leaf of @a swept whose sums it reads
+/// (−1: none); the sums' blocks no item reads are freed at once.
+std::vector<std::int64_t> latticeLeavesRead(
+    SweptLights& swept, const StageLeaves& leaves, const std::vector<openvdb::CoordBBox>& tiles, bool anisotropic)
+{
+    std::vector<std::int64_t> latticeLeaf(leaves.leafCount() + tiles.size(), -1);
+    if (!swept.lattice || swept.fluence.empty()) return latticeLeaf;
+    std::vector<char> read(swept.lattice->leafCount(), 0);
+    for (std::size_t item = 0; item < latticeLeaf.size(); ++item) {
+        const std::size_t leafCount = leaves.leafCount();
+        const openvdb::Coord at = item < leafCount ? leaves.leaf(item).origin() : centreOf(tiles[item - leafCount]);
+        const std::int64_t i = swept.lattice->indexOf(at);
+        if (i < 0) continue;
+        latticeLeaf[item] = i / detail::SweepLattice::kLeafVoxels;
+        read[std::size_t(latticeLeaf[item])] = 1;
+    }
+    for (std::size_t n = 0; n < read.size(); ++n) {
+        if (read[n]) continue;
+        swept.fluence.release(n);
+        if (anisotropic) swept.flux.release(n);
+    }
+    return latticeLeaf;
 }
 
 /// The light stage at one point: φ0 from every light (swept where a sweep holds the voxel,
@@ -283,7 +320,7 @@ DirectLightReport computeDirectLight(
     }
     const std::size_t leafCount = leaves.leafCount();
     const std::size_t total = leafCount + tiles.size();
-    const auto tileCentre = [&](std::size_t t) { return tiles[t].min() + openvdb::Coord(tiles[t].dim().x() / 2); };
+    const auto tileCentre = [&](std::size_t t) { return centreOf(tiles[t]); };
     std::vector<std::vector<openvdb::Vec3d>> perLight(total);
     std::vector<openvdb::Vec3f> tileDirect(tiles.size()), tileSource(tiles.size()), tileAnisotropy(tiles.size());
     std::atomic<std::size_t> done{0};
@@ -291,25 +328,12 @@ DirectLightReport computeDirectLight(
 
     SweptLights swept = sweepLights(active, medium, topology, options, anisotropic, leaves, tiles, interrupter);
     // The grids' leaves are made as each is lit, and the swept sums' blocks freed as they are read
-    // (the sweeps' arrays and the grids are never held whole at once): the lattice leaves no item
-    // reads go first.
-    std::vector<std::int64_t> latticeLeaf(total, -1); // per item: the lattice leaf it reads, or -1
-    if (swept.lattice && !swept.fluence.empty()) {
-        std::vector<char> read(swept.lattice->leafCount(), 0);
-        for (std::size_t item = 0; item < total; ++item) {
-            const openvdb::Coord at = item < leafCount ? leaves.leaf(item).origin() : tileCentre(item - leafCount);
-            const std::int64_t i = swept.lattice->indexOf(at);
-            if (i < 0) continue;
-            latticeLeaf[item] = i / detail::SweepLattice::kLeafVoxels;
-            read[std::size_t(latticeLeaf[item])] = 1;
-        }
-        for (std::size_t n = 0; n < read.size(); ++n) {
-            if (read[n]) continue;
-            swept.fluence.release(n);
-            if (anisotropic) swept.flux.release(n);
-        }
-    }
+    // (the sweeps' arrays and the grids are never held whole at once).
+    const std::vector<std::int64_t> latticeLeaf = latticeLeavesRead(swept, leaves, tiles, anisotropic);
     std::vector<std::unique_ptr<StageLeaf>> directLeaves(leafCount), sourceLeaves(leafCount), anisotropyLeaves(anisotropic ? leafCount : 0);
+    // Beyond the band, a leaf is made, then kept as its mean (direct, source, anisotropy).
+    const BandInterior deep(density, options.band);
+    std::vector<std::optional<std::array<openvdb::Vec3f, 3>>> deepMeans(options.band > 0.0 ? leafCount : 0);
 
     const PointLighting evaluate{medium, options, active, swept.lattice, swept.swept, swept.fluence, swept.flux, anisotropic};
 
@@ -337,6 +361,13 @@ DirectLightReport computeDirectLight(
                     sourceLeaf->setValueOnly(it.pos(), s);
                     if (anisotropyLeaf) anisotropyLeaf->setValueOnly(it.pos(), a);
                 }
+                if (!deepMeans.empty() && deep.holdsLeaf(mask.origin())) {
+                    deepMeans[item] = {
+                        leafMean(*directLeaf), leafMean(*sourceLeaf), anisotropyLeaf ? leafMean(*anisotropyLeaf) : openvdb::Vec3f(0.0f)};
+                    directLeaves[item].reset();
+                    sourceLeaves[item].reset();
+                    if (anisotropyLeaf) anisotropyLeaves[item].reset();
+                }
             } else {
                 const std::size_t t = item - leafCount;
                 const openvdb::Coord centre = tileCentre(t);
@@ -354,6 +385,13 @@ DirectLightReport computeDirectLight(
         }
     });
     if (cancelled) throw Interrupted();
+    for (std::size_t n = 0; n < deepMeans.size(); ++n) {
+        if (!deepMeans[n]) continue;
+        tiles.push_back(openvdb::CoordBBox::createCube(leaves.leaf(n).origin(), StageLeaf::DIM));
+        tileDirect.push_back((*deepMeans[n])[0]);
+        tileSource.push_back((*deepMeans[n])[1]);
+        tileAnisotropy.push_back((*deepMeans[n])[2]);
+    }
     auto direct = stageGrid(density, grids::kDirect, directLeaves, tiles, tileDirect);
     auto source = stageGrid(density, grids::kScatterSource, sourceLeaves, tiles, tileSource);
     openvdb::Vec3SGrid::Ptr anisotropy;

@@ -64,6 +64,11 @@ Operator lightOperator()
             number("step", "(optional) march step in voxels (default: the scene's scatter.step, 1 unless set, as vxf run lights it)",
                 nullptr, 0.01, 64.0),
             number("cutoff", "stop marching below this transmittance", defaults::kLightCutoff, 0.0, 0.5),
+            number("band",
+                "(optional) adaptive band, world units: the grids' 8^3 leaves deeper inside than this written as tiles of their "
+                "means, as the scatter stage's band takes its source (0: every voxel; default: the scene's scatter.band, as vxf "
+                "run lights it)",
+                nullptr, 0.0),
             flag("march",
                 "every light by a march per voxel and sample (the reference; slow). By default directional and environment lights "
                 "take their transmittance from one optical-depth sweep over the medium per direction (the surface's rim is marched "
@@ -193,6 +198,7 @@ DirectLightOptions lightOptions(const Args& args, const SceneSettings& settings)
     o.march.step = args.has("step") ? args.number("step") : settings.step;
     o.march.cutoff = args.number("cutoff");
     o.sweep = !args.flag("march");
+    o.band = args.has("band") ? args.number("band") : settings.scatterBand;
     return o;
 }
 

@@ -234,6 +234,7 @@ struct PipelineRun
         // A forward phase's first moment is carried by the accelerated sweeps alone (Scatter.h);
         // for any other scatter the light stage lights the similarity relation's medium too.
         const bool carriesMoment = s.kernel == "sweep" && s.accelerate && !wants("scatter_passes") && s.finePasses == 0;
+        if (s.scatterBand > 0.0) lightInputs["band"] = s.scatterBand; // (scenes without one keep their cached stages)
         if (material.phaseG != 0.0) { // isotropic scenes keep their cached stages
             lightInputs["phase_g"] = material.phaseG;
             lightInputs["phase_scaling"] = carriesMoment ? "delta-M 3, Henyey-Greenstein lobe" : "similarity";
@@ -248,6 +249,7 @@ struct PipelineRun
                 DirectLightOptions options;
                 options.march.step = s.step;
                 options.similarity = !carriesMoment;
+                options.band = s.scatterBand; // the deep leaves as tiles, which the scatter's band takes them as
                 const DirectLightReport lit = lightScene(set, scene, options, interrupter);
                 report.warnings.insert(report.warnings.end(), lit.warnings.begin(), lit.warnings.end());
                 set.setProvenance("light", lightInputs.dump());

@@ -1,12 +1,13 @@
 #include <vxf/scatter/Scatter.h>
 
 #include "SourceIteration.h"
+#include "../transport/SweepLattice.h"
 
 #include <vxf/core/GridRoles.h>
 #include <vxf/core/MemoryBudget.h>
 #include <vxf/transport/Phase.h>
 
-#include <vxf/scatter/AdaptiveBand.h>
+#include <vxf/transport/AdaptiveBand.h>
 #include <vxf/scatter/CoarseLevel.h>
 
 #include <vxf/core/Error.h>
@@ -67,6 +68,24 @@ MemoryEstimate bandedScatterMemory(double voxels, double swept)
 
 namespace {
 
+/// The voxels a sweep over @a source's leaves and tiles holds with coarse cells: the leaves'
+/// voxels, and of a tile's voxels one a cell where its 8³ blocks are thin enough to be cells
+/// (SweepLattice::thinEnoughForCell, at the tile's centre), every one where not.
+double sweptWithCoarseCells(const openvdb::Vec3SGrid& source, const Medium& medium)
+{
+    double swept = double(source.tree().leafCount()) * detail::SweepLattice::kLeafVoxels;
+    Medium::Sampler sampler(medium);
+    for (auto it = source.tree().cbeginValueOn(); it; ++it) {
+        if (it.isVoxelValue()) continue;
+        openvdb::CoordBBox box;
+        it.getBoundingBox(box);
+        const openvdb::Coord centre = box.min() + openvdb::Coord(box.dim().x() / 2 - 4);
+        const bool cells = detail::SweepLattice::thinEnoughForCell(sampler, centre);
+        swept += double(it.getVoxelCount()) / (cells ? double(detail::SweepLattice::kLeafVoxels) : 1.0);
+    }
+    return swept;
+}
+
 /// Whether scatter() solves the whole sum at once (sweeps or gathers with acceleration), not
 /// pass by pass.
 bool solvesWhole(const ScatterOptions& options)
@@ -103,18 +122,19 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
     openvdb::Vec3SGrid::Ptr sum, j;
     int k = options.fromPass;
     if (k == 0) {
+        // The file's scatter_source stays as it was: a band coarsens a copy as it makes it.
         j = set.get<openvdb::Vec3SGrid>(grids::kScatterSource);
-        if (options.band > 0.0 || sourceScale != 1.0f) j = j->deepCopy(); // the file's scatter_source stays as it was
+        if (options.band > 0.0) {
+            j = coarsenedBeyondBand(*j, medium.density(), options.band, report.band);
+        } else if (sourceScale != 1.0f) {
+            j = j->deepCopy();
+        }
         if (sourceScale != 1.0f) {
             openvdb::tools::foreach (
                 j->beginValueAll(), [sourceScale](const openvdb::Vec3SGrid::ValueAllIter& it) { it.setValue(*it * sourceScale); });
         }
-        report.band = coarsenBeyondBand(*j, medium.density(), options.band);
-        if (coarseCells) {
-            // The sweeps' voxels: the band's leaves' and one a coarse cell.
-            const double swept = double(j->tree().leafCount()) * 512.0 + double(report.band.coarseVoxels) / 512.0;
-            requireMemory("scatter", bandedScatterMemory(activeVoxels, swept));
-        }
+        if (!(options.band > 0.0)) report.band = coarsenBeyondBand(*j, medium.density(), 0.0); // its counts
+        if (coarseCells) requireMemory("scatter", bandedScatterMemory(activeVoxels, sweptWithCoarseCells(*j, medium)));
     } else {
         sum = set.get<openvdb::Vec3SGrid>("scatter_pass_1")->deepCopy();
         for (int p = 2; p <= k; ++p) {

@@ -4,7 +4,7 @@
 #include <vxf/core/MemoryBudget.h>
 #include <vxf/transport/Phase.h>
 
-#include <vxf/scatter/AdaptiveBand.h>
+#include <vxf/transport/AdaptiveBand.h>
 #include <vxf/scatter/CoarseLevel.h>
 
 #include <vxf/core/Error.h>

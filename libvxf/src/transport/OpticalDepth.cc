@@ -20,18 +20,17 @@ namespace vxf::detail {
 openvdb::Vec3f SweepLattice::depthStep(std::size_t leaf, int p, const openvdb::Vec3d& omega, const float (&weight)[4],
     const int (&offset)[4], double length, const openvdb::Vec3f (&tauUpwind)[4]) const
 {
-    const std::size_t first = leaf * kPaddedVoxels;
     openvdb::Vec3f tauIn(0.0f), stIn(0.0f);
     for (int k = 0; k < 4; ++k) {
         tauIn += weight[k] * tauUpwind[k];
         stIn += weight[k] * paddedSigmaT(leaf, p + offset[k]);
     }
     const openvdb::Vec3f here = paddedSigmaT(leaf, p);
-    if (mDistance.empty()) {
-        // No surface: every step whole (as insidePart of two negative distances).
+    const float* distance = distanceBlock(leaf);
+    if (!distance) {
+        // No surface, or deep inside it: every step whole (as insidePart of two negative distances).
         return tauIn + float(0.5 * length * mVoxelSize) * (stIn + here);
     }
-    const float* distance = &mDistance[first];
     float dIn = 0.0f;
     bool outside = false, inside = false; // upwind voxels on either side of the surface
     for (int k = 0; k < 4; ++k) {
@@ -145,7 +144,7 @@ void SweepLattice::opticalDepthFrom(
                 const openvdb::Coord ijk = o.offsetBy(local >> 6, (local >> 3) & 7, local & 7);
                 if (octantAround(ijk, point) != octant) continue;
                 const std::size_t i = n * kLeafVoxels + std::size_t(local);
-                const float d = paddedDistance(n * kPaddedVoxels + std::size_t(voxel.padded));
+                const float d = paddedDistance(n, voxel.padded);
                 const openvdb::Vec3d away = ijk.asVec3d() - point;
                 // A characteristic reaching back past the point's own layer (a voxel next to the
                 // point) has no upwind layer to read: marched.

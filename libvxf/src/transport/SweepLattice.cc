@@ -35,6 +35,12 @@ SweepLattice::SweepLattice(
     readMedium(medium, coefficients == Coefficients::PerVoxel);
 }
 
+bool SweepLattice::thinEnoughForCell(Medium::Sampler& sampler, const openvdb::Coord& origin, double maxCellDepth)
+{
+    const openvdb::Vec3d sigma = sampler.sigmaT(origin.asVec3d() + openvdb::Vec3d(3.5));
+    return std::max({sigma[0], sigma[1], sigma[2]}) * 8.0 * sampler.medium().voxelSize() <= maxCellDepth;
+}
+
 std::vector<openvdb::Coord> SweepLattice::coarseBlocks(const Medium& medium, const openvdb::MaskTree& topology, double maxCellDepth)
 {
     std::vector<openvdb::CoordBBox> tiles;
@@ -52,7 +58,6 @@ std::vector<openvdb::Coord> SweepLattice::coarseBlocks(const Medium& medium, con
         std::vector<openvdb::Coord>& mine = found.local();
         auto distance = surface ? std::optional<openvdb::FloatGrid::ConstAccessor>(surface->getConstAccessor()) : std::nullopt;
         Medium::Sampler sampler(medium);
-        const double side = 8.0 * medium.voxelSize();
         for (std::size_t t = r.begin(); t != r.end(); ++t) {
             const openvdb::CoordBBox& box = tiles[t];
             for (int x = box.min().x(); x <= box.max().x(); x += 8) {
@@ -66,9 +71,7 @@ std::vector<openvdb::Coord> SweepLattice::coarseBlocks(const Medium& medium, con
                                 distance->getValue(origin.offsetBy(4)) >= 0.0f)) {
                             continue;
                         }
-                        // Thin enough to resolve the light (σt at its centre, the thickest channel).
-                        const openvdb::Vec3d sigma = sampler.sigmaT(origin.asVec3d() + openvdb::Vec3d(3.5));
-                        if (std::max({sigma[0], sigma[1], sigma[2]}) * side > maxCellDepth) continue;
+                        if (!thinEnoughForCell(sampler, origin, maxCellDepth)) continue;
                         mine.push_back(origin);
                     }
                 }
@@ -151,15 +154,19 @@ void SweepLattice::readMedium(const Medium& medium, bool perVoxel)
     const bool surface = medium.surface() != nullptr;
     if (surface) mInterior.assign(voxelCount(), 1.0f);
     std::vector<float> distance(surface ? voxelCount() : 0, -1.0f);
-    std::vector<openvdb::Vec3f> inside(voxelCount());
-    std::vector<std::uint8_t> skin(surface ? voxelCount() : 0, 0);
-    std::vector<openvdb::Vec3f> skinNormal(surface ? voxelCount() : 0);
+    // σt inside the surface, per voxel: one float where it is grey by construction (the
+    // density's times a grey material's), three until known otherwise (the construction's peak:
+    // 37 bytes a voxel had held the bunny at dim 1024 to 9.2 GB).
+    const openvdb::Vec3d materialSigmaT = medium.material().sigmaT();
+    InsideSigma inside(voxelCount(), fromDensity && materialSigmaT[0] == materialSigmaT[1] && materialSigmaT[0] == materialSigmaT[2]);
+    // The skin's voxels (centres within half a voxel of the surface) with their normals, per leaf.
+    std::vector<std::vector<std::pair<std::uint16_t, openvdb::Vec3f>>> skin(surface ? mOrigins.size() : 0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mOrigins.size()), [&](const tbb::blocked_range<std::size_t>& r) {
         Medium::Sampler sampler(medium);
         openvdb::FloatGrid::ConstAccessor density = densityAccessor;
         for (std::size_t n = r.begin(); n != r.end(); ++n) {
             if (coarse(n)) {
-                readCoarseCell(n, medium, sampler, perVoxel, fromDensity, inside, distance);
+                readCoarseCell(n, sampler, density, perVoxel, fromDensity, inside, distance);
                 continue;
             }
             for (int v = 0; v < kLeafVoxels; ++v) {
@@ -180,68 +187,76 @@ void SweepLattice::readMedium(const Medium& medium, bool perVoxel)
                     mInterior[i] = float(1.0 / std::max(std::clamp(0.5 - d, 0.0, 1.0), Medium::kMinFraction));
                     interior = double(mInterior[i]);
                     openvdb::Vec3d point, normal;
-                    if (sampler.skinPoint(c, point, normal)) {
-                        skin[i] = 1;
-                        skinNormal[i] = openvdb::Vec3f(normal);
-                    }
+                    if (sampler.skinPoint(c, point, normal)) skin[n].emplace_back(std::uint16_t(v), openvdb::Vec3f(normal));
                 }
-                inside[i] = openvdb::Vec3f(t * interior);
+                inside.set(i, openvdb::Vec3f(t * interior));
             }
         }
     });
+    // The coarse cells' σt, kept (one value a cell) past the padded blocks' compaction.
+    std::vector<openvdb::Vec3f> coarseSigmaT(voxelCount() - mFineLeaves * kLeafVoxels);
+    for (std::size_t c = 0; c < coarseSigmaT.size(); ++c) coarseSigmaT[c] = inside.at(mFineLeaves * kLeafVoxels + c);
     // Grey σt (every voxel's the same in each channel) held as one float: a third of the
     // lattice's largest array (issue 62: 16 bytes a voxel).
-    const bool grey = tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, inside.size()), true,
-        [&](const tbb::blocked_range<std::size_t>& r, bool all) {
-            for (std::size_t i = r.begin(); all && i != r.end(); ++i) all = inside[i][0] == inside[i][1] && inside[i][0] == inside[i][2];
-            return all;
-        },
-        [](bool a, bool b) { return a && b; });
-    // The coarse cells' σt, kept (one value a cell) past the padded blocks' compaction.
-    std::vector<openvdb::Vec3f> coarseSigmaT(inside.begin() + std::ptrdiff_t(mFineLeaves * kLeafVoxels), inside.end());
-    if (grey) {
-        std::vector<float> scalar(inside.size());
-        for (std::size_t i = 0; i < inside.size(); ++i) scalar[i] = inside[i][0];
-        std::vector<openvdb::Vec3f>().swap(inside);
-        mSigmaTGrey = padded(scalar);
+    inside.makeGreyIfItIs();
+    if (!inside.grey.empty()) {
+        mSigmaTGrey = padded(inside.grey);
     } else {
-        mSigmaT = padded(inside);
+        mSigmaT = padded(inside.rgb);
     }
+    inside = InsideSigma(0, false);
     if (surface) mDistance = padded(distance);
     classifyLeaves();
     compactLeaves(coarseSigmaT);
     mSkinIndex.assign(mInterior.size(), -1);
-    for (std::size_t i = 0; i < skin.size(); ++i) {
-        if (!skin[i]) continue;
-        // A skin voxel's centre lies within half a voxel of the surface: never in a deep leaf.
-        const std::size_t at = shallowIndex(i);
-        if (at == kNone) throw Error("sweep lattice: a skin voxel in a deep leaf");
-        mSkinIndex[at] = std::int32_t(mSkin.size());
-        mSkin.push_back({std::uint32_t(i), skinNormal[i], float(std::max(-double(distance[i]), 0.0) * mVoxelSize)});
+    for (std::size_t n = 0; n < skin.size(); ++n) {
+        for (const auto& [v, normal] : skin[n]) {
+            const std::size_t i = n * kLeafVoxels + v;
+            // A skin voxel's centre lies within half a voxel of the surface: never in a deep leaf.
+            const std::size_t at = shallowIndex(i);
+            if (at == kNone) throw Error("sweep lattice: a skin voxel in a deep leaf");
+            mSkinIndex[at] = std::int32_t(mSkin.size());
+            mSkin.push_back({std::uint32_t(i), normal, float(std::max(-double(distance[i]), 0.0) * mVoxelSize)});
+        }
     }
 }
 
-void SweepLattice::readCoarseCell(std::size_t n, const Medium& medium, Medium::Sampler& sampler, bool perVoxel, bool fromDensity,
-    std::vector<openvdb::Vec3f>& inside, std::vector<float>& distance)
+void SweepLattice::InsideSigma::makeGreyIfItIs()
+{
+    if (rgb.empty()) return;
+    const bool isGrey = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, rgb.size()), true,
+        [&](const tbb::blocked_range<std::size_t>& r, bool all) {
+            for (std::size_t i = r.begin(); all && i != r.end(); ++i) all = rgb[i][0] == rgb[i][1] && rgb[i][0] == rgb[i][2];
+            return all;
+        },
+        [](bool a, bool b) { return a && b; });
+    if (!isGrey) return;
+    grey.resize(rgb.size());
+    for (std::size_t i = 0; i < rgb.size(); ++i) grey[i] = rgb[i][0];
+    std::vector<openvdb::Vec3f>().swap(rgb);
+}
+
+void SweepLattice::readCoarseCell(std::size_t n, Medium::Sampler& sampler, openvdb::FloatGrid::ConstAccessor& density, bool perVoxel,
+    bool fromDensity, InsideSigma& inside, std::vector<float>& distance)
 {
     // The means over the block's voxels: one read where the density holds the block as a tile.
     const openvdb::Coord& origin = mOrigins[n];
-    const int samples = medium.density().tree().probeConstLeaf(origin) ? kLeafVoxels : 1;
+    const int samples = density.probeConstLeaf(origin) ? kLeafVoxels : 1;
     openvdb::Vec3d t(0.0), s(0.0);
-    double density = 0.0;
+    double densitySum = 0.0;
     for (int v = 0; v < samples; ++v) {
         const openvdb::Coord c = origin.offsetBy(v >> 6, (v >> 3) & 7, v & 7);
         t += finiteCoefficient(sampler.sigmaT(c.asVec3d()), true);
         s += finiteCoefficient(sampler.sigmaS(c), false);
-        density += double(medium.density().tree().getValue(c));
+        densitySum += double(density.getValue(c));
     }
     const std::size_t i = voxelStart(n);
-    inside[i] = openvdb::Vec3f(t / double(samples)); // (deep: wholly inside, f = 1)
+    inside.set(i, openvdb::Vec3f(t / double(samples))); // (deep: wholly inside, f = 1)
     if (perVoxel && fromDensity) {
-        mDensityVoxel[i] = float(density / double(samples));
+        mDensityVoxel[i] = float(densitySum / double(samples));
     } else if (perVoxel) {
-        mSigmaTVoxel[i] = inside[i];
+        mSigmaTVoxel[i] = inside.at(i);
         mSigmaS[i] = openvdb::Vec3f(s / double(samples));
     }
     if (!distance.empty()) distance[i] = std::min(-1.0f, float(sampler.signedDistance(origin.offsetBy(4).asVec3d())));
@@ -306,6 +321,16 @@ void SweepLattice::compactLeaves(const std::vector<openvdb::Vec3f>& coarseSigmaT
         }
     }
     if (mInterior.empty()) return; // no surface: every leaf deep, f = 1
+    mDistanceStart.assign(mFineLeaves, kNone);
+    next = 0;
+    for (std::size_t n = 0; n < mFineLeaves; ++n) {
+        const float* d = &mDistance[n * kPaddedVoxels];
+        if (std::all_of(d, d + kPaddedVoxels, [](float v) { return v <= -kDistanceHeld; })) continue;
+        mDistanceStart[n] = next;
+        next += kPaddedVoxels;
+    }
+    keepBlocks(mDistance, kPaddedVoxels, mDistanceStart,
+        [&](std::size_t n) { return mDistanceStart[n] == kNone ? std::size_t(0) : std::size_t(kPaddedVoxels); });
     mShallowStart.assign(leaves, kNone);
     next = 0;
     for (std::size_t n = 0; n < leaves; ++n) {
@@ -372,9 +397,9 @@ SweepLattice::Coefficient SweepLattice::sigmaS() const { return coefficient(mSig
 std::size_t SweepLattice::bytes() const
 {
     const auto of = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
-    std::size_t sum = of(mOrigins) + of(mNeighbours) + of(mSigmaT) + of(mSigmaTGrey) + of(mDistance) + of(mDeep) + of(mUniform) +
-        of(mSigmaTStart) + of(mShallowStart) + of(mInterior) + of(mSigmaTVoxel) + of(mSigmaS) + of(mDensityVoxel) + of(mSkin) +
-        of(mSkinIndex);
+    std::size_t sum = of(mOrigins) + of(mNeighbours) + of(mSigmaT) + of(mSigmaTGrey) + of(mDistance) + of(mDistanceStart) + of(mDeep) +
+        of(mUniform) + of(mSigmaTStart) + of(mShallowStart) + of(mInterior) + of(mSigmaTVoxel) + of(mSigmaS) + of(mDensityVoxel) +
+        of(mSkin) + of(mSkinIndex);
     for (int o = 0; o < 8; ++o) sum += of(mOrder[o]) + of(mWavefronts[o]);
     return sum + mLeafIndex.size() * (sizeof(openvdb::Coord) + sizeof(std::int32_t) + 2 * sizeof(void*)) +
         mLeafIndex.bucket_count() * sizeof(void*);

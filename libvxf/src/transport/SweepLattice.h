@@ -89,6 +89,10 @@ public:
     /// kFaceVoxels values per leaf and direction: the fastest batch measured, and the smallest
     /// (docs/accuracy-notes.md, "Behind the code: SweepLattice").
     static constexpr std::size_t kSweepBatch = 2;
+    /// The signed distance is held where a leaf's padded block comes within this many voxels of
+    /// the surface; deeper, paddedDistance reads −kDistanceHeld (a sweep's steps there are whole
+    /// either way; the light stage marches a point light's voxels within 3 of the surface).
+    static constexpr float kDistanceHeld = 4.0f;
 
     /// What a lattice holds besides what a sweep reads: σt and σs per voxel, for the diffusion
     /// correction and the passes' sources (the scatter stage), or not (the light stage's sweeps:
@@ -105,6 +109,9 @@ public:
     /// of albedo 0.99 12% dark, cells of 1 put the bunny's image at dim 512 within 0.6% of full
     /// resolution (docs/accuracy-notes.md (ah)).
     static constexpr double kMaxCellDepth = 1.5;
+    /// Whether the 8³ block at @a origin is thin enough to be one coarse cell: at most
+    /// @a maxCellDepth mean free paths across (σt at its centre, the thickest channel).
+    static bool thinEnoughForCell(Medium::Sampler& sampler, const openvdb::Coord& origin, double maxCellDepth = kMaxCellDepth);
     /// The lattice over @a medium's active density and @a topology's active values.
     SweepLattice(const Medium& medium, const openvdb::Vec3SGrid& topology, Coefficients coefficients = Coefficients::PerVoxel,
         Tiles tiles = Tiles::Voxelized, double maxCellDepth = kMaxCellDepth);
@@ -377,10 +384,36 @@ private:
     /// inside @a medium's surface (all of them without one) and at most @a maxCellDepth mean
     /// free paths across: the coarse leaves.
     static std::vector<openvdb::Coord> coarseBlocks(const Medium& medium, const openvdb::MaskTree& topology, double maxCellDepth);
+    /// σt inside the surface per voxel while readMedium reads it: one float a voxel (`grey`) or
+    /// three (`rgb`), the other array empty.
+    struct InsideSigma
+    {
+        InsideSigma(std::size_t voxels, bool greyKnown)
+        {
+            if (greyKnown) {
+                grey.resize(voxels);
+            } else {
+                rgb.resize(voxels);
+            }
+        }
+        void set(std::size_t i, const openvdb::Vec3f& sigma)
+        {
+            if (grey.empty()) {
+                rgb[i] = sigma;
+            } else {
+                grey[i] = sigma[0];
+            }
+        }
+        openvdb::Vec3f at(std::size_t i) const { return grey.empty() ? rgb[i] : openvdb::Vec3f(grey[i]); }
+        /// Held as one float a voxel when every voxel's σt is the same in each channel.
+        void makeGreyIfItIs();
+        std::vector<float> grey;
+        std::vector<openvdb::Vec3f> rgb;
+    };
     /// A coarse leaf's one cell: its σt (inside, the mean over its voxels), σs or density and
     /// distance, at its per-voxel index.
-    void readCoarseCell(std::size_t leaf, const Medium& medium, Medium::Sampler& sampler, bool perVoxel, bool fromDensity,
-        std::vector<openvdb::Vec3f>& inside, std::vector<float>& distance);
+    void readCoarseCell(std::size_t leaf, Medium::Sampler& sampler, openvdb::FloatGrid::ConstAccessor& density, bool perVoxel,
+        bool fromDensity, InsideSigma& inside, std::vector<float>& distance);
     /// Coarse leaf @a leaf of a transport sweep along @a directions[@a d] (@a chords, its
     /// cube's): the light entering it from what its upwind neighbours handed on (@a faces: the
     /// fine leaves' downwind faces; @a leaving: the coarse leaves' light, of this direction), its
@@ -474,8 +507,20 @@ private:
         const std::size_t i = shallowIndex(voxel);
         return i == kNone || mSkinIndex.empty() ? -1 : mSkinIndex[i];
     }
-    /// The signed distance at padded index @a q (−1 without a surface).
-    float paddedDistance(std::size_t q) const { return mDistance.empty() ? -1.0f : mDistance[q]; }
+    /// Leaf @a leaf's padded block of signed distances, or null where none is held (no
+    /// surface, or a leaf lying kDistanceHeld voxels or more inside it).
+    const float* distanceBlock(std::size_t leaf) const
+    {
+        return mDistanceStart.empty() || mDistanceStart[leaf] == kNone ? nullptr : &mDistance[mDistanceStart[leaf]];
+    }
+    /// The signed distance at padded voxel @a p of leaf @a leaf: −1 without a surface,
+    /// −kDistanceHeld where the leaf holds none (deeper than that).
+    float paddedDistance(std::size_t leaf, int p) const
+    {
+        if (mDistance.empty()) return -1.0f;
+        const float* block = distanceBlock(leaf);
+        return block ? block[p] : -kDistanceHeld;
+    }
 
     double mVoxelSize = 1.0;
     std::vector<openvdb::Coord> mOrigins; ///< fine leaves first, then coarse ones
@@ -495,9 +540,13 @@ private:
     /// one value for a uniform or coarse leaf (its sweeps read that one: about half the thick bunny's
     /// leaves at dim 256, more as the interior grows).
     std::vector<std::size_t> mSigmaTStart;
-    /// Padded, signed distance to the surface (voxels); empty without a surface (a volume
-    /// object's medium: every voxel whole, f = 1, as if −1 everywhere).
+    /// Padded, signed distance to the surface (voxels), per fine leaf from mDistanceStart
+    /// (kNone: a leaf whose padded block lies kDistanceHeld or more inside, where a sweep's
+    /// steps are whole and a reader takes −kDistanceHeld: at dim 1024 most of the bunny's
+    /// leaves, 1.5 GB); empty without a surface (a volume object's medium: every voxel whole,
+    /// f = 1, as if −1 everywhere).
     std::vector<float> mDistance;
+    std::vector<std::size_t> mDistanceStart;
     std::vector<std::uint8_t> mDeep; ///< per leaf: its padded block more than half a voxel inside the surface (a coarse leaf: 1)
     std::vector<std::uint8_t> mUniform; ///< per leaf: deep, and one σt over its padded block (sweep's short path)
     /// Per leaf with a surface, where its 512 voxels start in mInterior and mSkinIndex, or kNone

@@ -332,7 +332,7 @@ void SweepLattice::sweepLeaf(std::size_t n, const Sigma* leafSigmaT, const openv
     const double len = mVoxelSize * path.length;
     const PaddedSigma<Sigma> st{leafSigmaT};
     constexpr bool kGrey = std::is_same_v<Sigma, float>; // the channels' steps share their weights
-    const float* distance = mDistance.empty() ? nullptr : &mDistance[n * kPaddedVoxels]; // (deep leaves do not read it)
+    const float* distance = distanceBlock(n); // (deep leaves do not read it)
     // Per channel, the last step's weights (uniformWeights); the last varying step's
     // (varyingWeights), shared by a grey medium's channels.
     UniformWeights uw[3];

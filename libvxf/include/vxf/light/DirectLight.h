@@ -20,6 +20,11 @@ struct DirectLightOptions
     /// resolution) instead of voxel by voxel. Only for media so thick that the deep interior
     /// never shows; thinner media show the tiles as blocks.
     bool coarseTiles = false;
+    /// The adaptive band (world units; 0: none): the 8³ leaves of the deep interior beyond it
+    /// (BandInterior) written as tiles of their voxels' means, as the scatter stage's band
+    /// coarsens its source (lit at full resolution all the same: the light stage's sweeps take
+    /// no coarse cells). A thick medium's grids then hold its band's voxels, not its volume's.
+    double band = 0.0;
     /// Directional and environment lights by optical-depth sweeps over the medium's leaves (one
     /// per direction, SweepLattice::opticalDepthAlong), their transmittance at each voxel centre,
     /// instead of a march per voxel and direction. Light entering the leaves from outside them

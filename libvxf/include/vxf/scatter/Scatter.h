@@ -1,7 +1,7 @@
 // vxf — the scatter stage: source iteration over passes, with early stopping.
 #pragma once
 
-#include <vxf/scatter/AdaptiveBand.h>
+#include <vxf/transport/AdaptiveBand.h>
 #include <vxf/scatter/ScatterPass.h>
 #include <vxf/scatter/SweepSolve.h>
 

@@ -80,6 +80,7 @@ public:
     {
     public:
         explicit Sampler(const Medium& medium);
+        const Medium& medium() const { return mMedium; }
         /// σt at index-space position @a ijk (1/world unit).
         openvdb::Vec3d sigmaT(const openvdb::Vec3d& ijk);
         /// σs at index-space position @a ijk (1/world unit).

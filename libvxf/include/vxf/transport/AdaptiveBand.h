@@ -13,6 +13,22 @@ struct AdaptiveBandReport
     openvdb::Index64 coarseVoxels = 0; ///< voxels those tiles cover
 };
 
+/// The deep interior beyond a band: the 8³ leaves whose voxels all lie at least max(band, 4
+/// voxels) inside the medium (the active region of a density, eroded with the 26-neighbour (L∞)
+/// stencil, so it never overstates the distance to the surface). coarsenBeyondBand makes them
+/// tiles; the light stage with a band writes them so.
+class BandInterior
+{
+public:
+    /// @a band in world units; ≤ 0: no leaf is deep.
+    BandInterior(const openvdb::FloatGrid& density, double band);
+    /// Whether the leaf at @a origin lies wholly in the deep interior.
+    bool holdsLeaf(const openvdb::Coord& origin) const;
+
+private:
+    openvdb::MaskTree mCore;
+};
+
 /// Coarsen the deep interior of @a grid (a quantity on the medium, e.g. a scattering source):
 /// every 8³ leaf whose voxels all lie at least max(band, 4 voxels) inside the medium (the
 /// active region of @a density) becomes one active tile holding the leaf's mean, and every
@@ -24,5 +40,12 @@ struct AdaptiveBandReport
 /// Passes over the tree evaluate tiles once (at their centre), so a pass costs the band's
 /// voxels plus one per tile. Idempotent.
 AdaptiveBandReport coarsenBeyondBand(openvdb::Vec3SGrid& grid, const openvdb::FloatGrid& density, double band);
+
+/// A copy of @a grid coarsened as coarsenBeyondBand does it in place, the same values, made
+/// without copying the leaves that become tiles: the scatter stage's own source, 12 bytes an
+/// active voxel of the deep interior less than a copy coarsened afterwards. @a report as
+/// coarsenBeyondBand's.
+openvdb::Vec3SGrid::Ptr coarsenedBeyondBand(
+    const openvdb::Vec3SGrid& grid, const openvdb::FloatGrid& density, double band, AdaptiveBandReport& report);
 
 } // namespace vxf
