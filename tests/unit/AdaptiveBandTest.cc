@@ -75,7 +75,10 @@ TEST_CASE("the band keeps full resolution near the surface and tiles the deep in
         CHECK(source->tree().getValue(openvdb::Coord(-17, 0, 0)) == openvdb::Vec3f(1.0f - 0.17f, 2.0f, 0.5f));
         CHECK(source->tree().probeConstLeaf(openvdb::Coord(-17, 0, 0)) != nullptr);
         CHECK(source->tree().probeConstLeaf(openvdb::Coord(0, 0, 0)) == nullptr);
-        // Idempotent.
+        // Idempotent; no copy is made of what is coarse already.
+        vxf::AdaptiveBandReport copied;
+        CHECK(vxf::coarsenedBeyondBand(*source, *density, 0.8, copied) == nullptr);
+        CHECK(copied.fineVoxels == report.fineVoxels);
         const auto again = vxf::coarsenBeyondBand(*source, *density, 0.8);
         CHECK(again.leafTiles == 0);
         CHECK(again.fineVoxels == report.fineVoxels);

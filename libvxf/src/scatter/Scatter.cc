@@ -122,13 +122,17 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
     openvdb::Vec3SGrid::Ptr sum, j;
     int k = options.fromPass;
     if (k == 0) {
-        // The file's scatter_source stays as it was: a band coarsens a copy as it makes it.
+        // The file's scatter_source stays as it was: a band coarsens a copy as it makes it (none
+        // where the light stage's band made it so already), a scale scales a copy.
         j = set.get<openvdb::Vec3SGrid>(grids::kScatterSource);
+        bool copied = false;
         if (options.band > 0.0) {
-            j = coarsenedBeyondBand(*j, medium.density(), options.band, report.band);
-        } else if (sourceScale != 1.0f) {
-            j = j->deepCopy();
+            if (auto coarse = coarsenedBeyondBand(*j, medium.density(), options.band, report.band)) {
+                j = coarse;
+                copied = true;
+            }
         }
+        if (sourceScale != 1.0f && !copied) j = j->deepCopy();
         if (sourceScale != 1.0f) {
             openvdb::tools::foreach (
                 j->beginValueAll(), [sourceScale](const openvdb::Vec3SGrid::ValueAllIter& it) { it.setValue(*it * sourceScale); });

@@ -120,6 +120,10 @@ openvdb::Vec3SGrid::Ptr coarsenedBeyondBand(
     const openvdb::Vec3SGrid& grid, const openvdb::FloatGrid& density, double band, AdaptiveBandReport& report)
 {
     const DeepBlocks deep = deepBlocks(grid.tree(), density, band);
+    if (deep.internal.empty() && deep.leaves.empty()) { // as coarse as the band makes it already
+        report = reportOf(grid, deep);
+        return nullptr;
+    }
     openvdb::Vec3SGrid::Ptr copy = grid.copyWithNewTree(); // metadata and transform
     auto& tree = copy->tree();
     for (auto it = grid.tree().cbeginValueOn(); it; ++it) { // the grid's own tiles

@@ -44,7 +44,8 @@ AdaptiveBandReport coarsenBeyondBand(openvdb::Vec3SGrid& grid, const openvdb::Fl
 /// A copy of @a grid coarsened as coarsenBeyondBand does it in place, the same values, made
 /// without copying the leaves that become tiles: the scatter stage's own source, 12 bytes an
 /// active voxel of the deep interior less than a copy coarsened afterwards. @a report as
-/// coarsenBeyondBand's.
+/// coarsenBeyondBand's. Null where no block would become a tile (a source the light stage
+/// wrote with the band already): @a grid itself is what a copy would be.
 openvdb::Vec3SGrid::Ptr coarsenedBeyondBand(
     const openvdb::Vec3SGrid& grid, const openvdb::FloatGrid& density, double band, AdaptiveBandReport& report);
 
