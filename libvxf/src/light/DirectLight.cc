@@ -116,14 +116,6 @@ openvdb::MaskTree stageTopology(const openvdb::FloatGrid& density, bool coarseTi
 using StageLeaf = openvdb::Vec3STree::LeafNodeType;
 using StageLeaves = openvdb::tree::LeafManager<const openvdb::MaskTree>;
 
-/// The mean of @a leaf's active values over its voxels (as coarsenBeyondBand takes it).
-openvdb::Vec3f leafMean(const StageLeaf& leaf)
-{
-    openvdb::Vec3d sum(0.0);
-    for (auto v = leaf.cbeginValueOn(); v; ++v) sum += openvdb::Vec3d(*v);
-    return openvdb::Vec3f(sum / double(StageLeaf::SIZE));
-}
-
 /// A grid of the light stage named @a name: @a leaves (taken) and @a tiles filled with @a tileValues.
 openvdb::Vec3SGrid::Ptr stageGrid(const openvdb::FloatGrid& density, const char* name, std::vector<std::unique_ptr<StageLeaf>>& leaves,
     const std::vector<openvdb::CoordBBox>& tiles, const std::vector<openvdb::Vec3f>& tileValues)

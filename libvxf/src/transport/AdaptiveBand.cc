@@ -10,10 +10,24 @@
 
 namespace vxf {
 
+namespace {
+
+/// A band of @a band world units in @a density's voxels (at least one).
+int bandInVoxels(const openvdb::FloatGrid& density, double band) { return std::max(1, int(std::ceil(band / density.voxelSize()[0]))); }
+
+} // namespace
+
+openvdb::Vec3f leafMean(const openvdb::Vec3STree::LeafNodeType& leaf)
+{
+    openvdb::Vec3d sum(0.0);
+    for (auto v = leaf.cbeginValueOn(); v; ++v) sum += openvdb::Vec3d(*v);
+    return openvdb::Vec3f(sum / double(leaf.SIZE));
+}
+
 BandInterior::BandInterior(const openvdb::FloatGrid& density, double band)
 {
     if (!(band > 0.0)) return;
-    const int bandVoxels = std::max(1, int(std::ceil(band / density.voxelSize()[0])));
+    const int bandVoxels = bandInVoxels(density, band);
     constexpr int leafDim = openvdb::MaskTree::LeafNodeType::DIM;
     mCore.topologyUnion(density.tree());
     // L∞ erosion of the medium's topology: never overstates the distance to the surface.
@@ -52,7 +66,7 @@ DeepBlocks deepBlocks(const openvdb::Vec3STree& tree, const openvdb::FloatGrid& 
 {
     DeepBlocks deep;
     if (!(band > 0.0)) return deep;
-    const int bandVoxels = std::max(1, int(std::ceil(band / density.voxelSize()[0])));
+    const int bandVoxels = bandInVoxels(density, band);
     MaskTree medium;
     medium.topologyUnion(density.tree());
 
@@ -83,9 +97,7 @@ DeepBlocks deepBlocks(const openvdb::Vec3STree& tree, const openvdb::FloatGrid& 
     for (auto leaf = tree.cbeginLeaf(); leaf; ++leaf) {
         const openvdb::Coord origin = leaf->origin();
         if (!core.holdsLeaf(origin) || deep.inInternal(origin)) continue;
-        openvdb::Vec3d sum(0.0);
-        for (auto v = leaf->cbeginValueOn(); v; ++v) sum += openvdb::Vec3d(*v);
-        deep.leaves.emplace_back(origin, openvdb::Vec3f(sum / double(leaf->SIZE)));
+        deep.leaves.emplace_back(origin, leafMean(*leaf));
     }
     return deep;
 }

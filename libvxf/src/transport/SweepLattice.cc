@@ -2,6 +2,7 @@
 
 #include <vxf/core/Error.h>
 #include <vxf/core/Hash.h>
+#include <vxf/transport/AdaptiveBand.h>
 
 #include <openvdb/tools/FindActiveValues.h>
 #include <openvdb/tree/LeafManager.h>
@@ -269,11 +270,7 @@ namespace {
 openvdb::Vec3f blockMean(const openvdb::Vec3SGrid::ConstAccessor& acc, const openvdb::Coord& origin)
 {
     openvdb::Vec3f value;
-    if (const openvdb::Vec3STree::LeafNodeType* leaf = acc.probeConstLeaf(origin)) {
-        openvdb::Vec3d sum(0.0);
-        for (auto it = leaf->cbeginValueOn(); it; ++it) sum += openvdb::Vec3d(*it);
-        return openvdb::Vec3f(sum / double(SweepLattice::kLeafVoxels));
-    }
+    if (const openvdb::Vec3STree::LeafNodeType* leaf = acc.probeConstLeaf(origin)) return leafMean(*leaf);
     return acc.probeValue(origin, value) ? value : openvdb::Vec3f(0.0f);
 }
 

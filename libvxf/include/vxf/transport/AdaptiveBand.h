@@ -13,6 +13,10 @@ struct AdaptiveBandReport
     openvdb::Index64 coarseVoxels = 0; ///< voxels those tiles cover
 };
 
+/// The mean of @a leaf's active values over all its 8³ voxels (inactive ones as 0): the value a
+/// band's tile takes for it (coarsenBeyondBand, the light stage's band, a coarse cell's read).
+openvdb::Vec3f leafMean(const openvdb::Vec3STree::LeafNodeType& leaf);
+
 /// The deep interior beyond a band: the 8³ leaves whose voxels all lie at least max(band, 4
 /// voxels) inside the medium (the active region of a density, eroded with the 26-neighbour (L∞)
 /// stencil, so it never overstates the distance to the surface). coarsenBeyondBand makes them
