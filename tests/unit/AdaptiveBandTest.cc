@@ -106,6 +106,18 @@ TEST_CASE("the band keeps full resolution near the surface and tiles the deep in
         // max(band, 4): depth 4 means i in [-20, 19], leaves [-16, 15]: 64 again.
         CHECK(vxf::coarsenBeyondBand(*source, *density, 0.1).leafTiles == 64);
     }
+    SECTION("a band as deep as half the medium leaves everything at full resolution")
+    {
+        // 24 voxels deep in a 48-voxel cube: no voxel is deeper. A band of 1e12 (a world-unit
+        // band given in voxels, or worse) is the same, and is not eroded voxel by voxel.
+        for (const double band : {2.4, 1e12}) {
+            const auto report = vxf::coarsenBeyondBand(*source, *density, band);
+            CHECK(report.leafTiles == 0);
+            CHECK(report.fineVoxels == voxels);
+            CHECK_FALSE(vxf::BandInterior(*density, band).holdsLeaf(openvdb::Coord(0)));
+        }
+        CHECK(vxf::BandInterior(*density, 1.2).holdsLeaf(openvdb::Coord(0))); // 12 deep: voxels [-12, 11]
+    }
 }
 
 TEST_CASE("blocks 64 voxels deep become 128³ tiles", "[band]")

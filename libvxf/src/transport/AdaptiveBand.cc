@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 namespace vxf {
@@ -13,7 +14,10 @@ namespace vxf {
 namespace {
 
 /// A band of @a band world units in @a density's voxels (at least one).
-int bandInVoxels(const openvdb::FloatGrid& density, double band) { return std::max(1, int(std::ceil(band / density.voxelSize()[0]))); }
+int bandInVoxels(const openvdb::FloatGrid& density, double band)
+{
+    return int(std::clamp(std::ceil(band / density.voxelSize()[0]), 1.0, 1e9)); // (any band deeper than a medium is as good)
+}
 
 } // namespace
 
@@ -29,10 +33,15 @@ BandInterior::BandInterior(const openvdb::FloatGrid& density, double band)
     if (!(band > 0.0)) return;
     const int bandVoxels = bandInVoxels(density, band);
     constexpr int leafDim = openvdb::MaskTree::LeafNodeType::DIM;
+    const int depth = std::max(bandVoxels, leafDim / 2);
+    // A band as deep as half the medium's extent leaves no core; eroding that far would take
+    // one pass a voxel (a band given in voxels where world units are asked took minutes).
+    openvdb::CoordBBox bounds;
+    density.tree().evalActiveVoxelBoundingBox(bounds);
+    if (bounds.empty() || 2 * std::int64_t(depth) >= std::int64_t(std::min({bounds.dim().x(), bounds.dim().y(), bounds.dim().z()}))) return;
     mCore.topologyUnion(density.tree());
     // L∞ erosion of the medium's topology: never overstates the distance to the surface.
-    openvdb::tools::erodeActiveValues(
-        mCore, std::max(bandVoxels, leafDim / 2), openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::PRESERVE_TILES);
+    openvdb::tools::erodeActiveValues(mCore, depth, openvdb::tools::NN_FACE_EDGE_VERTEX, openvdb::tools::PRESERVE_TILES);
 }
 
 bool BandInterior::holdsLeaf(const openvdb::Coord& origin) const
