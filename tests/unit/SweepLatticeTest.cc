@@ -44,7 +44,7 @@ TEST_CASE("optical depth along an axis is sigma_t times the way in, and a sweep'
     const vxf::detail::SweepLattice lattice(medium, source);
     const std::size_t centre = std::size_t(lattice.indexOf(openvdb::Coord(0)));
 
-    std::vector<openvdb::Vec3f> tau;
+    vxf::detail::SweepLattice::Depths tau;
     lattice.opticalDepthAlong(openvdb::Vec3d(0.0, 0.0, -1.0), tau);
     REQUIRE(tau.size() == lattice.voxelCount());
     CHECK(tau[centre][0] == Approx(sigmaT * 1.0).epsilon(0.04)); // the radius, to the edge's ramp of a voxel
@@ -69,7 +69,7 @@ TEST_CASE("a lattice for sweeps only holds no per-voxel coefficients and sweeps 
     CHECK(full.sigmaT().size() == full.voxelCount());
     CHECK(sweepOnly.sigmaT().empty());
     CHECK(sweepOnly.sigmaS().empty());
-    std::vector<openvdb::Vec3f> a, b;
+    Lattice::Depths a, b;
     full.opticalDepthAlong(openvdb::Vec3d(0.6, 0.0, -0.8), a);
     sweepOnly.opticalDepthAlong(openvdb::Vec3d(0.6, 0.0, -0.8), b);
     CHECK(a == b);
@@ -106,11 +106,14 @@ TEST_CASE("a lattice holds grey sigma_t as one float a voxel and no surface arra
     CHECK(perVoxelB > 2.5 * perVoxelA);
     // The same arithmetic per channel: the grey channels agree to the bit.
     const std::vector<openvdb::Vec3d> directions = vxf::sweepDirections(8, 0);
-    std::vector<openvdb::Vec3f> fa(a.voxelCount(), openvdb::Vec3f(0.0f)), fb = fa, ta, tb;
+    std::vector<openvdb::Vec3f> fa(a.voxelCount(), openvdb::Vec3f(0.0f)), fb = fa;
+    vxf::detail::SweepLattice::Depths ta, tb;
     a.sweep(a.sweepSource(a.read(source)), directions, 1.0, fa);
     b.sweep(b.sweepSource(b.read(source)), directions, 1.0, fb);
     a.opticalDepthAlong(openvdb::Vec3d(0.6, 0.0, -0.8), ta);
     b.opticalDepthAlong(openvdb::Vec3d(0.6, 0.0, -0.8), tb);
+    CHECK(ta.grey()); // the depths as the lattice's σt: one float a voxel where it is grey
+    CHECK_FALSE(tb.grey());
     std::size_t differ = 0;
     for (std::size_t v = 0; v < fa.size(); ++v) {
         for (int ch = 0; ch < 2; ++ch) differ += (fa[v][ch] != fb[v][ch]) + (ta[v][ch] != tb[v][ch]);
@@ -244,7 +247,7 @@ TEST_CASE(
     CHECK(nextToCell.x() < -8);
     CHECK(fluence[std::size_t(coarse.indexOf(nextToCell))][0] == Approx(4.0 * M_PI * j / sigmaT).epsilon(1e-4));
     // The optical-depth sweeps (the light stage's, voxel by voxel) take no coarse cell.
-    std::vector<openvdb::Vec3f> tau;
+    vxf::detail::SweepLattice::Depths tau;
     CHECK_THROWS_WITH(coarse.opticalDepthAlong(openvdb::Vec3d(0.0, 0.0, -1.0), tau), Catch::Contains("no coarse leaves"));
 }
 

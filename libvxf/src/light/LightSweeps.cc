@@ -154,7 +154,7 @@ void sweepLight(const LightSampler& light, const detail::SweepLattice& lattice, 
     tbb::enumerable_thread_specific<Medium::Sampler> samplers([&] { return lightStageSampler(medium, options); });
     const double minDistance = 0.5 * medium.voxelSize();
     sizeSums(lattice, phi, flux);
-    std::vector<openvdb::Vec3f> tau;
+    detail::SweepLattice::Depths tau;
     const auto worldOf = [&](std::size_t i) {
         const openvdb::Coord& o = lattice.origin(i / detail::SweepLattice::kLeafVoxels);
         const int v = int(i % detail::SweepLattice::kLeafVoxels);
@@ -317,7 +317,7 @@ void sweepPointLight(const LightSampler& light, const detail::SweepLattice& latt
             });
         return depths.depthOf(t);
     };
-    std::vector<openvdb::Vec3f> tau;
+    detail::SweepLattice::Depths tau;
     std::vector<std::uint8_t> state;
     lattice.opticalDepthFrom(lightIjk, tau, state,
         [&](const openvdb::Coord& ijk, float distance, bool mustMarch, const SweepLattice::SweptSoFar& swept, openvdb::Vec3f& depth) {

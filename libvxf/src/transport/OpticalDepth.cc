@@ -70,16 +70,16 @@ openvdb::Vec3f SweepLattice::depthStep(std::size_t leaf, int p, const openvdb::V
     return result;
 }
 
-void SweepLattice::opticalDepthAlong(const openvdb::Vec3d& omega, std::vector<openvdb::Vec3f>& tau, const EnteringDepth& entering) const
+void SweepLattice::opticalDepthAlong(const openvdb::Vec3d& omega, Depths& tau, const EnteringDepth& entering) const
 {
     requireFine("opticalDepthAlong");
-    tau.assign(voxelCount(), openvdb::Vec3f(0.0f));
+    tau.assignZero(*this);
     const Characteristic c = characteristic(omega);
     const float halfStep = float(0.5 * c.length * mVoxelSize);
     inUpwindOrder(
         omega, tau,
         [&](std::size_t n, openvdb::Vec3f* buffer, const UpwindVoxel* voxels) {
-            openvdb::Vec3f* out = &tau[n * kLeafVoxels];
+            const std::size_t first = n * kLeafVoxels;
             if (mUniform[n]) {
                 // One σt over the padded block: every step adds the same (its upwind blend of σt
                 // the same sum at every voxel), the block's σt not read (it is most of a sweep's
@@ -96,7 +96,7 @@ void SweepLattice::opticalDepthAlong(const openvdb::Vec3d& omega, std::vector<op
                     for (int k = 0; k < 8; ++k) {
                         const openvdb::Vec3f result = openvdb::Vec3f(tauIn + 3 * k) + own;
                         buffer[p + kPadded * k] = result;
-                        out[v + kLocal * k] = result;
+                        tau.set(first + std::size_t(v + kLocal * k), result);
                     }
                 });
                 return;
@@ -107,7 +107,7 @@ void SweepLattice::opticalDepthAlong(const openvdb::Vec3d& omega, std::vector<op
                     buffer[p + c.offset[0]], buffer[p + c.offset[1]], buffer[p + c.offset[2]], buffer[p + c.offset[3]]};
                 const openvdb::Vec3f result = depthStep(n, p, omega, c.weight, c.offset, c.length, upwind);
                 buffer[p] = result;
-                out[voxels[voxel].local] = result;
+                tau.set(first + std::size_t(voxels[voxel].local), result);
             }
         },
         entering);
@@ -119,10 +119,10 @@ int SweepLattice::octantAround(const openvdb::Coord& ijk, const openvdb::Vec3d& 
 }
 
 void SweepLattice::opticalDepthFrom(
-    const openvdb::Vec3d& point, std::vector<openvdb::Vec3f>& tau, std::vector<std::uint8_t>& state, const MarchedDepth& marched) const
+    const openvdb::Vec3d& point, Depths& tau, std::vector<std::uint8_t>& state, const MarchedDepth& marched) const
 {
     requireFine("opticalDepthFrom");
-    tau.assign(voxelCount(), openvdb::Vec3f(0.0f));
+    tau.assignZero(*this);
     state.assign(voxelCount(), kPending);
     for (int octant = 0; octant < 8; ++octant) {
         // The leaves holding voxels of this octant (bit a set: below the point along axis a).
@@ -177,10 +177,10 @@ void SweepLattice::opticalDepthFrom(
                 }
                 openvdb::Vec3f depth;
                 if (marched(ijk, d, !sweepable, swept, depth)) {
-                    tau[i] = depth;
+                    tau.set(i, depth);
                     state[i] = kMarched;
                 } else {
-                    tau[i] = depthStep(n, voxel.padded, away.unit(), c.weight, c.offset, c.length, upwind);
+                    tau.set(i, depthStep(n, voxel.padded, away.unit(), c.weight, c.offset, c.length, upwind));
                     state[i] = kBlended;
                 }
             }

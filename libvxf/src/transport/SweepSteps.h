@@ -376,8 +376,7 @@ void SweepLattice::leavesInUpwindOrder(int octant, const Visit& visit) const
 }
 
 template <typename Visit>
-void SweepLattice::inUpwindOrder(
-    const openvdb::Vec3d& omega, const std::vector<openvdb::Vec3f>& values, const Visit& visit, const EnteringDepth& outside) const
+void SweepLattice::inUpwindOrder(const openvdb::Vec3d& omega, const Depths& values, const Visit& visit, const EnteringDepth& outside) const
 {
     const int octant = octantOf(omega);
     const std::vector<Ghost> upwind = upwindGhosts(octant);
