@@ -47,8 +47,8 @@ public:
         const Scene scene = stageScene(args);
         const RenderOptions options = renderOptions(args, scene.settings);
         // Refused before the read when the file's own count says the volume will not fit.
-        if (const std::uint64_t voxels = declaredVoxels(mVolume, grids::kDensity))
-            requireMemory("render", renderMemory(double(voxels), options));
+        if (const auto footprints = declaredFootprints(mVolume, renderGrids(options)); !footprints.empty())
+            requireMemory("render", renderMemory(footprints, options));
         const VoxelSet set = readVoxelSet(mVolume, renderInputRead(options)); // its grids alone
         Material material;
         if (set.metadata().getMetadata<openvdb::StringMetadata>(kMaterialMetaKey)) {

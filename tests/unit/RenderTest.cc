@@ -1,5 +1,6 @@
 #include <vxf/render/Render.h>
 
+#include <vxf/core/GridStats.h>
 #include <vxf/core/Hash.h>
 #include <vxf/core/ProceduralMesh.h>
 #include <vxf/core/RayScene.h>
@@ -7,6 +8,7 @@
 #include <vxf/io/VoxelSetFile.h>
 #include <vxf/light/DirectLight.h>
 #include <vxf/pipeline/SceneGeometry.h>
+#include <vxf/transport/AdaptiveBand.h>
 #include <vxf/voxelize/Voxelize.h>
 
 #include "TestSupport.h"
@@ -829,4 +831,44 @@ TEST_CASE("a volume light: its emission x colour x intensity in J0, and seen alo
     fire.grid = "nope";
     scene.lights = {fire};
     CHECK_THROWS_WITH(vxf::render(set, medium, scene, options), Catch::Contains("light 'fire': no grid 'nope' in " + dir.path("fire.vdb")));
+}
+
+TEST_CASE("the render's estimate counts the bytes its grids hold, from the file's metadata as from memory", "[render][memory]")
+{
+    vxf::VoxelSet set = litSphere(1.0);
+    const vxf::RenderOptions options; // reads density, surface and direct (scatter where there is one)
+    const std::set<std::string> read = vxf::renderGrids(options);
+    std::vector<vxf::GridFootprint> inMemory;
+    for (const auto& grid : set.grids())
+        if (read.count(grid->getName())) inMemory.push_back(vxf::footprintOf(*grid));
+    REQUIRE(inMemory.size() == 3);
+
+    // Declared by the file (OpenVDB's file_mem_bytes and bounding box), its data not read: the same.
+    vxf::test::TempDir dir;
+    vxf::writeVoxelSet(dir.path("lit.vdb"), set);
+    std::vector<vxf::GridFootprint> declared = vxf::declaredFootprints(dir.path("lit.vdb"), read);
+    REQUIRE(declared.size() == inMemory.size());
+    const auto byName = [](const vxf::GridFootprint& a, const vxf::GridFootprint& b) { return a.name < b.name; };
+    std::sort(declared.begin(), declared.end(), byName);
+    std::sort(inMemory.begin(), inMemory.end(), byName);
+    for (std::size_t g = 0; g < declared.size(); ++g) {
+        CAPTURE(declared[g].name);
+        CHECK(declared[g].name == inMemory[g].name);
+        CHECK(declared[g].bytes == inMemory[g].bytes);
+        CHECK(declared[g].denseBytes == inMemory[g].denseBytes);
+        CHECK(declared[g].denseBytes > 0.0); // 64³: every copy is made
+    }
+    // The direct grid banded (its deep leaves as tiles: AdaptiveBand.h): the estimate falls by
+    // kRenderBytesPerGridByte times the bytes it no longer holds, the voxel count the same.
+    const double before = vxf::renderMemory(inMemory, options).bytes;
+    auto& direct = *set.get<openvdb::Vec3SGrid>("direct");
+    const openvdb::Index64 voxels = direct.activeVoxelCount();
+    const double held = double(direct.tree().memUsage());
+    REQUIRE(vxf::coarsenBeyondBand(direct, *set.get<openvdb::FloatGrid>("density"), 0.1).leafTiles > 0);
+    CHECK(direct.activeVoxelCount() == voxels);
+    const double after = vxf::renderMemory({inMemory[0], vxf::footprintOf(direct), inMemory[2]}, options).bytes;
+    const double saved = (held - double(direct.tree().memUsage())) * vxf::kRenderBytesPerGridByte;
+    CHECK(inMemory[1].name == "direct");
+    CHECK(before - after == Approx(saved).epsilon(1e-9));
+    CHECK(saved > 0.0);
 }

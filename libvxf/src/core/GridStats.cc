@@ -1,11 +1,14 @@
 #include <vxf/core/GridStats.h>
 
+#include <vxf/core/GridLookup.h>
+
 #include <openvdb/openvdb.h>
 
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 
 namespace vxf {
 
@@ -19,6 +22,31 @@ GridStats gridStats(const openvdb::GridBase& grid)
     stats.memoryBytes = tree.memUsage();
     stats.activeBBox = grid.evalActiveVoxelBoundingBox();
     return stats;
+}
+
+std::size_t valueBytes(const std::string& valueType)
+{
+    static const std::map<std::string, std::size_t> sizes = {{"bool", 1}, {"mask", 1}, {"float", 4}, {"double", 8}, {"half", 2},
+        {"int32", 4}, {"int64", 8}, {"vec3s", 12}, {"vec3d", 24}, {"vec3i", 12}};
+    const auto found = sizes.find(valueType);
+    return found == sizes.end() ? 4 : found->second;
+}
+
+GridFootprint footprintOf(const std::string& name, double bytes, const openvdb::CoordBBox& box, std::size_t valueBytes)
+{
+    GridFootprint f{name, bytes, 0.0};
+    if (!box.empty()) {
+        openvdb::CoordBBox copied = box;
+        copied.expand(kDenseCopyMargin);
+        const double dense = double(copied.volume()) * double(valueBytes);
+        if (dense <= double(kDenseCopyBytes)) f.denseBytes = dense; // (DenseCopy::create's test)
+    }
+    return f;
+}
+
+GridFootprint footprintOf(const openvdb::GridBase& grid)
+{
+    return footprintOf(grid.getName(), double(grid.baseTree().memUsage()), grid.evalActiveVoxelBoundingBox(), valueBytes(grid.valueType()));
 }
 
 namespace {

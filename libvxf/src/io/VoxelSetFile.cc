@@ -1,6 +1,7 @@
 #include <vxf/io/VoxelSetFile.h>
 
 #include <vxf/core/GridRoles.h>
+#include <vxf/core/GridStats.h>
 #include <vxf/core/MemoryBudget.h>
 #include <vxf/io/AtomicFile.h>
 #include <vxf/io/GridChecksum.h>
@@ -190,6 +191,24 @@ std::uint64_t declaredVoxels(const std::string& path, const std::string& grid)
         return count && count->value() > 0 ? std::uint64_t(count->value()) : 0;
     }
     return 0;
+}
+
+std::vector<GridFootprint> declaredFootprints(const std::string& path, const std::set<std::string>& names)
+{
+    const detail::VdbArchive archive = readArchive(
+        path, [&names](const std::string& name) { return names.count(name) > 0; }, true);
+    std::vector<GridFootprint> footprints;
+    for (const auto& g : archive.grids) {
+        if (!names.count(g->getName())) continue;
+        const auto bytes = g->getMetadata<openvdb::Int64Metadata>(openvdb::GridBase::META_FILE_MEM_BYTES);
+        const auto lo = g->getMetadata<openvdb::Vec3IMetadata>(openvdb::GridBase::META_FILE_BBOX_MIN);
+        const auto hi = g->getMetadata<openvdb::Vec3IMetadata>(openvdb::GridBase::META_FILE_BBOX_MAX);
+        if (!bytes || bytes->value() <= 0) continue;
+        const openvdb::CoordBBox box =
+            lo && hi ? openvdb::CoordBBox(openvdb::Coord(lo->value()), openvdb::Coord(hi->value())) : openvdb::CoordBBox();
+        footprints.push_back(footprintOf(g->getName(), double(bytes->value()), box, valueBytes(g->valueType())));
+    }
+    return footprints;
 }
 
 std::vector<std::string> voxelGridNames(const std::string& path)

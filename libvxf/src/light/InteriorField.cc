@@ -47,8 +47,8 @@ InteriorField::InteriorField(const Medium& medium, const openvdb::Vec3SGrid& phi
     : mValues(sourceFromFluence(medium, phi))
 {
     if (medium.surface()) continueOutward(medium, phi);
-    mValuesDense = DenseCopy<openvdb::Vec3SGrid>::create(*mValues, 2, kDenseCopyBytes);
-    if (mLogs) mLogsDense = DenseCopy<openvdb::Vec3SGrid>::create(*mLogs, 2, kDenseCopyBytes);
+    mValuesDense = DenseCopy<openvdb::Vec3SGrid>::create(*mValues, kDenseCopyMargin, kDenseCopyBytes);
+    if (mLogs) mLogsDense = DenseCopy<openvdb::Vec3SGrid>::create(*mLogs, kDenseCopyMargin, kDenseCopyBytes);
 }
 
 void InteriorField::continueOutward(const Medium& medium, const openvdb::Vec3SGrid& phi)

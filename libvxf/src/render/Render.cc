@@ -4,6 +4,7 @@
 
 #include <vxf/core/GridLookup.h>
 #include <vxf/core/GridRoles.h>
+#include <vxf/core/GridStats.h>
 #include <vxf/core/MemoryBudget.h>
 #include <vxf/core/Hash.h>
 #include <vxf/light/DirectLight.h>
@@ -74,11 +75,22 @@ void storePixel(RenderedImage& image, std::size_t pixel, const detail::PixelSum&
 
 } // namespace
 
-MemoryEstimate renderMemory(double voxels, const RenderOptions& options)
+MemoryEstimate renderMemory(const std::vector<GridFootprint>& grids, const RenderOptions& options)
 {
-    const double denseCopies = std::min(4.0 * double(kDenseCopyBytes), voxels * kRenderDenseBytesPerVoxel);
-    return stageMemory(
-        kStageFixedBytes + denseCopies, voxels, kRenderBytesPerVoxel, double(options.width) * double(options.height), kRenderBytesPerPixel);
+    double gridBytes = 0.0, surfaceBytes = 0.0, denseBytes = 0.0;
+    for (const GridFootprint& g : grids) {
+        (g.name == grids::kSurface ? surfaceBytes : gridBytes) += g.bytes;
+        denseBytes += g.denseBytes;
+    }
+    const double pixels = double(options.width) * double(options.height);
+    MemoryEstimate e;
+    e.bytes = kStageFixedBytes + gridBytes * kRenderBytesPerGridByte + surfaceBytes * kRenderBytesPerSurfaceByte + denseBytes +
+        pixels * kRenderBytesPerPixel;
+    e.how = fmt::format("grids of {} × {:.1f}, a surface of {} × {:.0f}, dense copies of {}, {:.3g} pixels × {:.0f} bytes + {}",
+        formatBytes(std::uint64_t(gridBytes)), kRenderBytesPerGridByte, formatBytes(std::uint64_t(surfaceBytes)),
+        kRenderBytesPerSurfaceByte, formatBytes(std::uint64_t(denseBytes)), pixels, kRenderBytesPerPixel,
+        formatBytes(std::uint64_t(kStageFixedBytes)));
+    return e;
 }
 
 std::set<std::string> renderGrids(const RenderOptions& options)
@@ -104,7 +116,11 @@ RenderedImage render(const VoxelSet& set, const Medium& medium, const Scene& sce
         throw UsageError(
             fmt::format("image size {}x{} with {} samples per pixel is empty", options.width, options.height, options.samples));
     }
-    requireMemory("render", renderMemory(double(medium.density().activeVoxelCount()), options));
+    std::vector<GridFootprint> footprints;
+    const std::set<std::string> read = renderGrids(options);
+    for (const openvdb::GridBase::Ptr& grid : set.grids())
+        if (read.count(grid->getName())) footprints.push_back(footprintOf(*grid));
+    requireMemory("render", renderMemory(footprints, options));
     const detail::RenderContext context(set, medium, scene, options, meshes);
 
     RenderedImage image;

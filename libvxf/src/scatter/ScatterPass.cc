@@ -192,7 +192,7 @@ openvdb::Vec3SGrid::Ptr scatterPass(
     if (options.source == ScatterPassOptions::SourceRead::Continued)
         sourceField.emplace(medium, source, SourceField::Near::Lattice);
     else
-        sourceDense = DenseCopy<openvdb::Vec3SGrid>::create(source, 2, kDenseCopyBytes);
+        sourceDense = DenseCopy<openvdb::Vec3SGrid>::create(source, kDenseCopyMargin, kDenseCopyBytes);
     openvdb::tree::LeafManager<openvdb::Vec3STree> leaves(fluence->tree());
     std::vector<openvdb::CoordBBox> tiles;
     for (auto it = fluence->tree().cbeginValueOn(); it; ++it) {

@@ -250,9 +250,9 @@ SourceField::SourceField(const Medium& medium, const openvdb::Vec3SGrid& source,
             const openvdb::Vec3d j = v.distance <= 0.0 ? evaluate(layer, -v.distance) : js - (evaluate(layer, 1.0) - js) * v.distance;
             acc.setValueOnly(v.ijk, openvdb::Vec3f(j));
         }
-        if (mLayerIndex) mLayerIndexDense = DenseCopy<openvdb::Int32Grid>::create(*mLayerIndex, 2, kDenseCopyBytes);
+        if (mLayerIndex) mLayerIndexDense = DenseCopy<openvdb::Int32Grid>::create(*mLayerIndex, kDenseCopyMargin, kDenseCopyBytes);
     }
-    mValuesDense = DenseCopy<openvdb::Vec3SGrid>::create(*mValues, 2, kDenseCopyBytes);
+    mValuesDense = DenseCopy<openvdb::Vec3SGrid>::create(*mValues, kDenseCopyMargin, kDenseCopyBytes);
 }
 
 SourceField::Sampler::Sampler(const SourceField& field)

@@ -102,8 +102,9 @@ Medium::Medium(const VoxelSet& set, const Material& material, Lookups lookups)
     mActualSigmaS = mSigmaS;
     mBounds = mDensity->evalActiveVoxelBoundingBox();
     const bool dense = lookups == Lookups::Dense;
-    if (dense && mSigmaA) mSigmaADense = DenseCopy<openvdb::Vec3SGrid>::create(*mSigmaA, 2, kDenseCopyBytes);
-    if (dense && mSigmaS) mSigmaSDense = mActualSigmaSDense = DenseCopy<openvdb::Vec3SGrid>::create(*mSigmaS, 2, kDenseCopyBytes);
+    if (dense && mSigmaA) mSigmaADense = DenseCopy<openvdb::Vec3SGrid>::create(*mSigmaA, kDenseCopyMargin, kDenseCopyBytes);
+    if (dense && mSigmaS)
+        mSigmaSDense = mActualSigmaSDense = DenseCopy<openvdb::Vec3SGrid>::create(*mSigmaS, kDenseCopyMargin, kDenseCopyBytes);
     if (material.phaseG != 0.0) {
         // The transport's medium: σs* = (1 − f)·σs, σa as it is, the rest's g* (Phase.h).
         const PhaseScaling scaling = transportScaling(material.phaseG);
@@ -111,8 +112,8 @@ Medium::Medium(const VoxelSet& set, const Material& material, Lookups lookups)
     }
     if (!dense) return;
     // Trilinear lookups reach a voxel beyond the active voxels (marchBounds).
-    mDensityDense = DenseCopy<openvdb::FloatGrid>::create(*mDensity, 2, kDenseCopyBytes);
-    if (mSurface) mSurfaceDense = DenseCopy<openvdb::FloatGrid>::create(*mSurface, 2, kDenseCopyBytes);
+    mDensityDense = DenseCopy<openvdb::FloatGrid>::create(*mDensity, kDenseCopyMargin, kDenseCopyBytes);
+    if (mSurface) mSurfaceDense = DenseCopy<openvdb::FloatGrid>::create(*mSurface, kDenseCopyMargin, kDenseCopyBytes);
     if (!mSigmaA && !mSigmaS && mDensityDense) {
         mUniform = std::make_shared<const UniformBricks>(mDensityDense.get(), mBounds, mSurfaceDense.get(), voxelSize(), bool(mSurface));
     } else if (!mSigmaA && !mSigmaS && !mSurface && !mBounds.empty()) {
@@ -132,7 +133,7 @@ void Medium::scaleScattering(double factor, double restG)
         openvdb::tools::foreach (scaled->beginValueAll(),
             [factor](const openvdb::Vec3SGrid::ValueAllIter& it) { it.setValue(openvdb::Vec3f(openvdb::Vec3d(*it) * factor)); });
         mSigmaS = scaled;
-        if (mSigmaSDense) mSigmaSDense = DenseCopy<openvdb::Vec3SGrid>::create(*mSigmaS, 2, kDenseCopyBytes);
+        if (mSigmaSDense) mSigmaSDense = DenseCopy<openvdb::Vec3SGrid>::create(*mSigmaS, kDenseCopyMargin, kDenseCopyBytes);
     }
 }
 

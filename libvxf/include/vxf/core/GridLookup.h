@@ -131,5 +131,7 @@ private:
 /// The memory one dense copy may take before lookups fall back to the tree (256 MiB: a float
 /// grid of 400³ voxels, a vec3 grid of 280³).
 inline constexpr std::size_t kDenseCopyBytes = std::size_t(256) << 20;
+/// The voxels around a grid's active box its dense copy holds (a lookup's block at the edge).
+inline constexpr int kDenseCopyMargin = 2;
 
 } // namespace vxf

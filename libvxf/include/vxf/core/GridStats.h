@@ -1,6 +1,8 @@
 // vxf — sparse-storage statistics of a grid (for summaries and `vxf info`).
 #pragma once
 
+#include <vxf/core/MemoryBudget.h>
+
 #include <openvdb/Grid.h>
 
 #include <cstdint>
@@ -19,6 +21,13 @@ struct GridStats
 
 /// Statistics of @a grid's tree; reads only, O(nodes).
 GridStats gridStats(const openvdb::GridBase& grid);
+
+/// The bytes a value of OpenVDB's type @a valueType ("float", "vec3s", …) takes (4 where unknown).
+std::size_t valueBytes(const std::string& valueType);
+/// A grid's footprint (MemoryBudget.h) from its tree's @a bytes, its active @a box and its
+/// values' size: what a file's metadata declares, or (the second) a grid in memory holds.
+GridFootprint footprintOf(const std::string& name, double bytes, const openvdb::CoordBBox& box, std::size_t valueBytes);
+GridFootprint footprintOf(const openvdb::GridBase& grid);
 
 /// The range of a grid's active values (an active tile counting once per voxel it covers).
 struct ValueRange

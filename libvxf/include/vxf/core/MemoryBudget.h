@@ -42,6 +42,16 @@ struct MemoryEstimate
 };
 MemoryEstimate stageMemory(double fixedBytes, double voxels, double bytesPerVoxel, double pixels = 0.0, double bytesPerPixel = 0.0);
 
+/// A grid as a stage's estimate counts it: its tree's bytes in memory, and the bytes of the dense
+/// copy its lookups would make of its active box (GridLookup.h; 0 where the box passes the
+/// copies' limit and none is made). Known before a file is read (its grids' metadata: GridStats.h
+/// footprintOf) as after.
+struct GridFootprint
+{
+    std::string name;
+    double bytes = 0.0, denseBytes = 0.0;
+};
+
 /// Throws vxf::Error when @a estimate passes the budget, before the stage allocates:
 /// "STAGE needs about 9.1 GiB at its peak (…), more than the memory budget of 8 GiB (…)".
 void requireMemory(const std::string& stage, const MemoryEstimate& estimate);

@@ -1,10 +1,12 @@
 // vxf — reading and writing voxel sets as multi-grid OpenVDB files.
 #pragma once
 
+#include <vxf/core/MemoryBudget.h>
 #include <vxf/core/VoxelSet.h>
 
 #include <cstdint>
 #include <functional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -55,6 +57,12 @@ VoxelSet readGrids(const std::string& path, const std::vector<std::string>& name
 /// OpenVDB writes with every grid), its data not read: what a stage's memory estimate needs
 /// before it reads the file. 0 where the file holds no such grid or declares no count.
 std::uint64_t declaredVoxels(const std::string& path, const std::string& grid);
+
+/// The footprints (MemoryBudget.h) the .vdb at @a path declares for those of its grids named in
+/// @a names (`file_mem_bytes` and `file_bbox_min`/`max`, which OpenVDB writes with every grid),
+/// their data not read: what the render's estimate counts before it reads them. A grid declaring
+/// no size is left out.
+std::vector<GridFootprint> declaredFootprints(const std::string& path, const std::set<std::string>& names);
 
 /// The names of the voxel grids of the .vdb at @a path, in the file's order (no grid's data read):
 /// for a message naming what a file holds when a grid asked for is not there.

@@ -58,20 +58,21 @@ struct RenderMeshes
     const RayScene* media = nullptr; ///< the media only: where camera and shadow rays cross the surface (may be null)
 };
 
-/// The render stage's peak per active voxel of the medium's density and per pixel (its layers,
-/// sample tables and the EXR written), beyond the fixed part and its dense copies: what each added
-/// voxel took between the two largest rows of bench/scale (docs/reports/scale.md; the bunny's dims
-/// 256 to 512 and the smoke's 256³ to 384³ both 113 bytes), rounded up. The dense copies the
-/// marches read (density and three colour fields) stop growing at kDenseCopyBytes each: counted
-/// as kRenderDenseBytesPerVoxel a voxel up to 4 × that (the bunny at dim 256: 1,291 MiB estimated,
-/// 1,313 measured; at dim 512 4,481 against 3,945). render checks them against the memory budget
-/// before it allocates (a 32768² image is refused at once).
-inline constexpr double kRenderBytesPerVoxel = 120.0;
-inline constexpr double kRenderDenseBytesPerVoxel = 180.0;
+/// The render stage's peak from the grids it reads (renderGrids) and its image: each grid's
+/// tree held, with the copies its lookups make (the continued interior field, the source's
+/// layers), kRenderBytesPerGridByte of its bytes; the surface level set kRenderBytesPerSurfaceByte
+/// of its own (the source's layers and the band's voxels near the surface grow with it); the
+/// dense copies where they are made (GridFootprint); and the image's layers, sample tables and
+/// EXR, kRenderBytesPerPixel a pixel. Fitted to bench/scale's bunny at dims 256 and 512, full
+/// and banded (docs/accuracy-notes.md (aj)): within 1-9% above what each took, where counting
+/// the density's active voxels (120 bytes each) had taken a banded volume for a full one.
+/// render checks it against the memory budget before it allocates, and `vxf render` from the
+/// file's metadata before it reads (a 32768² image is refused at once).
+inline constexpr double kRenderBytesPerGridByte = 3.5;
+inline constexpr double kRenderBytesPerSurfaceByte = 12.0;
 inline constexpr double kRenderBytesPerPixel = 160.0;
-/// The render's peak for a density of @a voxels active voxels at @a options' image size (the
-/// constants above): what render() checks, and `vxf render` from the file's count before it reads.
-MemoryEstimate renderMemory(double voxels, const RenderOptions& options);
+/// The render's peak for @a grids (the footprints of those it reads) at @a options' image size.
+MemoryEstimate renderMemory(const std::vector<GridFootprint>& grids, const RenderOptions& options);
 
 /// The grids render() reads from its set with @a options: the medium's (Medium::gridsRead),
 /// `scatter`, its anisotropy and the source's, and `direct` unless the lights are marched. A
