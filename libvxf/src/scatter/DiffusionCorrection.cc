@@ -40,7 +40,6 @@ std::vector<openvdb::Coord> DiffusionCorrection::indexCells(
     const auto inDomain = [&](const openvdb::Vec3f& t) { return std::min({t[0], t[1], t[2]}) * dx >= kThinVoxel; };
     std::vector<openvdb::Coord> cells;
     std::vector<std::pair<std::uint32_t, std::uint32_t>> members; // (cell, voxel) of the domain, in lattice order
-    mCellOf.assign(lattice.voxelCount(), -1);
     for (std::size_t n = 0; n < lattice.fineLeafCount(); ++n) {
         for (int v = 0; v < L; ++v) {
             if (!inDomain(sigmaT[n * L + v])) continue;
@@ -48,10 +47,10 @@ std::vector<openvdb::Coord> DiffusionCorrection::indexCells(
             const openvdb::Coord cell(c[0] >> shift, c[1] >> shift, c[2] >> shift);
             const auto [it, added] = cellIndex.emplace(cell, std::int32_t(cells.size()));
             if (added) cells.push_back(cell);
-            mCellOf[n * L + v] = it->second;
             members.emplace_back(std::uint32_t(it->second), std::uint32_t(n * L + v));
         }
     }
+    mFineCells = cells.size();
     // A coarse leaf's cell: the cells of its block (each of its one value; the diffusion's
     // grid stays uniform), its correction their mean.
     const int side = std::max(1, 8 >> shift);
@@ -274,13 +273,14 @@ DiffusionCorrection::Solve DiffusionCorrection::solve(const std::vector<openvdb:
 
 void DiffusionCorrection::addTo(std::vector<openvdb::Vec3f>& values, double weight) const
 {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mMembers.size()), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t i = r.begin(); i != r.end(); ++i) {
-            const std::uint32_t v = mMembers[i];
-            if (mCellOf[v] < 0) continue; // a coarse cell's: below
-            const std::size_t c = std::size_t(mCellOf[v]);
-            for (int ch = 0; ch < 3; ++ch) {
-                if (mSolution[ch].size() > c) values[v][ch] += float(weight * mSolution[ch][c]);
+    // The fine leaves' cells: each voxel of the domain is a member of one (coarse ones: below).
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mFineCells), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t c = r.begin(); c != r.end(); ++c) {
+            for (std::uint32_t k = mStart[c]; k < mStart[c + 1]; ++k) {
+                const std::uint32_t v = mMembers[k];
+                for (int ch = 0; ch < 3; ++ch) {
+                    if (mSolution[ch].size() > c) values[v][ch] += float(weight * mSolution[ch][c]);
+                }
             }
         }
     });
