@@ -136,6 +136,23 @@ void SweepLattice::indexLeaves(const Medium& medium, const openvdb::MaskTree& to
             if (i == 0 || key[order[i]] != key[order[i - 1]]) mWavefronts[octant].push_back(i);
         }
         mWavefronts[octant].push_back(order.size());
+        // The fine leaves' places among the faces a sweep keeps (mFacePlace).
+        const std::vector<std::size_t>& fronts = mWavefronts[octant];
+        std::size_t widest = 0;
+        for (std::size_t f = 0; f + 1 < fronts.size(); ++f) {
+            std::size_t fine = 0;
+            for (std::size_t i = fronts[f]; i < fronts[f + 1]; ++i) fine += coarse(std::size_t(order[i])) ? 0 : 1;
+            widest = std::max(widest, fine);
+        }
+        mFacePlace[octant].assign(mFineLeaves, -1);
+        for (std::size_t f = 0; f + 1 < fronts.size(); ++f) {
+            const long long ring = ((key[order[fronts[f]]] % 4) + 4) % 4;
+            std::size_t place = std::size_t(ring) * widest;
+            for (std::size_t i = fronts[f]; i < fronts[f + 1]; ++i) {
+                if (!coarse(std::size_t(order[i]))) mFacePlace[octant][std::size_t(order[i])] = std::int32_t(place++);
+            }
+        }
+        mFacePlaces[octant] = 4 * widest;
     }
 }
 
@@ -397,7 +414,7 @@ std::size_t SweepLattice::bytes() const
     std::size_t sum = of(mOrigins) + of(mNeighbours) + of(mSigmaT) + of(mSigmaTGrey) + of(mDistance) + of(mDistanceStart) + of(mDeep) +
         of(mUniform) + of(mSigmaTStart) + of(mShallowStart) + of(mInterior) + of(mSigmaTVoxel) + of(mSigmaS) + of(mDensityVoxel) +
         of(mSkin) + of(mSkinIndex);
-    for (int o = 0; o < 8; ++o) sum += of(mOrder[o]) + of(mWavefronts[o]);
+    for (int o = 0; o < 8; ++o) sum += of(mOrder[o]) + of(mWavefronts[o]) + of(mFacePlace[o]);
     return sum + mLeafIndex.size() * (sizeof(openvdb::Coord) + sizeof(std::int32_t) + 2 * sizeof(void*)) +
         mLeafIndex.bucket_count() * sizeof(void*);
 }

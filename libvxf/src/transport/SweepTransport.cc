@@ -35,16 +35,17 @@ void forUpwindBlock(int octant, F&& f)
 }
 
 /// A leaf's upwind ghosts in its padded @a buffer: what its @a neighbours (27) handed on, a
-/// fine one's downwind faces (@a faces), a coarse one's light through the face the ghost lies
-/// across (@a leaving, null: no coarse leaves, the loop without their test), 0 where none is.
+/// fine one's downwind faces (@a faces, at its place @a facePlace), a coarse one's light through
+/// the face the ghost lies across (@a leaving, null: no coarse leaves, the loop without their
+/// test), 0 where none is.
 void fillGhosts(const std::vector<Ghost>& upwind, const std::int32_t* neighbours, std::size_t fineLeaves, const openvdb::Vec3f* faces,
-    const openvdb::Vec3f* leaving, openvdb::Vec3f* buffer)
+    const std::int32_t* facePlace, const openvdb::Vec3f* leaving, openvdb::Vec3f* buffer)
 {
     constexpr std::size_t kFace = SweepLattice::kFaceVoxels;
     if (!leaving) {
         for (const Ghost& g : upwind) {
             const int leaf = neighbours[g.slot];
-            buffer[g.padded] = leaf >= 0 ? faces[std::size_t(leaf) * kFace + std::size_t(g.face)] : openvdb::Vec3f(0.0f);
+            buffer[g.padded] = leaf >= 0 ? faces[std::size_t(facePlace[leaf]) * kFace + std::size_t(g.face)] : openvdb::Vec3f(0.0f);
         }
         return;
     }
@@ -52,7 +53,7 @@ void fillGhosts(const std::vector<Ghost>& upwind, const std::int32_t* neighbours
         const int leaf = neighbours[g.slot];
         buffer[g.padded] = leaf < 0           ? openvdb::Vec3f(0.0f)
             : std::size_t(leaf) >= fineLeaves ? leaving[(std::size_t(leaf) - fineLeaves) * 3 + std::size_t(g.face / 64)]
-                                              : faces[std::size_t(leaf) * kFace + std::size_t(g.face)];
+                                              : faces[std::size_t(facePlace[leaf]) * kFace + std::size_t(g.face)];
     }
 }
 
@@ -119,11 +120,13 @@ void SweepLattice::sweep(const SweepSource& source, const std::vector<openvdb::V
                 inOctant.begin() + std::ptrdiff_t(i), inOctant.begin() + std::ptrdiff_t(std::min(inOctant.size(), i + kSweepBatch)));
         }
     }
-    const std::size_t leaves = mFineLeaves, coarseLeaves = mOrigins.size() - mFineLeaves;
+    const std::size_t coarseLeaves = mOrigins.size() - mFineLeaves;
     std::size_t largest = 0;
     for (const std::vector<std::size_t>& batch : batches) largest = std::max(largest, batch.size());
-    // What a leaf hands on: a fine leaf its downwind faces, a coarse one each face's light.
-    std::vector<openvdb::Vec3f> faces(largest * leaves * kFaceVoxels), leaving(largest * coarseLeaves * 3);
+    // What a leaf hands on: a fine leaf its downwind faces (the last four wavefronts',
+    // mFacePlace), a coarse one each face's light.
+    const std::size_t places = *std::max_element(mFacePlaces.begin(), mFacePlaces.end());
+    std::vector<openvdb::Vec3f> faces(largest * places * kFaceVoxels), leaving(largest * coarseLeaves * 3);
     const std::vector<CubeChords> chords = coarseLeaves > 0 ? cubeChords(directions) : std::vector<CubeChords>{};
     struct Scratch
     {
@@ -143,10 +146,11 @@ void SweepLattice::sweep(const SweepSource& source, const std::vector<openvdb::V
         const int octant = octantOf(directions[batch.front()]);
         const std::vector<Ghost> upwind = upwindGhosts(octant);
         const std::array<std::int16_t, kFaceVoxels> downwind = downwindFaces(octant);
+        const std::int32_t* facePlace = mFacePlace[std::size_t(octant)].data();
         leavesInUpwindOrder(octant, [&](std::size_t n) {
             if (coarse(n)) {
                 for (std::size_t slot = 0; slot < batch.size(); ++slot) {
-                    sweepCoarseLeaf(n, directions, batch[slot], chords[batch[slot]], faces.data() + slot * leaves * kFaceVoxels,
+                    sweepCoarseLeaf(n, directions, batch[slot], chords[batch[slot]], faces.data() + slot * places * kFaceVoxels, facePlace,
                         leaving.data() + slot * coarseLeaves * 3, source, w, fluence, moment, scratches.local().coarse);
                 }
                 return;
@@ -156,9 +160,9 @@ void SweepLattice::sweep(const SweepSource& source, const std::vector<openvdb::V
             for (std::size_t slot = 0; slot < batch.size(); ++slot) {
                 const std::size_t d = batch[slot];
                 const openvdb::Vec3d& omega = directions[d];
-                const openvdb::Vec3f* ownFaces = faces.data() + slot * leaves * kFaceVoxels;
+                const openvdb::Vec3f* ownFaces = faces.data() + slot * places * kFaceVoxels;
                 const openvdb::Vec3f* ownLeaving = leaving.data() + slot * coarseLeaves * 3;
-                fillGhosts(upwind, &mNeighbours[n * 27], mFineLeaves, ownFaces, coarseLeaves > 0 ? ownLeaving : nullptr, buffer);
+                fillGhosts(upwind, &mNeighbours[n * 27], mFineLeaves, ownFaces, facePlace, coarseLeaves > 0 ? ownLeaving : nullptr, buffer);
                 // The leaf's padded block of J: as it is (padded, no moment), or gathered once a
                 // batch by the block's index, with a moment's a beside it; with a moment, J
                 // toward ω: J·RestPhase(a, ω, β·ω), over the gathered blocks.
@@ -194,7 +198,7 @@ void SweepLattice::sweep(const SweepSource& source, const std::vector<openvdb::V
                     sweepLeaf(
                         n, &mSigmaTGrey[mSigmaTStart[n]], omega, j, buffer, w, &fluence[n * kLeafVoxels], fluxHere, worldOmega, skinHere);
                 }
-                openvdb::Vec3f* leafFaces = &faces[(slot * leaves + n) * kFaceVoxels];
+                openvdb::Vec3f* leafFaces = &faces[(slot * places + std::size_t(facePlace[n])) * kFaceVoxels];
                 for (int k = 0; k < kFaceVoxels; ++k) leafFaces[k] = buffer[downwind[std::size_t(k)]];
             }
         });
@@ -204,8 +208,8 @@ void SweepLattice::sweep(const SweepSource& source, const std::vector<openvdb::V
 }
 
 void SweepLattice::sweepCoarseLeaf(std::size_t n, const std::vector<openvdb::Vec3d>& directions, std::size_t d, const CubeChords& chords,
-    const openvdb::Vec3f* faces, openvdb::Vec3f* leaving, const SweepSource& source, float weight, std::vector<openvdb::Vec3f>& fluence,
-    const FirstMoment* moment, CoarseWeights& cache) const
+    const openvdb::Vec3f* faces, const std::int32_t* facePlace, openvdb::Vec3f* leaving, const SweepSource& source, float weight,
+    std::vector<openvdb::Vec3f>& fluence, const FirstMoment* moment, CoarseWeights& cache) const
 {
     // The light entering through each upwind face: what the neighbour there hands on through
     // it (a fine leaf's downwind face's mean).
@@ -221,7 +225,7 @@ void SweepLattice::sweepCoarseLeaf(std::size_t n, const std::vector<openvdb::Vec
             in[a] = leaving[(std::size_t(m) - mFineLeaves) * 3 + std::size_t(a)];
             continue;
         }
-        const openvdb::Vec3f* f = &faces[std::size_t(m) * kFaceVoxels + std::size_t(a) * 64];
+        const openvdb::Vec3f* f = &faces[std::size_t(facePlace[m]) * kFaceVoxels + std::size_t(a) * 64];
         for (int k = 0; k < 64; ++k) in[a] += f[k];
         in[a] *= 1.0f / 64.0f;
     }
