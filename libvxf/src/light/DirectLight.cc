@@ -1,6 +1,7 @@
 #include <vxf/light/DirectLight.h>
 
 #include <vxf/core/GridRoles.h>
+#include <vxf/core/GridLookup.h>
 #include <vxf/core/GridStats.h>
 #include <vxf/core/MemoryBudget.h>
 #include <vxf/light/VolumeEmission.h>
@@ -281,7 +282,11 @@ struct PointLighting
 
 } // namespace
 
-MemoryEstimate lightMemory(double voxels) { return stageMemory(kStageFixedBytes, voxels, kLightBytesPerVoxel); }
+MemoryEstimate lightMemory(double voxels)
+{
+    const double denseCopies = std::min(2.0 * double(kDenseCopyBytes), voxels * kLightDenseBytesPerVoxel);
+    return stageMemory(kStageFixedBytes + denseCopies, voxels, kLightBytesPerVoxel);
+}
 
 DirectLightReport computeDirectLight(
     VoxelSet& set, const Medium& medium, const std::vector<Light>& lights, const DirectLightOptions& options, Interrupter* interrupter)

@@ -92,12 +92,18 @@ openvdb::Vec3d sampleTransmittance(const LightSample& sample, Medium::Sampler& s
 openvdb::Vec3d lightFluence(const LightSampler& light, Medium::Sampler& sampler, const Medium& medium, const openvdb::Coord& voxel,
     const MarchOptions& options, const RayScene* occluders = nullptr, openvdb::Vec3d* flux = nullptr);
 
-/// The light stage's peak per active voxel of the medium's density (tiles' voxels counted), the
-/// larger of the bunny's 3.44M at dim 256 (433 MiB, 102 bytes a voxel, its dense copies for the
-/// marches included) and scripts/make-smoke's 4.59M at 256³ with a phase (390 MiB, 66), less the
-/// fixed part, rounded up (docs/accuracy-notes.md (ae)). computeDirectLight checks it against the
-/// memory budget before it allocates.
-inline constexpr double kLightBytesPerVoxel = 110.0;
+/// The light stage's peak: the fixed part, the dense copies its marches read (the density and
+/// the surface, as GridLookup makes them: counted as kLightDenseBytesPerVoxel an active voxel, up
+/// to two copies' limit) and kLightBytesPerVoxel an active voxel of the medium's density (tiles'
+/// voxels counted): what each added voxel took in bench/scale (docs/reports/scale.md: the
+/// bunny's dims 256 to 512 41 bytes, the smoke's 256³ to 384³ 70 before its depths were one
+/// float), rounded up. The bunny at dim 256: 448 MiB estimated, 391 measured; at dim 1024 with
+/// the band 14.7 GiB against 6.6 (the band's tiles are not known before the light is made);
+/// the larger figure of dim 256 alone (110 bytes, its dense copies in it) had refused dim 1024
+/// on a machine of 22 GiB (docs/accuracy-notes.md (aj)). computeDirectLight checks it against
+/// the memory budget before it allocates, `vxf light` from the file's count before it reads.
+inline constexpr double kLightBytesPerVoxel = 70.0;
+inline constexpr double kLightDenseBytesPerVoxel = 36.0;
 /// The light stage's peak for a density of @a voxels active voxels: what computeDirectLight
 /// checks, and `vxf light` from the file's count before it reads.
 MemoryEstimate lightMemory(double voxels);
