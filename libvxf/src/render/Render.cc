@@ -75,10 +75,10 @@ void storePixel(RenderedImage& image, std::size_t pixel, const detail::PixelSum&
 
 } // namespace
 
-MemoryEstimate renderMemory(const std::vector<GridFootprint>& grids, const RenderOptions& options)
+MemoryEstimate renderMemory(const std::vector<GridFootprint>& read, const RenderOptions& options)
 {
     double gridBytes = 0.0, surfaceBytes = 0.0, denseBytes = 0.0;
-    for (const GridFootprint& g : grids) {
+    for (const GridFootprint& g : read) {
         (g.name == grids::kSurface ? surfaceBytes : gridBytes) += g.bytes;
         denseBytes += g.denseBytes;
     }

@@ -71,8 +71,8 @@ struct RenderMeshes
 inline constexpr double kRenderBytesPerGridByte = 3.5;
 inline constexpr double kRenderBytesPerSurfaceByte = 12.0;
 inline constexpr double kRenderBytesPerPixel = 160.0;
-/// The render's peak for @a grids (the footprints of those it reads) at @a options' image size.
-MemoryEstimate renderMemory(const std::vector<GridFootprint>& grids, const RenderOptions& options);
+/// The render's peak for the footprints of the grids it reads (@a read) at @a options' image size.
+MemoryEstimate renderMemory(const std::vector<GridFootprint>& read, const RenderOptions& options);
 
 /// The grids render() reads from its set with @a options: the medium's (Medium::gridsRead),
 /// `scatter`, its anisotropy and the source's, and `direct` unless the lights are marched. A
