@@ -46,7 +46,7 @@ public:
         const ops::Args args = mParams->args();
         const Scene scene = stageScene(args);
         const RenderOptions options = renderOptions(args, scene.settings);
-        // Refused before the read when the file's own count says the volume will not fit.
+        // Refused before the read when the bytes the file declares for its grids will not fit.
         if (const auto footprints = declaredFootprints(mVolume, renderGrids(options)); !footprints.empty())
             requireMemory("render", renderMemory(footprints, options));
         const VoxelSet set = readVoxelSet(mVolume, renderInputRead(options)); // its grids alone
