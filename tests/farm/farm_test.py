@@ -78,7 +78,9 @@ def start_cluster(workers):
                                        "--name", f"w{i}", "--host", "127.0.0.1"],
                                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
     from distributed import Client
-    with Client(address, timeout="60s") as client:
+    # (A fresh environment's first scheduler can take over a minute to answer under a loaded
+    # ctest -j2: CI at 5999997 timed out at 60 s before any test ran.)
+    with Client(address, timeout="180s") as client:
         client.wait_for_workers(workers, timeout=120)
     return address, procs
 
