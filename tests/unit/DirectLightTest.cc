@@ -412,6 +412,18 @@ TEST_CASE("a directional light by sweeps: shadows cast across vacuum wider than 
         CHECK(swept->tree().getValue(openvdb::Coord(i, 0, 0)).x() == Approx(expected).epsilon(1e-3));
         CHECK(marched->tree().getValue(openvdb::Coord(i, 0, 0)).x() == Approx(expected).epsilon(1e-3));
     }
+    // A point light on the axis, 200 voxels before the near slab: the far slab's light crossed
+    // the gap (marched through the lattice's leaves only, the vacuum between skipped) and the
+    // near slab, I/r² dimmed by the same depths.
+    const vxf::Light point = pointLight(openvdb::Vec3d(-10.0, 0.0, 0.0), 3.0);
+    const auto pointSwept = litDirect(set, material, {point}, true), pointMarched = litDirect(set, material, {point}, false);
+    for (int i : {32, 35, 47}) {
+        INFO("voxel x = " << i << ", point light");
+        const double r = 10.0 + i * dx;
+        const double expected = 3.0 / (r * r) * std::exp(-sigmaT * dx * (8.0 + (i - 32) + 0.5));
+        CHECK(pointSwept->tree().getValue(openvdb::Coord(i, 0, 0)).x() == Approx(expected).epsilon(1e-3));
+        CHECK(pointMarched->tree().getValue(openvdb::Coord(i, 0, 0)).x() == Approx(expected).epsilon(1e-3));
+    }
 }
 
 TEST_CASE("directional and environment lights by sweeps match the march through a sphere's surface", "[light][direct][sweep]")
