@@ -158,15 +158,16 @@ public:
         Intersector rays(*mIntersector); // a shallow copy: its own ray and accessor
         // OpenVDB's index rays take voxel v as the cube [v, v + 1); vxf's voxel centres lie on v.
         if (!rays.setIndexRay(Ray(fromIjk + openvdb::Vec3d(0.5), direction, 0.0))) return;
-        std::vector<Span> hits;
-        rays.hits(hits);
-        for (Span span : hits) {
+        rays.hits(spans);
+        std::size_t kept = 0; // widened and merged in place
+        for (Span span : spans) {
             span.set(std::max(0.0, span.t0 - margin), span.t1 + margin);
-            if (!spans.empty() && span.t0 <= spans.back().t1)
-                spans.back().t1 = std::max(spans.back().t1, span.t1);
+            if (kept > 0 && span.t0 <= spans[kept - 1].t1)
+                spans[kept - 1].t1 = std::max(spans[kept - 1].t1, span.t1);
             else
-                spans.push_back(span);
+                spans[kept++] = span;
         }
+        spans.resize(kept);
     }
 
 private:
@@ -255,7 +256,7 @@ void sweepLight(const LightSampler& light, const detail::SweepLattice& lattice, 
         // surface; where the sweep has none there yet, marched from two voxels before the hit
         // until kRimHandOff voxels from the surface, where the sweep's depth takes over as for
         // the rim (these marches had run through the medium to the cutoff).
-        lattice.opticalDepthAlong(travel, tau, [&](const openvdb::Coord& ijk, const detail::SweepLattice::SweptSoFar& swept) {
+        const auto entering = [&](const openvdb::Coord& ijk, const detail::SweepLattice::SweptSoFar& swept) {
             openvdb::Vec3d from = ijk.asVec3d();
             if (options.boundary) {
                 const openvdb::Vec3d world = xform.indexToWorld(from);
@@ -290,7 +291,9 @@ void sweepLight(const LightSampler& light, const detail::SweepLattice& lattice, 
             }
             return depths.depthOf(
                 transmittanceToBoundary(samplers.local(), medium, from, -travel, options.march, sweptClearOfSurface(swept)));
-        });
+        };
+        // Leaves in the dark (every upwind depth beyond the cutoff) are not swept.
+        lattice.opticalDepthAlong(travel, tau, entering, float(depths.cutoff));
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
             for (std::size_t i = r.begin(); i != r.end(); ++i) {
                 const std::int32_t e = rim.entryOf(i);

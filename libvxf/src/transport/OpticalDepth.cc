@@ -70,7 +70,7 @@ openvdb::Vec3f SweepLattice::depthStep(std::size_t leaf, int p, const openvdb::V
     return result;
 }
 
-void SweepLattice::opticalDepthAlong(const openvdb::Vec3d& omega, Depths& tau, const EnteringDepth& entering) const
+void SweepLattice::opticalDepthAlong(const openvdb::Vec3d& omega, Depths& tau, const EnteringDepth& entering, float opaque) const
 {
     requireFine("opticalDepthAlong");
     tau.assignZero(*this);
@@ -78,8 +78,12 @@ void SweepLattice::opticalDepthAlong(const openvdb::Vec3d& omega, Depths& tau, c
     const float halfStep = float(0.5 * c.length * mVoxelSize);
     inUpwindOrder(
         omega, tau,
-        [&](std::size_t n, openvdb::Vec3f* buffer, const UpwindVoxel* voxels) {
+        [&](std::size_t n, openvdb::Vec3f* buffer, const UpwindVoxel* voxels, float leastUpwind) {
             const std::size_t first = n * kLeafVoxels;
+            if (leastUpwind > opaque && (mUniform[n] || !distanceBlock(n))) {
+                for (int v = 0; v < kLeafVoxels; ++v) tau.set(first + std::size_t(v), openvdb::Vec3f(leastUpwind));
+                return;
+            }
             if (mUniform[n]) {
                 // One σt over the padded block: every step adds the same (its upwind blend of σt
                 // the same sum at every voxel), the block's σt not read (it is most of a sweep's

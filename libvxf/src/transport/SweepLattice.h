@@ -302,10 +302,19 @@ public:
     /// toward the light, or the depth @a swept holds where the path left the medium upwind);
     /// null: τ = 0 there, the lattice alone casts shadows. Parallel light travelling along
     /// @a direction (unit, index space).
+    ///
+    /// Beyond an optical depth of @a opaque light counts as blocked (the marches' cutoff): a leaf
+    /// holding no surface whose upwind ghosts all lie beyond it (every channel) is not swept but
+    /// takes the least of their depths at every voxel, which its own lie above (σt ≥ 0, and only
+    /// the continuation through a surface lowers a depth). Its light is 0 either way; a voxel
+    /// downwind blending them with lit depths (a shadow's edge) reads the least, a change of its
+    /// transmittance of the order of the cutoff's own (under 3 × 10^-4 on a sphere at 10^-4).
+    /// The thick bunny's light at dim 1024: 238 → 187 s.
     class SweptSoFar;
     class Depths;
     using EnteringDepth = std::function<openvdb::Vec3f(const openvdb::Coord&, const SweptSoFar&)>;
-    void opticalDepthAlong(const openvdb::Vec3d& direction, Depths& tau, const EnteringDepth& entering = {}) const;
+    void opticalDepthAlong(const openvdb::Vec3d& direction, Depths& tau, const EnteringDepth& entering = {},
+        float opaque = std::numeric_limits<float>::infinity()) const;
 
     /// Optical depth τ from a point light at @a point (index space) to every voxel centre (per
     /// voxel), by one upwind sweep per octant around it (octant by octant, bit a set for voxels
@@ -459,7 +468,8 @@ private:
     /// @a values (per voxel; where no leaf is, @a outside(ijk) if given, else 0): visit(leaf,
     /// buffer, voxels) once per leaf, which takes its voxels in the order of @a voxels
     /// (upwindVoxels) and writes each one's own value to the buffer and to @a values. One call a
-    /// leaf, not a voxel: what is the same over a leaf is looked at once.
+    /// leaf, not a voxel: what is the same over a leaf is looked at once. visit's fourth argument
+    /// is the least of the ghosts' values (every channel).
     template <typename Visit>
     void inUpwindOrder(const openvdb::Vec3d& omega, const Depths& values, const Visit& visit, const EnteringDepth& outside = {}) const;
     /// visit(leaf) for the leaves in upwind order along @a octant, a wavefront's in parallel.

@@ -385,6 +385,7 @@ void SweepLattice::inUpwindOrder(const openvdb::Vec3d& omega, const Depths& valu
     leavesInUpwindOrder(octant, [&](std::size_t n) {
         openvdb::Vec3f* buffer = buffers.local().data();
         std::optional<SweptSoFar> swept; // (for `outside`, made at the leaf's first ghost without a leaf)
+        float least = std::numeric_limits<float>::infinity();
         for (const Ghost& g : upwind) {
             const int leaf = mNeighbours[n * 27 + g.slot];
             if (leaf >= 0) {
@@ -395,8 +396,10 @@ void SweepLattice::inUpwindOrder(const openvdb::Vec3d& omega, const Depths& valu
             } else {
                 buffer[g.padded] = openvdb::Vec3f(0.0f);
             }
+            const openvdb::Vec3f& ghost = buffer[g.padded];
+            least = std::min({least, ghost[0], ghost[1], ghost[2]});
         }
-        visit(n, buffer, voxels.data());
+        visit(n, buffer, voxels.data(), least);
     });
 }
 
