@@ -178,6 +178,7 @@ SweptLights sweepLights(const std::vector<LightSampler>& active, const Medium& m
     out.energy.assign(active.size(), openvdb::Vec3d(0.0));
     if (!options.sweep) return out;
     Rim rim;
+    std::optional<LatticeSpans> spans;
     openvdb::Vec3d before(0.0); // the sums' energyOf so far
     for (std::size_t l = 0; l < active.size(); ++l) {
         const bool fromPoint = sweepableFromPoint(active[l].light());
@@ -185,14 +186,15 @@ SweptLights sweepLights(const std::vector<LightSampler>& active, const Medium& m
         if (!out.lattice) {
             out.lattice.emplace(medium, topology, detail::SweepLattice::Coefficients::SweepOnly);
             rim = rimOf(*out.lattice, medium);
+            if (!options.boundary) spans.emplace(*out.lattice); // (with meshes, the marches ask them)
         }
         // Each light adds into the sums; its energy is what it added (energyOf is a sum: the
         // sums' energy after the light less the earlier lights').
         detail::LeafBlocks<openvdb::Vec3f>* flux = anisotropic ? &out.flux : nullptr;
         if (fromPoint)
-            sweepPointLight(active[l], *out.lattice, medium, rim, options, out.fluence, flux);
+            sweepPointLight(active[l], *out.lattice, medium, rim, spans ? &*spans : nullptr, options, out.fluence, flux);
         else
-            sweepLight(active[l], *out.lattice, medium, rim, options, out.fluence, flux);
+            sweepLight(active[l], *out.lattice, medium, rim, spans ? &*spans : nullptr, options, out.fluence, flux);
         out.swept[l] = true;
         const openvdb::Vec3d after = energyOf(out.fluence, *out.lattice, leaves, tiles);
         out.energy[l] = after - before;

@@ -11,7 +11,6 @@
 #include <vxf/core/Hash.h>
 
 #include <openvdb/tools/Morphology.h>
-#include <openvdb/tools/RayIntersector.h>
 #include <openvdb/tree/LeafManager.h>
 
 #include <fmt/format.h>
@@ -22,7 +21,6 @@
 #include <cmath>
 #include <functional>
 #include <limits>
-#include <memory>
 #include <optional>
 
 namespace vxf::detail {
@@ -128,54 +126,6 @@ struct MarchedDepths
     float blocked;
 };
 
-/// Where rays cross a lattice's leaves: without the medium's meshes (a volume object), the
-/// only way to tell the vacuum a ray from the lattice toward a light crosses. The medium lies
-/// in the leaves (their voxels are its active ones and the voxel around them: every point whose
-/// trilinear reads meet it), so a march need step through their spans only. OpenVDB's
-/// hierarchical DDA over a mask of the leaves (VolumeRayIntersector at leaf level).
-class LatticeSpans
-{
-public:
-    using Ray = openvdb::math::Ray<double>;
-    using Span = Ray::TimeSpan;
-
-    explicit LatticeSpans(const SweepLattice& lattice)
-        : mMask(openvdb::BoolGrid::create(false))
-    {
-        for (std::size_t n = 0; n < lattice.leafCount(); ++n) mMask->tree().touchLeaf(lattice.origin(n))->setValuesOn();
-        if (mMask->empty()) return;
-        mIntersector = std::make_unique<Intersector>(*mMask);
-        mMask->tree().clear(); // the intersector holds its own copy of the topology
-    }
-
-    /// The spans (index units along the unit index-space @a direction from @a fromIjk) where the
-    /// ray lies in a leaf, each widened by @a margin either side and merged where they meet, in
-    /// order along the ray; none where it meets no leaf.
-    void along(const openvdb::Vec3d& fromIjk, const openvdb::Vec3d& direction, double margin, std::vector<Span>& spans) const
-    {
-        spans.clear();
-        if (!mIntersector) return;
-        Intersector rays(*mIntersector); // a shallow copy: its own ray and accessor
-        // OpenVDB's index rays take voxel v as the cube [v, v + 1); vxf's voxel centres lie on v.
-        if (!rays.setIndexRay(Ray(fromIjk + openvdb::Vec3d(0.5), direction, 0.0))) return;
-        rays.hits(spans);
-        std::size_t kept = 0; // widened and merged in place
-        for (Span span : spans) {
-            span.set(std::max(0.0, span.t0 - margin), span.t1 + margin);
-            if (kept > 0 && span.t0 <= spans[kept - 1].t1)
-                spans[kept - 1].t1 = std::max(spans[kept - 1].t1, span.t1);
-            else
-                spans[kept++] = span;
-        }
-        spans.resize(kept);
-    }
-
-private:
-    using Intersector = openvdb::tools::VolumeRayIntersector<openvdb::BoolGrid, 0>;
-    openvdb::BoolGrid::Ptr mMask;
-    std::unique_ptr<Intersector> mIntersector;
-};
-
 /// τ from @a fromIjk along the unit index-space @a direction for @a length (index units),
 /// marched through @a leaves' spans only (the medium's: the vacuum between them holds none) and
 /// handed to @a handOff where it takes the rest of the way; @a spans is scratch.
@@ -219,7 +169,7 @@ bool sweepable(const Light& light) { return light.type == Light::Type::Direction
 /// meshes are still asked per voxel and sample. With @a flux, also the light's grey first
 /// moment per voxel (lightFluence).
 void sweepLight(const LightSampler& light, const detail::SweepLattice& lattice, const Medium& medium, const Rim& rim,
-    const DirectLightOptions& options, LeafBlocks<openvdb::Vec3f>& phi, LeafBlocks<openvdb::Vec3f>* flux)
+    const LatticeSpans* spans, const DirectLightOptions& options, LeafBlocks<openvdb::Vec3f>& phi, LeafBlocks<openvdb::Vec3f>* flux)
 {
     const openvdb::math::Transform& xform = medium.transform();
     const std::size_t count = lattice.voxelCount();
@@ -236,8 +186,6 @@ void sweepLight(const LightSampler& light, const detail::SweepLattice& lattice, 
     };
     const openvdb::Vec3d anywhere = xform.indexToWorld(medium.activeBounds().getCenter());
 
-    std::optional<LatticeSpans> spans;
-    if (!options.boundary) spans.emplace(lattice);
     const bool surface = medium.surface() != nullptr;
     tbb::enumerable_thread_specific<std::vector<LatticeSpans::Span>> spanLists;
 
@@ -361,7 +309,7 @@ constexpr float kVacuumSpread = 0.05f;
 /// from its medium point the same way. Without a surface (a density grid's medium) every voxel
 /// the sweep can blend is swept. With @a flux, also the light's grey first moment per voxel.
 void sweepPointLight(const LightSampler& light, const detail::SweepLattice& lattice, const Medium& medium, const Rim& rim,
-    const DirectLightOptions& options, LeafBlocks<openvdb::Vec3f>& phi, LeafBlocks<openvdb::Vec3f>* flux)
+    const LatticeSpans* leaves, const DirectLightOptions& options, LeafBlocks<openvdb::Vec3f>& phi, LeafBlocks<openvdb::Vec3f>* flux)
 {
     using detail::SweepLattice;
     const openvdb::math::Transform& xform = medium.transform();
@@ -388,10 +336,8 @@ void sweepPointLight(const LightSampler& light, const detail::SweepLattice& latt
     // voxels, a march that left the bunny near a silhouette at dim 256 came out 20-fold dark.
     std::function<openvdb::Vec3f(const openvdb::Vec3d&, const SweepLattice::SweptSoFar&)> marchedDepth;
     // Without meshes (a volume object), the marches cross the vacuum between the lattice's
-    // leaves at once (LatticeSpans): the light reaching the lattice across vacuum is marched to
-    // the light from there.
-    std::optional<LatticeSpans> leaves;
-    if (!options.boundary) leaves.emplace(lattice);
+    // leaves at once (@a leaves): the light reaching the lattice across vacuum is marched to the
+    // light from there.
     tbb::enumerable_thread_specific<std::vector<LatticeSpans::Span>> spanLists;
     marchedDepth = [&](const openvdb::Vec3d& from, const SweepLattice::SweptSoFar& swept) {
         bool askedMeshes = false;
