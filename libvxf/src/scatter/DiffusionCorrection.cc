@@ -171,7 +171,7 @@ DiffusionCorrection::DiffusionCorrection(const SweepLattice& lattice, int coarse
                 matrix->setValue(openvdb::math::pcg::SizeType(i), openvdb::math::pcg::SizeType(i), diagonal);
             }
         });
-        mChannels[ch].preconditioner = std::make_unique<openvdb::math::pcg::JacobiPreconditioner<Matrix>>(*matrix);
+        mChannels[ch].preconditioner = std::make_unique<DiffusionMultigrid>(*matrix, cells);
         mChannels[ch].matrix = std::move(matrix);
     }
 }
