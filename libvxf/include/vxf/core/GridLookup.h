@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <memory>
+#include <type_traits>
 
 namespace vxf {
 
@@ -87,7 +88,7 @@ public:
     template <int N>
     void getBlock(const openvdb::Coord& lo, ValueType (&data)[N][N][N]) const
     {
-        if (mDense && mDense->getBlock(lo, data)) return;
+        if (mDense ? mDense->getBlock(lo, data) : getBlockInLeaf(lo, data)) return;
         for (int i = 0; i < N; ++i) {
             for (int j = 0; j < N; ++j) {
                 for (int k = 0; k < N; ++k) data[i][j][k] = getValue(lo.offsetBy(i, j, k));
@@ -124,6 +125,41 @@ public:
     }
 
 private:
+    /// The block from the tree when one leaf (or one tile) holds all of it: one probe and N³
+    /// reads from the leaf's buffer instead of N³ walks of the accessor (the light stage's
+    /// marches at dim 512, no dense copy: a third of their time was in those walks); false when
+    /// it straddles leaves.
+    template <int N>
+    bool getBlockInLeaf(const openvdb::Coord& lo, ValueType (&data)[N][N][N]) const
+    {
+        using LeafT = typename GridT::TreeType::LeafNodeType;
+        constexpr int kDim = int(LeafT::DIM);
+        if constexpr (std::is_same_v<ValueType, bool>) {
+            return false; // (a bit mask, no buffer of values)
+        } else {
+            const openvdb::Coord hi = lo.offsetBy(N - 1);
+            for (int a = 0; a < 3; ++a) {
+                if ((lo[a] & ~(kDim - 1)) != (hi[a] & ~(kDim - 1))) return false;
+            }
+            if (const LeafT* leaf = mAccessor.probeConstLeaf(lo)) {
+                const ValueType* p = leaf->buffer().data() + LeafT::coordToOffset(lo);
+                for (int i = 0; i < N; ++i) {
+                    for (int j = 0; j < N; ++j) {
+                        for (int k = 0; k < N; ++k) data[i][j][k] = p[(i * kDim + j) * kDim + k];
+                    }
+                }
+                return true;
+            }
+            const ValueType value = mAccessor.getValue(lo); // a tile or the background holds the whole block
+            for (int i = 0; i < N; ++i) {
+                for (int j = 0; j < N; ++j) {
+                    for (int k = 0; k < N; ++k) data[i][j][k] = value;
+                }
+            }
+            return true;
+        }
+    }
+
     const DenseCopy<GridT>* mDense;
     typename GridT::ConstAccessor mAccessor;
 };
