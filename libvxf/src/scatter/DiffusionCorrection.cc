@@ -39,21 +39,41 @@ std::vector<openvdb::Coord> DiffusionCorrection::indexCells(
     const double dx = lattice.voxelSize();
     const auto inDomain = [&](const openvdb::Vec3f& t) { return std::min({t[0], t[1], t[2]}) * dx >= kThinVoxel; };
     std::vector<openvdb::Coord> cells;
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> members; // (cell, voxel) of the domain, in lattice order
+    mStart.assign(1, 0);
+    mMembers.clear();
+    // A fine leaf's cells are its own (its origin a multiple of 8, a cell at most 8 wide): each
+    // indexed once, in the order of its first voxel, its voxels in lattice order.
+    const int side = std::max(1, 8 >> shift); // a leaf's cells a side
+    std::vector<std::int32_t> local(std::size_t(side * side * side));
+    std::vector<std::uint32_t> filled;
+    cellIndex.reserve(lattice.leafCount() * local.size()); // (at most: no rehashing)
     for (std::size_t n = 0; n < lattice.fineLeafCount(); ++n) {
+        std::fill(local.begin(), local.end(), -1);
+        const std::size_t first = cells.size();
+        const auto localCell = [&](int v) { return (((v >> 6) >> shift) * side + (((v >> 3) & 7) >> shift)) * side + ((v & 7) >> shift); };
         for (int v = 0; v < L; ++v) {
             if (!inDomain(sigmaT[n * L + v])) continue;
-            const openvdb::Coord c = lattice.origin(n).offsetBy(v >> 6, (v >> 3) & 7, v & 7);
-            const openvdb::Coord cell(c[0] >> shift, c[1] >> shift, c[2] >> shift);
-            const auto [it, added] = cellIndex.emplace(cell, std::int32_t(cells.size()));
-            if (added) cells.push_back(cell);
-            members.emplace_back(std::uint32_t(it->second), std::uint32_t(n * L + v));
+            std::int32_t& cell = local[std::size_t(localCell(v))];
+            if (cell < 0) {
+                cell = std::int32_t(cells.size() - first);
+                const openvdb::Coord c = lattice.origin(n).offsetBy(v >> 6, (v >> 3) & 7, v & 7);
+                cells.emplace_back(c[0] >> shift, c[1] >> shift, c[2] >> shift);
+                cellIndex.emplace(cells.back(), std::int32_t(cells.size() - 1));
+                mStart.push_back(0);
+            }
+            ++mStart[first + std::size_t(cell) + 1];
+        }
+        // The counts to starts, then the voxels to their places.
+        for (std::size_t c = first; c < cells.size(); ++c) mStart[c + 1] += mStart[c];
+        mMembers.resize(mStart.back());
+        filled.assign(mStart.begin() + std::ptrdiff_t(first), mStart.end() - 1);
+        for (int v = 0; v < L; ++v) {
+            if (inDomain(sigmaT[n * L + v])) mMembers[filled[std::size_t(local[std::size_t(localCell(v))])]++] = std::uint32_t(n * L + v);
         }
     }
     mFineCells = cells.size();
     // A coarse leaf's cell: the cells of its block (each of its one value; the diffusion's
     // grid stays uniform), its correction their mean.
-    const int side = std::max(1, 8 >> shift);
     for (std::size_t n = lattice.fineLeafCount(); n < lattice.leafCount(); ++n) {
         const auto v = std::uint32_t(lattice.voxelStart(n));
         if (!inDomain(sigmaT[v])) continue;
@@ -62,24 +82,15 @@ std::vector<openvdb::Coord> DiffusionCorrection::indexCells(
         for (int a = 0; a < side; ++a) {
             for (int b = 0; b < side; ++b) {
                 for (int c = 0; c < side; ++c) {
-                    const auto cell = std::int32_t(cells.size());
-                    cellIndex.emplace(first.offsetBy(a, b, c), cell); // (new: the blocks are apart)
+                    cellIndex.emplace(first.offsetBy(a, b, c), std::int32_t(cells.size())); // (new: the blocks are apart)
                     cells.push_back(first.offsetBy(a, b, c));
-                    members.emplace_back(std::uint32_t(cell), v);
+                    mMembers.push_back(v);
+                    mStart.push_back(std::uint32_t(mMembers.size()));
                 }
             }
         }
     }
-    if (cells.empty()) return cells;
-    // Each cell's voxels, contiguous: mMembers[mStart[c] .. mStart[c + 1]).
-    mStart.assign(cells.size() + 1, 0);
-    for (const auto& [cell, v] : members) ++mStart[std::size_t(cell) + 1];
-    for (std::size_t c = 0; c < cells.size(); ++c) mStart[c + 1] += mStart[c];
-    mMembers.resize(members.size());
-    {
-        std::vector<std::uint32_t> next(mStart.begin(), mStart.end() - 1);
-        for (const auto& [cell, v] : members) mMembers[next[cell]++] = v;
-    }
+    if (cells.empty()) mStart.clear();
     return cells;
 }
 

@@ -198,10 +198,7 @@ DiffusionMultigrid::~DiffusionMultigrid() = default;
 
 std::size_t DiffusionMultigrid::cellsAt(int l) const { return mLevels[std::size_t(l)]->size(); }
 
-void DiffusionMultigrid::apply(const Vector& r, Vector& z)
-{
-    cycle(0, r.data(), z.data());
-}
+void DiffusionMultigrid::apply(const Vector& r, Vector& z) { cycle(0, r.data(), z.data()); }
 
 void DiffusionMultigrid::cycle(std::size_t l, const double* b, double* x)
 {

@@ -104,28 +104,38 @@ private:
     std::vector<openvdb::Vec3f> mG, mF; // the last G(φ) and f
 };
 
-/// Σ |v| per channel over the medium's voxels (a coarse cell's value for each of its voxels),
-/// in a fixed order (the same for every thread count).
+/// Σ @a f(v) · (the voxels v stands for: a coarse cell's count) over the lattice, per channel: in
+/// parallel over fixed chunks, their sums added in order (the same for every thread count).
+template <typename F>
+openvdb::Vec3d latticeSum(const detail::SweepLattice& lattice, std::size_t count, F&& f)
+{
+    constexpr std::size_t kChunk = std::size_t(1) << 16;
+    std::vector<openvdb::Vec3d> chunks((count + kChunk - 1) / kChunk, openvdb::Vec3d(0.0));
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks.size()), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t c = r.begin(); c != r.end(); ++c) {
+            openvdb::Vec3d sum(0.0);
+            for (std::size_t v = c * kChunk; v < std::min(count, (c + 1) * kChunk); ++v) sum += f(v) * lattice.voxelsAt(v);
+            chunks[c] = sum;
+        }
+    });
+    openvdb::Vec3d sum(0.0);
+    for (const openvdb::Vec3d& chunk : chunks) sum += chunk;
+    return sum;
+}
+
+openvdb::Vec3d absolute(const openvdb::Vec3f& v) { return openvdb::Vec3d(std::abs(v[0]), std::abs(v[1]), std::abs(v[2])); }
+
+/// Σ |v| per channel over the medium's voxels (a coarse cell's value for each of its voxels).
 openvdb::Vec3d l1(const detail::SweepLattice& lattice, const std::vector<openvdb::Vec3f>& values)
 {
-    openvdb::Vec3d sum(0.0);
-    for (std::size_t i = 0; i < values.size(); ++i) {
-        const openvdb::Vec3f& v = values[i];
-        sum += openvdb::Vec3d(std::abs(v[0]), std::abs(v[1]), std::abs(v[2])) * lattice.voxelsAt(i);
-    }
-    return sum;
+    return latticeSum(lattice, values.size(), [&](std::size_t v) { return absolute(values[v]); });
 }
 
 /// |@a next − @a phi|₁ per channel, as l1.
 openvdb::Vec3d l1Change(
     const detail::SweepLattice& lattice, const std::vector<openvdb::Vec3f>& next, const std::vector<openvdb::Vec3f>& phi)
 {
-    openvdb::Vec3d sum(0.0);
-    for (std::size_t i = 0; i < next.size(); ++i) {
-        const openvdb::Vec3f d = next[i] - phi[i];
-        sum += openvdb::Vec3d(std::abs(d[0]), std::abs(d[1]), std::abs(d[2])) * lattice.voxelsAt(i);
-    }
-    return sum;
+    return latticeSum(lattice, next.size(), [&](std::size_t v) { return absolute(next[v] - phi[v]); });
 }
 
 /// The accelerated (or plain) iteration of sweepSolve: the lattice and its arrays, one
@@ -241,8 +251,7 @@ private:
             if (size[ch] > 0.0) it.change = std::max(it.change, moved[ch] / size[ch]);
         }
         phi.swap(next);
-        it.energy = openvdb::Vec3d(0.0);
-        for (std::size_t v = 0; v < count; ++v) it.energy += openvdb::Vec3d(phi[v]) * lattice.voxelsAt(v);
+        it.energy = latticeSum(lattice, count, [&](std::size_t v) { return openvdb::Vec3d(phi[v]); });
         it.ratio = previousChange > 0.0 ? it.change / previousChange : 0.0;
         previousChange = it.change;
         it.error = it.ratio > 0.0 && it.ratio < 1.0 ? it.change * it.ratio / (1.0 - it.ratio) : it.change;
