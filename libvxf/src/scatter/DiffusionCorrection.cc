@@ -91,6 +91,8 @@ std::vector<openvdb::Coord> DiffusionCorrection::indexCells(
         }
     }
     if (cells.empty()) mStart.clear();
+    mMembers.shrink_to_fit(); // (grown leaf by leaf: up to twice its size, kept for the solve)
+    mStart.shrink_to_fit();
     return cells;
 }
 
