@@ -1,7 +1,7 @@
 // The diffusion correction's multigrid preconditioner (src/scatter/DiffusionMultigrid.h): conjugate
 // gradient converges in a few iterations where Jacobi's takes many, to the same solution; the
 // cycle is symmetric and positive (as conjugate gradient needs), the same bits on any thread
-// count, and holds on a domain whose aggregates stop shrinking.
+// count, holds on a domain whose aggregates stop shrinking, and solves a small system exactly.
 #include "scatter/DiffusionMultigrid.h"
 
 #include <catch2/catch.hpp>
@@ -149,5 +149,24 @@ TEST_CASE("the multigrid cycle holds where the aggregates stop shrinking", "[sca
     INFO("multigrid " << state.iterations << " iterations");
     CHECK(state.success);
     CHECK(state.iterations <= 30);
+    CHECK(largestDifference(x, reference) <= 1e-6 * reference.infNorm());
+}
+
+TEST_CASE("a system of at most kDirectCells cells is solved exactly, in one iteration", "[scatter][diffusion]")
+{
+    // 7³ = 343 cells: one level, factored; the cycle is the inverse, so conjugate gradient stops
+    // after its first step.
+    const std::vector<openvdb::Coord> cells = cube(7, openvdb::Coord(3, -9, 1));
+    const auto matrix = diffusionMatrix(cells, 0.5, 0.99);
+    DiffusionMultigrid multigrid(*matrix, cells);
+    CHECK(multigrid.levels() == 1);
+    const Vector b = randomVector(cells.size(), 5);
+    Vector x(b.size(), 0.0), reference(b.size(), 0.0);
+    const auto state = solve(*matrix, b, x, multigrid);
+    openvdb::math::pcg::JacobiPreconditioner<Matrix> jacobi(*matrix);
+    solve(*matrix, b, reference, jacobi);
+    INFO("multigrid " << state.iterations << " iterations");
+    CHECK(state.success);
+    CHECK(state.iterations <= 1);
     CHECK(largestDifference(x, reference) <= 1e-6 * reference.infNorm());
 }

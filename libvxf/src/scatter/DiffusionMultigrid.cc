@@ -191,7 +191,7 @@ DiffusionMultigrid::DiffusionMultigrid(const Matrix& matrix, const std::vector<o
         current = &coords;
         mLevels.push_back(std::move(coarse));
     }
-    if (mLevels.size() > 1 && mLevels.back()->size() <= kDirectCells) mCholesky = cholesky(*mLevels.back()->matrix);
+    if (mLevels.back()->size() <= kDirectCells) mCholesky = cholesky(*mLevels.back()->matrix);
 }
 
 DiffusionMultigrid::~DiffusionMultigrid() = default;
