@@ -80,6 +80,26 @@ double largestDifference(const Vector& a, const Vector& b)
     return difference;
 }
 
+/// Conjugate gradient on @a matrix with @a multigrid and with Jacobi's preconditioner from the
+/// same random right-hand side (@a seed): both states, and the largest difference of the
+/// solutions relative to the largest of Jacobi's.
+struct Solved
+{
+    openvdb::math::pcg::State multigrid, jacobi;
+    double difference;
+};
+Solved solveBoth(const Matrix& matrix, DiffusionMultigrid& multigrid, unsigned seed)
+{
+    const Vector b = randomVector(matrix.numRows(), seed);
+    Vector x(b.size(), 0.0), reference(b.size(), 0.0);
+    Solved solved;
+    solved.multigrid = solve(matrix, b, x, multigrid);
+    openvdb::math::pcg::JacobiPreconditioner<Matrix> jacobi(matrix);
+    solved.jacobi = solve(matrix, b, reference, jacobi);
+    solved.difference = largestDifference(x, reference) / reference.infNorm();
+    return solved;
+}
+
 } // namespace
 
 TEST_CASE("the multigrid cycle takes conjugate gradient to Jacobi's solution in a few iterations", "[scatter][diffusion]")
@@ -91,17 +111,13 @@ TEST_CASE("the multigrid cycle takes conjugate gradient to Jacobi's solution in 
     DiffusionMultigrid multigrid(*matrix, cells);
     CHECK(multigrid.levels() == 4); // 110592 → 15000 (the odd origin: 24 × 25 × 25 aggregates) → 2197 → 343 cells
     CHECK(multigrid.cellsAt(multigrid.levels() - 1) <= DiffusionMultigrid::kDirectCells);
-    const Vector b = randomVector(cells.size(), 1);
-    Vector x(b.size(), 0.0), reference(b.size(), 0.0);
-    const auto state = solve(*matrix, b, x, multigrid);
-    openvdb::math::pcg::JacobiPreconditioner<Matrix> jacobi(*matrix);
-    const auto referenceState = solve(*matrix, b, reference, jacobi);
-    INFO("multigrid " << state.iterations << " iterations, Jacobi " << referenceState.iterations);
-    CHECK(state.success);
-    CHECK(referenceState.success);
-    CHECK(state.iterations <= 16);
-    CHECK(referenceState.iterations >= 5 * state.iterations);
-    CHECK(largestDifference(x, reference) <= 1e-6 * reference.infNorm());
+    const Solved solved = solveBoth(*matrix, multigrid, 1);
+    INFO("multigrid " << solved.multigrid.iterations << " iterations, Jacobi " << solved.jacobi.iterations);
+    CHECK(solved.multigrid.success);
+    CHECK(solved.jacobi.success);
+    CHECK(solved.multigrid.iterations <= 16);
+    CHECK(solved.jacobi.iterations >= 5 * solved.multigrid.iterations);
+    CHECK(solved.difference <= 1e-6);
 }
 
 TEST_CASE("the multigrid cycle is symmetric, positive and the same on any thread count", "[scatter][diffusion]")
@@ -141,15 +157,11 @@ TEST_CASE("the multigrid cycle holds where the aggregates stop shrinking", "[sca
     const auto matrix = diffusionMatrix(cells, 1.0, 0.99);
     DiffusionMultigrid multigrid(*matrix, cells);
     CHECK(multigrid.cellsAt(multigrid.levels() - 1) > DiffusionMultigrid::kDirectCells);
-    const Vector b = randomVector(cells.size(), 4);
-    Vector x(b.size(), 0.0), reference(b.size(), 0.0);
-    const auto state = solve(*matrix, b, x, multigrid);
-    openvdb::math::pcg::JacobiPreconditioner<Matrix> jacobi(*matrix);
-    solve(*matrix, b, reference, jacobi);
-    INFO("multigrid " << state.iterations << " iterations");
-    CHECK(state.success);
-    CHECK(state.iterations <= 30);
-    CHECK(largestDifference(x, reference) <= 1e-6 * reference.infNorm());
+    const Solved solved = solveBoth(*matrix, multigrid, 4);
+    INFO("multigrid " << solved.multigrid.iterations << " iterations");
+    CHECK(solved.multigrid.success);
+    CHECK(solved.multigrid.iterations <= 30);
+    CHECK(solved.difference <= 1e-6);
 }
 
 TEST_CASE("a system of at most kDirectCells cells is solved exactly, in one iteration", "[scatter][diffusion]")
@@ -160,13 +172,9 @@ TEST_CASE("a system of at most kDirectCells cells is solved exactly, in one iter
     const auto matrix = diffusionMatrix(cells, 0.5, 0.99);
     DiffusionMultigrid multigrid(*matrix, cells);
     CHECK(multigrid.levels() == 1);
-    const Vector b = randomVector(cells.size(), 5);
-    Vector x(b.size(), 0.0), reference(b.size(), 0.0);
-    const auto state = solve(*matrix, b, x, multigrid);
-    openvdb::math::pcg::JacobiPreconditioner<Matrix> jacobi(*matrix);
-    solve(*matrix, b, reference, jacobi);
-    INFO("multigrid " << state.iterations << " iterations");
-    CHECK(state.success);
-    CHECK(state.iterations <= 1);
-    CHECK(largestDifference(x, reference) <= 1e-6 * reference.infNorm());
+    const Solved solved = solveBoth(*matrix, multigrid, 5);
+    INFO("multigrid " << solved.multigrid.iterations << " iterations");
+    CHECK(solved.multigrid.success);
+    CHECK(solved.multigrid.iterations <= 1);
+    CHECK(solved.difference <= 1e-6);
 }
