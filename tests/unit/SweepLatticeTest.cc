@@ -1,6 +1,6 @@
 // The lattice the sweeps run on (src/transport/SweepLattice.h, private to light and scatter): a
 // grid's values read and written back, optical depth along a direction, and the transport
-// sweep's fixed point deep in a homogeneous medium.
+// sweep's fixed point deep in a homogeneous medium; dark leaves skipped, the distance held near the surface only.
 #include "transport/SweepLattice.h"
 
 #include <vxf/transport/AdaptiveBand.h>
@@ -10,6 +10,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <atomic>
 #include <cmath>
 #include <limits>
 
@@ -90,6 +91,82 @@ TEST_CASE("optical depth: leaves in the dark are not swept, and the light stays 
     // Where a voxel blends a dark leaf's depths with lit ones (a shadow's edge) it reads the
     // least of them: of the order of the cutoff's own error (a march sets 10^-4 to 0).
     CHECK(worst < 3e-4);
+}
+
+TEST_CASE("optical depth from a point: leaves in the dark are not swept, and the light stays as it was", "[transport][lattice]")
+{
+    // The sphere of 30 per unit, 32 voxels a radius (0.94 mean free paths a voxel), with its
+    // surface, a point light 3.4 radii from its centre: most of it lies beyond the cutoff.
+    const vxf::Material m = vxf::test::albedoMaterial(30.0, 0.5);
+    vxf::VoxelSet set = vxf::test::uniformSphere(m, 1.0, 32);
+    vxf::test::putSphereSurface(set, 1.0, 32);
+    const vxf::Medium medium(set, m);
+    using Lattice = vxf::detail::SweepLattice;
+    const Lattice lattice(medium, *set.get<openvdb::Vec3SGrid>("scatter_source"), Lattice::Coefficients::SweepOnly);
+    const float opaque = float(-std::log(1e-4));
+    const openvdb::Vec3d point(60.0, -45.0, 75.0); // index space
+    // Light reaching the lattice across vacuum (no upwind leaf): all of it.
+    std::atomic<std::size_t> offered{0};
+    const auto swept = [&offered](const openvdb::Coord&, float, bool mustMarch, const Lattice::SweptSoFar&, openvdb::Vec3f& depth) {
+        ++offered;
+        if (!mustMarch) return false;
+        depth = openvdb::Vec3f(0.0f);
+        return true;
+    };
+    Lattice::Depths all, dark;
+    std::vector<std::uint8_t> allState, darkState;
+    lattice.opticalDepthFrom(point, all, allState, swept);
+    const std::size_t offeredAll = offered;
+    offered = 0;
+    lattice.opticalDepthFrom(point, dark, darkState, swept, opaque);
+    // Where light gets through, the largest change of transmittance in the medium (within the
+    // sphere) and in the vacuum voxels of the lattice around it: a voxel in the shadow behind the
+    // sphere, near its edge, blends a skipped leaf's bound (below the depth the sweep would give
+    // it) with lit depths, and no medium reads it there.
+    std::size_t lit = 0;
+    bool stillDark = true; // in the medium
+    double worstInside = 0.0, worstOutside = 0.0;
+    for (std::size_t i = 0; i < all.size(); ++i) {
+        const int v = int(i % Lattice::kLeafVoxels);
+        const bool inside = lattice.origin(i / Lattice::kLeafVoxels).offsetBy(v >> 6, (v >> 3) & 7, v & 7).asVec3d().length() < 32.0;
+        if (all[i][0] > opaque) {
+            if (inside) stillDark = stillDark && dark[i][0] > opaque && dark[i][0] <= all[i][0];
+            continue;
+        }
+        ++lit;
+        double& worst = inside ? worstInside : worstOutside;
+        worst = std::max(worst, std::abs(std::exp(-double(dark[i][0])) - std::exp(-double(all[i][0]))));
+    }
+    const std::size_t skipped = all.size() - offered; // (a skipped leaf's voxels are not offered)
+    INFO(skipped << " voxels skipped of " << all.size() << ", " << lit << " lit; change inside " << worstInside << ", outside "
+                 << worstOutside);
+    CHECK(offeredAll == all.size());
+    CHECK(skipped > all.size() / 10);
+    CHECK(lit > all.size() / 10);
+    CHECK(stillDark); // a skipped voxel's depth bounds the sweep's from below, beyond the cutoff
+    CHECK(worstInside < 1e-6);
+    CHECK(worstOutside < 0.25);
+}
+
+TEST_CASE("a lattice holds the surface's distance only near it, not where a level set reads its interior value", "[transport][lattice]")
+{
+    // A level set of half-width 3 (vxf's, Houdini's) reads −3 voxels everywhere deeper: a leaf
+    // there holds no distance, and the sweeps' depths are as σt times the way in.
+    const double sigmaT = 30.0;
+    const vxf::Material m = vxf::test::albedoMaterial(sigmaT, 0.5);
+    vxf::VoxelSet set = vxf::test::uniformSphere(m, 1.0, 32);
+    vxf::test::putSphereSurface(set, 1.0, 32);
+    const vxf::Medium medium(set, m);
+    const vxf::detail::SweepLattice lattice(medium, *set.get<openvdb::Vec3SGrid>("scatter_source"));
+    const auto leafAt = [&](const openvdb::Coord& c) { return std::size_t(lattice.indexOf(c)) / vxf::detail::SweepLattice::kLeafVoxels; };
+    CHECK_FALSE(lattice.holdsDistance(leafAt(openvdb::Coord(0))));
+    CHECK(lattice.deep(leafAt(openvdb::Coord(0))));
+    CHECK(lattice.holdsDistance(leafAt(openvdb::Coord(31, 0, 0)))); // across the surface
+    CHECK_FALSE(lattice.deep(leafAt(openvdb::Coord(31, 0, 0))));
+    vxf::detail::SweepLattice::Depths tau;
+    lattice.opticalDepthAlong(openvdb::Vec3d(0.0, 0.0, -1.0), tau);
+    CHECK(tau[std::size_t(lattice.indexOf(openvdb::Coord(0)))][0] == Approx(sigmaT).epsilon(0.01));
+    CHECK(tau[std::size_t(lattice.indexOf(openvdb::Coord(0, 0, -16)))][0] == Approx(1.5 * sigmaT).epsilon(0.01));
 }
 
 TEST_CASE("a lattice for sweeps only holds no per-voxel coefficients and sweeps the same", "[transport][lattice]")

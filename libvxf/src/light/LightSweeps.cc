@@ -52,6 +52,7 @@ Rim rimOf(const detail::SweepLattice& lattice, const Medium& medium)
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lattice.leafCount()), [&](const tbb::blocked_range<std::size_t>& r) {
         Medium::Sampler sampler(medium);
         for (std::size_t n = r.begin(); n != r.end(); ++n) {
+            if (lattice.deep(n)) continue; // (every centre inside by more than half a voxel)
             for (int v = 0; v < detail::SweepLattice::kLeafVoxels; ++v) {
                 const openvdb::Coord ijk = lattice.origin(n).offsetBy(v >> 6, (v >> 3) & 7, v & 7);
                 const openvdb::Vec3d point = sampler.mediumPoint(ijk);
@@ -374,7 +375,8 @@ void sweepPointLight(const LightSampler& light, const detail::SweepLattice& latt
     };
     detail::SweepLattice::Depths tau;
     std::vector<std::uint8_t> state;
-    lattice.opticalDepthFrom(lightIjk, tau, state,
+    lattice.opticalDepthFrom(
+        lightIjk, tau, state,
         [&](const openvdb::Coord& ijk, float distance, bool mustMarch, const SweepLattice::SweptSoFar& swept, openvdb::Vec3f& depth) {
             const bool band = surface && std::abs(distance) < kPointMarchedBand;
             if (!mustMarch && !band) return false;
@@ -391,7 +393,8 @@ void sweepPointLight(const LightSampler& light, const detail::SweepLattice& latt
             }
             depth = marchedDepth(from, swept);
             return true;
-        });
+        },
+        float(depths.cutoff));
     const SweepLattice::SweptSoFar done(lattice, tau, &state);
 
     const double minDistance = 0.5 * medium.voxelSize();

@@ -122,8 +122,51 @@ int SweepLattice::octantAround(const openvdb::Coord& ijk, const openvdb::Vec3d& 
     return (ijk[0] < point[0] ? 1 : 0) | (ijk[1] < point[1] ? 2 : 0) | (ijk[2] < point[2] ? 4 : 0);
 }
 
+float SweepLattice::darkLeafDepth(std::size_t leaf, int octant, const openvdb::Vec3d& point, const Depths& tau) const
+{
+    // (Deep: every step whole, its own depth σt·length·dx added to the blend.)
+    if (!mUniform[leaf]) return -1.0f;
+    // The leaf and its ghost layer (on the side toward the point: +8 where the leaf lies below
+    // it) all in the octant, and the leaf's nearest voxel centre R from the point.
+    const openvdb::Coord& o = mOrigins[leaf];
+    int ghost[3];
+    double nearest = 0.0;
+    for (int a = 0; a < 3; ++a) {
+        const bool below = (octant >> a) & 1;
+        if (below ? !(o[a] + 8 < point[a]) : !(o[a] - 1 >= point[a])) return -1.0f;
+        ghost[a] = below ? 8 : -1;
+        const double gap = below ? point[a] - double(o[a] + 7) : double(o[a]) - point[a];
+        nearest += gap * gap;
+    }
+    float least = std::numeric_limits<float>::infinity();
+    const auto read = [&](int x, int y, int z) {
+        const std::int64_t at = voxelIndex(leaf, x, y, z);
+        if (at < 0) return false;
+        const openvdb::Vec3f t = tau[std::size_t(at)];
+        least = std::min({least, t[0], t[1], t[2]});
+        return true;
+    };
+    for (int i = 0; i < 8; ++i) {
+        for (int j = 0; j < 8; ++j) {
+            if (!read(ghost[0], i, j) || !read(i, ghost[1], j) || !read(i, j, ghost[2])) return -1.0f;
+        }
+        if (!read(ghost[0], ghost[1], i) || !read(ghost[0], i, ghost[2]) || !read(i, ghost[1], ghost[2])) return -1.0f;
+    }
+    if (!read(ghost[0], ghost[1], ghost[2])) return -1.0f;
+    // A voxel's crossing lies c.length ≤ √3 short of it (crossing ≥ R − √3), its four upwind
+    // centres within √2 of the crossing: each upwind depth is scaled by crossing / r ≥ ρ. The
+    // step then adds σt·length·dx ≥ σt·dx. So depths ≥ V upwind give ρV + σt·dx ≥ V at every
+    // voxel where V ≤ σt·dx / (1 − ρ): the least ghost's depth, capped there, bounds them all.
+    const double crossing = std::sqrt(nearest) - std::sqrt(3.0);
+    if (!(crossing > 0.0)) return -1.0f;
+    const double rho = crossing / (crossing + std::sqrt(2.0));
+    const openvdb::Vec3f sigma = paddedSigmaT(leaf, 0);
+    const double step = double(std::min({sigma[0], sigma[1], sigma[2]})) * mVoxelSize;
+    return float(std::min(double(least), step / (1.0 - rho)));
+}
+
 void SweepLattice::opticalDepthFrom(
-    const openvdb::Vec3d& point, Depths& tau, std::vector<std::uint8_t>& state, const MarchedDepth& marched) const
+    const openvdb::Vec3d& point, Depths& tau, std::vector<std::uint8_t>& state, const MarchedDepth& marched, float opaque) const
 {
     requireFine("opticalDepthFrom");
     tau.assignZero(*this);
@@ -139,6 +182,16 @@ void SweepLattice::opticalDepthFrom(
         };
         leavesInUpwindOrder(octant, [&](std::size_t n) {
             if (!holds(n)) return;
+            if (std::isfinite(opaque)) {
+                const float dark = darkLeafDepth(n, octant, point, tau);
+                if (dark > opaque) {
+                    for (std::size_t i = n * kLeafVoxels; i < (n + 1) * kLeafVoxels; ++i) {
+                        tau.set(i, openvdb::Vec3f(dark));
+                        state[i] = kBlended;
+                    }
+                    return;
+                }
+            }
             const SweptSoFar swept(*this, tau, octant, n, frontKey(n, octant), point, &state);
             const openvdb::Coord& o = mOrigins[n];
             const openvdb::Vec3d centre = o.asVec3d() + openvdb::Vec3d(3.5) - point;

@@ -205,7 +205,9 @@ void SweepLattice::readMedium(const Medium& medium, bool perVoxel)
                     mInterior[i] = float(1.0 / std::max(std::clamp(0.5 - d, 0.0, 1.0), Medium::kMinFraction));
                     interior = double(mInterior[i]);
                     openvdb::Vec3d point, normal;
-                    if (sampler.skinPoint(c, point, normal)) skin[n].emplace_back(std::uint16_t(v), openvdb::Vec3f(normal));
+                    // (skinPoint reads d again: only where it can find the skin.)
+                    if (std::abs(d) < 0.5 && sampler.skinPoint(c, point, normal))
+                        skin[n].emplace_back(std::uint16_t(v), openvdb::Vec3f(normal));
                 }
                 inside.set(i, openvdb::Vec3f(t * interior));
             }
@@ -225,7 +227,9 @@ void SweepLattice::readMedium(const Medium& medium, bool perVoxel)
     inside = InsideSigma(0, false);
     if (surface) mDistance = padded(distance);
     classifyLeaves();
-    compactLeaves(coarseSigmaT);
+    // A narrow-band level set's interior value, as signedDistance reads it at a voxel centre.
+    const float interiorDistance = surface ? float(double(-medium.surface()->background()) / medium.voxelSize()) : 0.0f;
+    compactLeaves(coarseSigmaT, interiorDistance);
     mSkinIndex.assign(mInterior.size(), -1);
     for (std::size_t n = 0; n < skin.size(); ++n) {
         for (const auto& [v, normal] : skin[n]) {
@@ -311,7 +315,7 @@ void keepBlocks(std::vector<T>& values, std::size_t block, const std::vector<std
 
 } // namespace
 
-void SweepLattice::compactLeaves(const std::vector<openvdb::Vec3f>& coarseSigmaT)
+void SweepLattice::compactLeaves(const std::vector<openvdb::Vec3f>& coarseSigmaT, float interiorDistance)
 {
     const std::size_t leaves = mOrigins.size();
     mSigmaTStart.resize(mFineLeaves);
@@ -339,7 +343,7 @@ void SweepLattice::compactLeaves(const std::vector<openvdb::Vec3f>& coarseSigmaT
     next = 0;
     for (std::size_t n = 0; n < mFineLeaves; ++n) {
         const float* d = &mDistance[n * kPaddedVoxels];
-        if (std::all_of(d, d + kPaddedVoxels, [](float v) { return v <= -kDistanceHeld; })) continue;
+        if (std::all_of(d, d + kPaddedVoxels, [&](float v) { return v <= -kDistanceHeld || v == interiorDistance; })) continue;
         mDistanceStart[n] = next;
         next += kPaddedVoxels;
     }

@@ -90,8 +90,10 @@ public:
     /// (docs/accuracy-notes.md, "Behind the code: SweepLattice").
     static constexpr std::size_t kSweepBatch = 2;
     /// The signed distance is held where a leaf's padded block comes within this many voxels of
-    /// the surface; deeper, paddedDistance reads −kDistanceHeld (a sweep's steps there are whole
-    /// either way; the light stage marches a point light's voxels within 3 of the surface).
+    /// the surface, and is not wholly at a narrow-band level set's interior value (−3 voxels for
+    /// vxf's and Houdini's half-width of 3: nothing closer is known there); elsewhere
+    /// paddedDistance reads −kDistanceHeld (a sweep's steps there are whole either way; the light
+    /// stage marches a point light's voxels within 3 of the surface).
     static constexpr float kDistanceHeld = 4.0f;
 
     /// What a lattice holds besides what a sweep reads: σt and σs per voxel, for the diffusion
@@ -122,6 +124,11 @@ public:
     std::size_t leafCount() const { return mOrigins.size(); }
     std::size_t fineLeafCount() const { return mFineLeaves; }
     bool coarse(std::size_t leaf) const { return leaf >= mFineLeaves; }
+    /// Whether leaf @a leaf's padded block lies more than half a voxel inside the surface (or
+    /// there is none): no voxel centre of it within half a voxel of the surface.
+    bool deep(std::size_t leaf) const { return mDeep[leaf] != 0; }
+    /// Whether leaf @a leaf holds its padded block of signed distances (kDistanceHeld).
+    bool holdsDistance(std::size_t leaf) const { return distanceBlock(leaf) != nullptr; }
     /// Values of a per-voxel array: 512 a fine leaf, one a coarse leaf.
     std::size_t voxelCount() const { return mFineLeaves * kLeafVoxels + (mOrigins.size() - mFineLeaves); }
     /// Where leaf @a leaf's values start in a per-voxel array.
@@ -308,7 +315,9 @@ public:
     /// takes the least of their depths at every voxel, which its own lie above (σt ≥ 0, and only
     /// the continuation through a surface lowers a depth). Its light is 0 either way; a voxel
     /// downwind blending them with lit depths (a shadow's edge) reads the least, a change of its
-    /// transmittance of the order of the cutoff's own (under 3 × 10^-4 on a sphere at 10^-4).
+    /// transmittance of the order of the cutoff's own in a medium (under 3 × 10^-4 on a sphere at
+    /// 10^-4, 4 × 10^-8 within a sphere with a surface), more in the vacuum voxels of the lattice
+    /// in the shadow behind a surface (0.11 there), whose light no medium reads.
     /// The thick bunny's light at dim 1024: 238 → 187 s.
     class SweptSoFar;
     class Depths;
@@ -332,9 +341,18 @@ public:
     /// yet. @a swept reads what is final so far (SweptSoFar), e.g. for a march that hands off.
     /// @a state (per voxel): kMarched where @a marched gave the depth, kBlended where the sweep
     /// did (SweptSoFar::sample reads only marched ones where asked).
+    ///
+    /// Beyond an optical depth of @a opaque light counts as blocked, as in opticalDepthAlong: a
+    /// uniform leaf (deep inside, one σt) whose upwind ghosts and itself lie in one octant and
+    /// whose ghosts all hold depths whose bound darkLeafDepth puts beyond it is not swept (nor
+    /// offered to @a marched: a voxel near the surface there lies where light has crossed that
+    /// much medium) but takes that bound, which every depth the sweep would give it lies above.
+    /// Downwind of it, as in opticalDepthAlong, the light within a sphere with a surface is the
+    /// same bits; in the vacuum voxels in the shadow behind it up to 0.17 lighter.
     using MarchedDepth = std::function<bool(
         const openvdb::Coord& ijk, float signedDistance, bool mustMarch, const SweptSoFar& swept, openvdb::Vec3f& depth)>;
-    void opticalDepthFrom(const openvdb::Vec3d& point, Depths& tau, std::vector<std::uint8_t>& state, const MarchedDepth& marched) const;
+    void opticalDepthFrom(const openvdb::Vec3d& point, Depths& tau, std::vector<std::uint8_t>& state, const MarchedDepth& marched,
+        float opaque = std::numeric_limits<float>::infinity()) const;
     /// opticalDepthFrom's states of a voxel: not yet swept, blended from upwind, marched.
     static constexpr std::uint8_t kPending = 0, kBlended = 1, kMarched = 2;
     /// The octant around @a point voxel @a ijk lies in (bit a set: ijk[a] < point[a]).
@@ -437,6 +455,11 @@ private:
     /// @a out, @a weight times its mean added to @a phi (and the flux's).
     void sweepCoarseCell(std::size_t leaf, const CubeChords& cube, const openvdb::Vec3f (&in)[3], const openvdb::Vec3f& j, float weight,
         openvdb::Vec3f& phi, openvdb::Vec3f* flux, const openvdb::Vec3f& worldOmega, CoarseWeights& cache, openvdb::Vec3f* out) const;
+    /// A lower bound of every depth opticalDepthFrom around @a point would give leaf @a leaf in
+    /// @a octant, from the least of its upwind ghosts' @a tau, when the leaf may be skipped as
+    /// dark (see there); −1 when it may not (not uniform, a ghost in no leaf or across one of the
+    /// point's planes).
+    float darkLeafDepth(std::size_t leaf, int octant, const openvdb::Vec3d& point, const Depths& tau) const;
     /// Throws unless every leaf is fine (the optical-depth sweeps, whose voxels the light stage writes one by one).
     void requireFine(const char* what) const;
     /// σt (padded), the surface's distance, 1/f and skin, and with @a perVoxel σt and σs per voxel.
@@ -444,8 +467,10 @@ private:
     /// mDeep and mUniform from σt and the distance.
     void classifyLeaves();
     /// After classifyLeaves: σt kept as one value for each uniform leaf (mSigmaTStart), then
-    /// @a coarseSigmaT's (one a coarse leaf), 1/f only for the leaves that are not deep (mShallowStart).
-    void compactLeaves(const std::vector<openvdb::Vec3f>& coarseSigmaT);
+    /// @a coarseSigmaT's (one a coarse leaf), 1/f only for the leaves that are not deep (mShallowStart),
+    /// the distance only for those within kDistanceHeld of the surface and not wholly at
+    /// @a interiorDistance (a narrow-band level set's interior value).
+    void compactLeaves(const std::vector<openvdb::Vec3f>& coarseSigmaT, float interiorDistance);
     /// A Coefficient of @a held values, or of the density times @a perDensity (@a nonNegative:
     /// negative values read 0).
     Coefficient coefficient(const std::vector<openvdb::Vec3f>& held, const openvdb::Vec3d& perDensity, bool nonNegative) const;
