@@ -147,7 +147,11 @@ openvdb::Vec3d energyOf(const detail::LeafBlocks<openvdb::Vec3f>& fluence, const
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, sums.size()), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t item = r.begin(); item != r.end(); ++item) {
             if (item < leaves.leafCount()) {
-                for (auto it = leaves.leaf(item).cbeginValueOn(); it; ++it) sums[item] += at(it.getCoord());
+                // The lattice's leaf at the stage leaf's origin (both 8³ aligned), looked up once.
+                const std::int64_t first = lattice.indexOf(leaves.leaf(item).origin());
+                if (first < 0) continue;
+                for (auto it = leaves.leaf(item).cbeginValueOn(); it; ++it)
+                    sums[item] += openvdb::Vec3d(fluence[std::size_t(first) + it.pos()]);
             } else {
                 const openvdb::CoordBBox& box = tiles[item - leaves.leafCount()];
                 sums[item] += at(centreOf(box)) * double(box.volume());
@@ -242,15 +246,23 @@ struct PointLighting
     const detail::LeafBlocks<openvdb::Vec3f>& sweptFlux; ///< per lattice voxel, their first moment's sum (anisotropic)
     const bool anisotropic;
 
-    /// At voxel @a ijk (index point @a pointIjk), adding each marched light's fluence × @a weight
-    /// to @a sums (the swept ones' are summed as they are swept: SweptLights::energy).
+    /// The lattice's per-voxel index of @a ijk in the lattice leaf @a latticeLeaf (−1: none;
+    /// latticeLeavesRead), without a lookup where the stage leaf is that leaf.
+    std::int64_t indexIn(std::int64_t latticeLeaf, const openvdb::Coord& ijk) const
+    {
+        if (!lattice || latticeLeaf < 0) return lattice ? lattice->indexOf(ijk) : -1;
+        return latticeLeaf * detail::SweepLattice::kLeafVoxels + detail::SweepLattice::localIndex(ijk[0] & 7, ijk[1] & 7, ijk[2] & 7);
+    }
+
+    /// At voxel @a ijk (index point @a pointIjk; the lattice's per-voxel @a index there, −1:
+    /// none), adding each marched light's fluence × @a weight to @a sums (the swept ones' are
+    /// summed as they are swept: SweptLights::energy).
     void operator()(Medium::Sampler& sampler, std::vector<VolumeEmission::Sampler>& emitters, const openvdb::Coord& ijk,
-        const openvdb::Vec3d& pointIjk, std::vector<openvdb::Vec3d>& sums, openvdb::Vec3f& outDirect, openvdb::Vec3f& outSource,
-        openvdb::Vec3f& outAnisotropy, double weight) const
+        std::int64_t index, const openvdb::Vec3d& pointIjk, std::vector<openvdb::Vec3d>& sums, openvdb::Vec3f& outDirect,
+        openvdb::Vec3f& outSource, openvdb::Vec3f& outAnisotropy, double weight) const
     {
         openvdb::Vec3d phi(0.0), flux(0.0);
         // Swept lights from their sweep; the others marched (lightFluence).
-        const std::int64_t index = lattice ? lattice->indexOf(ijk) : -1;
         if (index >= 0 && !sweptFluence.empty()) {
             phi += openvdb::Vec3d(sweptFluence[std::size_t(index)]);
             if (anisotropic) flux += openvdb::Vec3d(sweptFlux[std::size_t(index)]);
@@ -356,7 +368,8 @@ DirectLightReport computeDirectLight(
                 StageLeaf* anisotropyLeaf = anisotropic ? made(anisotropyLeaves[item]) : nullptr;
                 for (auto it = mask.cbeginValueOn(); it; ++it) {
                     openvdb::Vec3f d, s, a;
-                    evaluate(sampler, emitters, it.getCoord(), it.getCoord().asVec3d(), sums, d, s, a, 1.0);
+                    const openvdb::Coord ijk = it.getCoord();
+                    evaluate(sampler, emitters, ijk, evaluate.indexIn(latticeLeaf[item], ijk), ijk.asVec3d(), sums, d, s, a, 1.0);
                     directLeaf->setValueOnly(it.pos(), d);
                     sourceLeaf->setValueOnly(it.pos(), s);
                     if (anisotropyLeaf) anisotropyLeaf->setValueOnly(it.pos(), a);
@@ -371,8 +384,8 @@ DirectLightReport computeDirectLight(
             } else {
                 const std::size_t t = item - leafCount;
                 const openvdb::Coord centre = tileCentre(t);
-                evaluate(sampler, emitters, centre, centre.asVec3d(), sums, tileDirect[t], tileSource[t], tileAnisotropy[t],
-                    double(tiles[t].volume()));
+                evaluate(sampler, emitters, centre, evaluate.indexIn(latticeLeaf[item], centre), centre.asVec3d(), sums, tileDirect[t],
+                    tileSource[t], tileAnisotropy[t], double(tiles[t].volume()));
             }
             if (latticeLeaf[item] >= 0) {
                 swept.fluence.release(std::size_t(latticeLeaf[item]));

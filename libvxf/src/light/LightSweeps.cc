@@ -173,7 +173,6 @@ void sweepLight(const LightSampler& light, const detail::SweepLattice& lattice, 
     const LatticeSpans* spans, const DirectLightOptions& options, LeafBlocks<openvdb::Vec3f>& phi, LeafBlocks<openvdb::Vec3f>* flux)
 {
     const openvdb::math::Transform& xform = medium.transform();
-    const std::size_t count = lattice.voxelCount();
     const MarchedDepths depths(options.march);
     // One sampler per thread for the entering depths' marches (a sampler registers accessors).
     tbb::enumerable_thread_specific<Medium::Sampler> samplers([&] { return lightStageSampler(medium, options); });
@@ -243,14 +242,24 @@ void sweepLight(const LightSampler& light, const detail::SweepLattice& lattice, 
         };
         // Leaves in the dark (every upwind depth beyond the cutoff) are not swept.
         lattice.opticalDepthAlong(travel, tau, entering, float(depths.cutoff));
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
-            for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                const std::int32_t e = rim.entryOf(i);
-                if (e >= 0 && rim.grazing(e, -travel)) continue;
-                const openvdb::Vec3d t = depths.transmittanceOf(tau[i]);
-                if (t != openvdb::Vec3d(0.0) && (!options.occluders || unoccluded(options.occluders, medium, worldOf(i), s))) {
-                    phi[i] += openvdb::Vec3f(s.fluence * t);
-                    if (flux) (*flux)[i] -= openvdb::Vec3f(greyOf(s.fluence * t) * s.direction);
+        // A leaf at a time: its rim entries (most leaves have none) and its sums' block once.
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lattice.leafCount()), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t n = r.begin(); n != r.end(); ++n) {
+                const std::size_t first = n * detail::SweepLattice::kLeafVoxels;
+                const bool rimmed = !rim.leafStart.empty() && rim.leafStart[n] != rim.leafStart[n + 1];
+                openvdb::Vec3f* phiBlock = &phi[first];
+                openvdb::Vec3f* fluxBlock = flux ? &(*flux)[first] : nullptr;
+                for (std::size_t v = 0; v < std::size_t(detail::SweepLattice::kLeafVoxels); ++v) {
+                    const std::size_t i = first + v;
+                    const openvdb::Vec3d t = depths.transmittanceOf(tau[i]);
+                    if (t == openvdb::Vec3d(0.0)) continue;
+                    if (rimmed) {
+                        const std::int32_t e = rim.entryOf(i);
+                        if (e >= 0 && rim.grazing(e, -travel)) continue;
+                    }
+                    if (options.occluders && !unoccluded(options.occluders, medium, worldOf(i), s)) continue;
+                    phiBlock[v] += openvdb::Vec3f(s.fluence * t);
+                    if (fluxBlock) fluxBlock[v] -= openvdb::Vec3f(greyOf(s.fluence * t) * s.direction);
                 }
             }
         });
