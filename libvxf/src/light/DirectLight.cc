@@ -257,9 +257,9 @@ struct PointLighting
     /// At voxel @a ijk (index point @a pointIjk; the lattice's per-voxel @a index there, −1:
     /// none), adding each marched light's fluence × @a weight to @a sums (the swept ones' are
     /// summed as they are swept: SweptLights::energy).
-    void operator()(Medium::Sampler& sampler, std::vector<VolumeEmission::Sampler>& emitters, const openvdb::Coord& ijk,
-        std::int64_t index, const openvdb::Vec3d& pointIjk, std::vector<openvdb::Vec3d>& sums, openvdb::Vec3f& outDirect,
-        openvdb::Vec3f& outSource, openvdb::Vec3f& outAnisotropy, double weight) const
+    void operator()(Medium::Sampler& sampler, std::vector<VolumeEmission::Sampler>& emitters, const openvdb::Coord& ijk, std::int64_t index,
+        const openvdb::Vec3d& pointIjk, std::vector<openvdb::Vec3d>& sums, openvdb::Vec3f& outDirect, openvdb::Vec3f& outSource,
+        openvdb::Vec3f& outAnisotropy, double weight) const
     {
         openvdb::Vec3d phi(0.0), flux(0.0);
         // Swept lights from their sweep; the others marched (lightFluence).

@@ -161,6 +161,41 @@ Medium::Sampler lightStageSampler(const Medium& medium, const DirectLightOptions
 /// Whether sweepLight handles @a light (the others are marched voxel by voxel).
 bool sweepable(const Light& light) { return light.type == Light::Type::Directional || light.type == Light::Type::Environment; }
 
+/// Light sample @a s, through one direction's optical depths @a tau (travelling along the unit
+/// index-space @a travel), added to the sums @a phi (and @a flux) at every voxel of @a lattice
+/// it reaches, a leaf at a time (its rim entries, most leaves have none, and its sums' block
+/// looked up once): not at the rim voxels the direction grazes (marched), nor where one of
+/// @a occluders blocks it.
+void addSweptSample(const LightSample& s, const openvdb::Vec3d& travel, const detail::SweepLattice& lattice,
+    const detail::SweepLattice::Depths& tau, const MarchedDepths& depths, const Rim& rim, const Medium& medium, const RayScene* occluders,
+    LeafBlocks<openvdb::Vec3f>& phi, LeafBlocks<openvdb::Vec3f>* flux)
+{
+    constexpr int kLeafVoxels = detail::SweepLattice::kLeafVoxels;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lattice.leafCount()), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t n = r.begin(); n != r.end(); ++n) {
+            const std::size_t first = n * kLeafVoxels;
+            const bool rimmed = !rim.leafStart.empty() && rim.leafStart[n] != rim.leafStart[n + 1];
+            openvdb::Vec3f* phiBlock = &phi[first];
+            openvdb::Vec3f* fluxBlock = flux ? &(*flux)[first] : nullptr;
+            for (int v = 0; v < kLeafVoxels; ++v) {
+                const std::size_t i = first + std::size_t(v);
+                const openvdb::Vec3d t = depths.transmittanceOf(tau[i]);
+                if (t == openvdb::Vec3d(0.0)) continue;
+                if (rimmed) {
+                    const std::int32_t e = rim.entryOf(i);
+                    if (e >= 0 && rim.grazing(e, -travel)) continue;
+                }
+                if (occluders) {
+                    const openvdb::Coord ijk = lattice.origin(n).offsetBy(v >> 6, (v >> 3) & 7, v & 7);
+                    if (!unoccluded(occluders, medium, medium.transform().indexToWorld(ijk), s)) continue;
+                }
+                phiBlock[v] += openvdb::Vec3f(s.fluence * t);
+                if (fluxBlock) fluxBlock[v] -= openvdb::Vec3f(greyOf(s.fluence * t) * s.direction);
+            }
+        }
+    });
+}
+
 /// The fluence of a directional or environment light at the centre of every voxel of @a lattice
 /// (per voxel), its transmittance by one optical-depth sweep per direction
 /// (SweepLattice::opticalDepthAlong); at @a rim voxels, along the directions grazing the
@@ -179,11 +214,6 @@ void sweepLight(const LightSampler& light, const detail::SweepLattice& lattice, 
     const double minDistance = 0.5 * medium.voxelSize();
     sizeSums(lattice, phi, flux);
     detail::SweepLattice::Depths tau;
-    const auto worldOf = [&](std::size_t i) {
-        const openvdb::Coord& o = lattice.origin(i / detail::SweepLattice::kLeafVoxels);
-        const int v = int(i % detail::SweepLattice::kLeafVoxels);
-        return xform.indexToWorld(o.offsetBy(v >> 6, (v >> 3) & 7, v & 7));
-    };
     const openvdb::Vec3d anywhere = xform.indexToWorld(medium.activeBounds().getCenter());
 
     const bool surface = medium.surface() != nullptr;
@@ -242,27 +272,7 @@ void sweepLight(const LightSampler& light, const detail::SweepLattice& lattice, 
         };
         // Leaves in the dark (every upwind depth beyond the cutoff) are not swept.
         lattice.opticalDepthAlong(travel, tau, entering, float(depths.cutoff));
-        // A leaf at a time: its rim entries (most leaves have none) and its sums' block once.
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lattice.leafCount()), [&](const tbb::blocked_range<std::size_t>& r) {
-            for (std::size_t n = r.begin(); n != r.end(); ++n) {
-                const std::size_t first = n * detail::SweepLattice::kLeafVoxels;
-                const bool rimmed = !rim.leafStart.empty() && rim.leafStart[n] != rim.leafStart[n + 1];
-                openvdb::Vec3f* phiBlock = &phi[first];
-                openvdb::Vec3f* fluxBlock = flux ? &(*flux)[first] : nullptr;
-                for (std::size_t v = 0; v < std::size_t(detail::SweepLattice::kLeafVoxels); ++v) {
-                    const std::size_t i = first + v;
-                    const openvdb::Vec3d t = depths.transmittanceOf(tau[i]);
-                    if (t == openvdb::Vec3d(0.0)) continue;
-                    if (rimmed) {
-                        const std::int32_t e = rim.entryOf(i);
-                        if (e >= 0 && rim.grazing(e, -travel)) continue;
-                    }
-                    if (options.occluders && !unoccluded(options.occluders, medium, worldOf(i), s)) continue;
-                    phiBlock[v] += openvdb::Vec3f(s.fluence * t);
-                    if (fluxBlock) fluxBlock[v] -= openvdb::Vec3f(greyOf(s.fluence * t) * s.direction);
-                }
-            }
-        });
+        addSweptSample(s, travel, lattice, tau, depths, rim, medium, options.occluders, phi, flux);
         // The rim along the directions grazing it: marched from the medium point toward the
         // light until the ray lies kRimHandOff voxels from the surface (it left the medium, or
         // went deep into it), and on from there with the sweep's depth. A ray leaving the
