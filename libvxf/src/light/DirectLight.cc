@@ -246,11 +246,11 @@ struct PointLighting
     const detail::LeafBlocks<openvdb::Vec3f>& sweptFlux; ///< per lattice voxel, their first moment's sum (anisotropic)
     const bool anisotropic;
 
-    /// The lattice's per-voxel index of @a ijk in the lattice leaf @a latticeLeaf (−1: none;
-    /// latticeLeavesRead), without a lookup where the stage leaf is that leaf.
-    std::int64_t indexIn(std::int64_t latticeLeaf, const openvdb::Coord& ijk) const
+    /// The lattice's per-voxel index of @a ijk, which lies in lattice leaf @a latticeLeaf (−1:
+    /// none, or no sums; latticeLeavesRead), or −1: no lookup.
+    static std::int64_t indexIn(std::int64_t latticeLeaf, const openvdb::Coord& ijk)
     {
-        if (!lattice || latticeLeaf < 0) return lattice ? lattice->indexOf(ijk) : -1;
+        if (latticeLeaf < 0) return -1;
         return latticeLeaf * detail::SweepLattice::kLeafVoxels + detail::SweepLattice::localIndex(ijk[0] & 7, ijk[1] & 7, ijk[2] & 7);
     }
 
