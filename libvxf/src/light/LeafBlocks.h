@@ -5,6 +5,10 @@
 
 #include "../transport/SweepLattice.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
 #include <cstddef>
 #include <memory>
 #include <vector>
@@ -18,15 +22,18 @@ public:
     static constexpr std::size_t kBlock = SweepLattice::kLeafVoxels;
 
     bool empty() const { return mBlocks.empty(); }
-    /// @a leaves blocks of kBlock values, each @a value.
+    /// @a leaves blocks of kBlock values, each @a value (made on every thread: the bunny at dim
+    /// 1024 holds 2.6 GB of them, 5 s of one thread's page faults).
     void assign(std::size_t leaves, const T& value)
     {
         mBlocks.clear();
         mBlocks.resize(leaves);
-        for (auto& block : mBlocks) {
-            block.reset(new T[kBlock]);
-            std::fill(block.get(), block.get() + kBlock, value);
-        }
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t n = r.begin(); n != r.end(); ++n) {
+                mBlocks[n].reset(new T[kBlock]);
+                std::fill(mBlocks[n].get(), mBlocks[n].get() + kBlock, value);
+            }
+        });
     }
     /// Lattice voxel @a i (leaf i / kBlock); its block must not have been released.
     T& operator[](std::size_t i) { return mBlocks[i / kBlock][i % kBlock]; }

@@ -170,8 +170,8 @@ void SweepLattice::readMedium(const Medium& medium, bool perVoxel)
     }
     const openvdb::FloatGrid::ConstAccessor densityAccessor = medium.density().getConstAccessor();
     const bool surface = medium.surface() != nullptr;
-    if (surface) mInterior.assign(voxelCount(), 1.0f);
-    std::vector<float> distance(surface ? voxelCount() : 0, -1.0f);
+    // Per voxel while the leaves are read (every voxel is written): the signed distance and 1/f.
+    ScratchArray<float> distance(surface ? voxelCount() : 0), interior(surface ? voxelCount() : 0);
     // σt inside the surface, per voxel: one float where it is grey by construction (the
     // density's times a grey material's), three until known otherwise (the construction's peak:
     // 37 bytes a voxel had held the bunny at dim 1024 to 9.2 GB).
@@ -198,38 +198,31 @@ void SweepLattice::readMedium(const Medium& medium, bool perVoxel)
                     mSigmaTVoxel[i] = openvdb::Vec3f(t);
                     mSigmaS[i] = openvdb::Vec3f(finiteCoefficient(sampler.sigmaS(c), false));
                 }
-                double interior = 1.0;
+                double fraction = 1.0;
                 if (surface) {
                     const double d = sampler.signedDistance(c.asVec3d());
                     distance[i] = float(d);
-                    mInterior[i] = float(1.0 / std::max(std::clamp(0.5 - d, 0.0, 1.0), Medium::kMinFraction));
-                    interior = double(mInterior[i]);
+                    interior[i] = float(1.0 / std::max(std::clamp(0.5 - d, 0.0, 1.0), Medium::kMinFraction));
+                    fraction = double(interior[i]);
                     openvdb::Vec3d point, normal;
                     // (skinPoint reads d again: only where it can find the skin.)
                     if (std::abs(d) < 0.5 && sampler.skinPoint(c, point, normal))
                         skin[n].emplace_back(std::uint16_t(v), openvdb::Vec3f(normal));
                 }
-                inside.set(i, openvdb::Vec3f(t * interior));
+                inside.set(i, openvdb::Vec3f(t * fraction));
             }
         }
     });
-    // The coarse cells' σt, kept (one value a cell) past the padded blocks' compaction.
+    // The coarse cells' σt, held one value a cell after the fine leaves' blocks.
     std::vector<openvdb::Vec3f> coarseSigmaT(voxelCount() - mFineLeaves * kLeafVoxels);
     for (std::size_t c = 0; c < coarseSigmaT.size(); ++c) coarseSigmaT[c] = inside.at(mFineLeaves * kLeafVoxels + c);
     // Grey σt (every voxel's the same in each channel) held as one float: a third of the
     // lattice's largest array (issue 62: 16 bytes a voxel).
     inside.makeGreyIfItIs();
-    if (!inside.grey.empty()) {
-        mSigmaTGrey = padded(inside.grey);
-    } else {
-        mSigmaT = padded(inside.rgb);
-    }
-    inside = InsideSigma(0, false);
-    if (surface) mDistance = padded(distance);
-    classifyLeaves();
     // A narrow-band level set's interior value, as signedDistance reads it at a voxel centre.
     const float interiorDistance = surface ? float(double(-medium.surface()->background()) / medium.voxelSize()) : 0.0f;
-    compactLeaves(coarseSigmaT, interiorDistance);
+    holdPadded(inside, distance, interior, coarseSigmaT, interiorDistance);
+    inside = InsideSigma(0, false);
     mSkinIndex.assign(mInterior.size(), -1);
     for (std::size_t n = 0; n < skin.size(); ++n) {
         for (const auto& [v, normal] : skin[n]) {
@@ -246,21 +239,24 @@ void SweepLattice::readMedium(const Medium& medium, bool perVoxel)
 void SweepLattice::InsideSigma::makeGreyIfItIs()
 {
     if (rgb.empty()) return;
+    const tbb::blocked_range<std::size_t> all(0, rgb.size());
     const bool isGrey = tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, rgb.size()), true,
-        [&](const tbb::blocked_range<std::size_t>& r, bool all) {
-            for (std::size_t i = r.begin(); all && i != r.end(); ++i) all = rgb[i][0] == rgb[i][1] && rgb[i][0] == rgb[i][2];
-            return all;
+        all, true,
+        [&](const tbb::blocked_range<std::size_t>& r, bool same) {
+            for (std::size_t i = r.begin(); same && i != r.end(); ++i) same = rgb[i][0] == rgb[i][1] && rgb[i][0] == rgb[i][2];
+            return same;
         },
         [](bool a, bool b) { return a && b; });
     if (!isGrey) return;
-    grey.resize(rgb.size());
-    for (std::size_t i = 0; i < rgb.size(); ++i) grey[i] = rgb[i][0];
-    std::vector<openvdb::Vec3f>().swap(rgb);
+    grey = ScratchArray<float>(rgb.size());
+    tbb::parallel_for(all, [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i) grey[i] = rgb[i][0];
+    });
+    rgb = ScratchArray<openvdb::Vec3f>();
 }
 
 void SweepLattice::readCoarseCell(std::size_t n, Medium::Sampler& sampler, openvdb::FloatGrid::ConstAccessor& density, bool perVoxel,
-    bool fromDensity, InsideSigma& inside, std::vector<float>& distance)
+    bool fromDensity, InsideSigma& inside, ScratchArray<float>& distance)
 {
     // The means over the block's voxels: one read where the density holds the block as a tile.
     const openvdb::Coord& origin = mOrigins[n];
@@ -295,101 +291,118 @@ openvdb::Vec3f blockMean(const openvdb::Vec3SGrid::ConstAccessor& acc, const ope
     return acc.probeValue(origin, value) ? value : openvdb::Vec3f(0.0f);
 }
 
-/// @a values made of @a count(n) of each leaf n's block of @a block values (its first ones),
-/// the blocks one after another from @a start (as compactLeaves counts them), in place.
-template <typename T, typename Count>
-void keepBlocks(std::vector<T>& values, std::size_t block, const std::vector<std::size_t>& start, Count&& count)
+/// @a values (per voxel) at the padded voxels @a index (SweepLattice::paddedVoxels) into
+/// @a block; 0 where no leaf is.
+template <typename T>
+void gatherPadded(const std::int64_t* index, const T* values, T* block)
 {
-    if (values.empty()) return;
-    std::size_t size = 0;
-    for (std::size_t n = 0; n < start.size(); ++n) {
-        const std::size_t kept = count(n);
-        if (kept == 0) continue;
-        // start[n] ≤ n·block: each block moves toward the front, past what is already moved.
-        std::copy(values.begin() + std::ptrdiff_t(n * block), values.begin() + std::ptrdiff_t(n * block + kept),
-            values.begin() + std::ptrdiff_t(start[n]));
-        size = start[n] + kept;
+    for (int q = 0; q < SweepLattice::kPaddedVoxels; ++q) block[q] = index[q] < 0 ? T(0) : values[std::size_t(index[q])];
+}
+
+/// Whether all of a padded block's values are equal.
+template <typename T>
+bool allEqual(const T* block)
+{
+    return std::all_of(block, block + SweepLattice::kPaddedVoxels, [&](const T& v) { return v == block[0]; });
+}
+
+/// Where each counted block starts when they lie one after another: @a count(n) values for
+/// leaf n, @a none where it has none; the total in @a total.
+template <typename Count>
+std::vector<std::size_t> blockStarts(std::size_t leaves, Count&& count, std::size_t none, std::size_t& total)
+{
+    std::vector<std::size_t> start(leaves, none);
+    total = 0;
+    for (std::size_t n = 0; n < leaves; ++n) {
+        const std::size_t values = count(n);
+        if (values == 0) continue;
+        start[n] = total;
+        total += values;
     }
-    std::vector<T>(values.begin(), values.begin() + std::ptrdiff_t(size)).swap(values);
+    return start;
 }
 
 } // namespace
 
-void SweepLattice::compactLeaves(const std::vector<openvdb::Vec3f>& coarseSigmaT, float interiorDistance)
+void SweepLattice::holdPadded(const InsideSigma& inside, const ScratchArray<float>& distance, const ScratchArray<float>& interior,
+    const std::vector<openvdb::Vec3f>& coarseSigmaT, float interiorDistance)
 {
     const std::size_t leaves = mOrigins.size();
-    mSigmaTStart.resize(mFineLeaves);
-    std::size_t next = 0;
-    for (std::size_t n = 0; n < mFineLeaves; ++n) {
-        mSigmaTStart[n] = next;
-        next += mUniform[n] ? 1 : std::size_t(kPaddedVoxels);
-    }
-    const auto sigmaTCount = [&](std::size_t n) { return mUniform[n] ? std::size_t(1) : std::size_t(kPaddedVoxels); };
-    keepBlocks(mSigmaTGrey, kPaddedVoxels, mSigmaTStart, sigmaTCount);
-    keepBlocks(mSigmaT, kPaddedVoxels, mSigmaTStart, sigmaTCount);
-    // A coarse leaf's one σt after the fine leaves' blocks.
-    mSigmaTGrey.reserve(mSigmaTGrey.empty() ? 0 : mSigmaTGrey.size() + coarseSigmaT.size());
-    mSigmaT.reserve(mSigmaT.empty() ? 0 : mSigmaT.size() + coarseSigmaT.size());
-    for (std::size_t c = 0; c < coarseSigmaT.size(); ++c) {
-        mSigmaTStart.push_back(mSigmaTGrey.empty() ? mSigmaT.size() : mSigmaTGrey.size());
-        if (mSigmaTGrey.empty()) {
-            mSigmaT.push_back(coarseSigmaT[c]);
-        } else {
-            mSigmaTGrey.push_back(coarseSigmaT[c][0]);
-        }
-    }
-    if (mInterior.empty()) return; // no surface: every leaf deep, f = 1
-    mDistanceStart.assign(mFineLeaves, kNone);
-    next = 0;
-    for (std::size_t n = 0; n < mFineLeaves; ++n) {
-        const float* d = &mDistance[n * kPaddedVoxels];
-        if (std::all_of(d, d + kPaddedVoxels, [&](float v) { return v <= -kDistanceHeld || v == interiorDistance; })) continue;
-        mDistanceStart[n] = next;
-        next += kPaddedVoxels;
-    }
-    keepBlocks(mDistance, kPaddedVoxels, mDistanceStart,
-        [&](std::size_t n) { return mDistanceStart[n] == kNone ? std::size_t(0) : std::size_t(kPaddedVoxels); });
-    mShallowStart.assign(leaves, kNone);
-    next = 0;
-    for (std::size_t n = 0; n < leaves; ++n) {
-        if (mDeep[n]) continue;
-        mShallowStart[n] = next;
-        next += kLeafVoxels;
-    }
-    keepBlocks(mInterior, kLeafVoxels, mShallowStart, [&](std::size_t n) { return mDeep[n] ? std::size_t(0) : std::size_t(kLeafVoxels); });
-}
-
-void SweepLattice::classifyLeaves()
-{
-    const bool surface = !mDistance.empty(), grey = !mSigmaTGrey.empty();
-    // Leaves whose padded block lies wholly inside the surface (or without one): a sweep there
-    // needs no cut of its steps and holds no skin voxel.
-    // A coarse leaf: deep (coarseBlocks) and of one σt.
-    mDeep.assign(mOrigins.size(), 1);
-    if (surface) {
+    const bool surface = !distance.empty(), grey = !inside.grey.empty();
+    // @a visit(n, index, sigmaT) for each fine leaf n in parallel: its padded voxels' indices and
+    // its padded σt (floats where grey, else colours).
+    const auto eachFineLeaf = [&](const auto& visit) {
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mFineLeaves), [&](const tbb::blocked_range<std::size_t>& r) {
+            std::int64_t index[kPaddedVoxels];
+            std::vector<float> greyBlock(grey ? kPaddedVoxels : 0);
+            std::vector<openvdb::Vec3f> rgbBlock(grey ? 0 : kPaddedVoxels);
             for (std::size_t n = r.begin(); n != r.end(); ++n) {
-                const float* d = &mDistance[n * kPaddedVoxels];
-                mDeep[n] = std::all_of(d, d + kPaddedVoxels, [](float v) { return v < -0.5f; }) ? 1 : 0;
+                paddedVoxels(n, index);
+                if (grey) {
+                    gatherPadded(index, inside.grey.data(), greyBlock.data());
+                } else {
+                    gatherPadded(index, inside.rgb.data(), rgbBlock.data());
+                }
+                visit(n, index, greyBlock.data(), rgbBlock.data());
             }
         });
+    };
+    // Each fine leaf classified on its padded blocks: deep (wholly more than half a voxel
+    // inside, or no surface), uniform (deep, one σt: every step of a sweep there alike), and
+    // whether its distance is held. A coarse leaf is deep and of one σt.
+    mDeep.assign(leaves, 1);
+    mUniform.assign(leaves, 1);
+    std::vector<std::uint8_t> holdsDistance(mFineLeaves, 0);
+    eachFineLeaf([&](std::size_t n, const std::int64_t* index, const float* greyBlock, const openvdb::Vec3f* rgbBlock) {
+        if (surface) {
+            float d[kPaddedVoxels];
+            gatherPadded(index, distance.data(), d);
+            mDeep[n] = std::all_of(d, d + kPaddedVoxels, [](float v) { return v < -0.5f; }) ? 1 : 0;
+            const bool interiorOnly =
+                std::all_of(d, d + kPaddedVoxels, [&](float v) { return v <= -kDistanceHeld || v == interiorDistance; });
+            holdsDistance[n] = interiorOnly ? 0 : 1;
+        }
+        mUniform[n] = mDeep[n] && (grey ? allEqual(greyBlock) : allEqual(rgbBlock)) ? 1 : 0;
+    });
+    // Where each leaf's blocks start; then only those blocks made, a leaf at a time.
+    std::size_t sigmaTCount = 0, distanceCount = 0, shallowCount = 0;
+    mSigmaTStart = blockStarts(
+        mFineLeaves, [&](std::size_t n) { return mUniform[n] ? std::size_t(1) : std::size_t(kPaddedVoxels); }, kNone, sigmaTCount);
+    // A coarse leaf's one σt after the fine leaves' blocks.
+    if (grey) {
+        mSigmaTGrey.resize(sigmaTCount + coarseSigmaT.size());
+    } else {
+        mSigmaT.resize(sigmaTCount + coarseSigmaT.size());
     }
-    // Deep leaves of one σt (a voxelized mesh's interior): every step of a sweep there is alike.
-    mUniform.assign(mOrigins.size(), 1);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mFineLeaves), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t n = r.begin(); n != r.end(); ++n) {
-            mUniform[n] = 0;
-            if (!mDeep[n]) continue;
-            const std::size_t first = n * kPaddedVoxels;
-            bool one = true;
-            if (grey) {
-                const float* st = &mSigmaTGrey[first];
-                one = std::all_of(st, st + kPaddedVoxels, [&](float v) { return v == st[0]; });
-            } else {
-                const openvdb::Vec3f* st = &mSigmaT[first];
-                one = std::all_of(st, st + kPaddedVoxels, [&](const openvdb::Vec3f& v) { return v == st[0]; });
-            }
-            mUniform[n] = one ? 1 : 0;
+    for (std::size_t c = 0; c < coarseSigmaT.size(); ++c) {
+        mSigmaTStart.push_back(sigmaTCount + c);
+        if (grey) {
+            mSigmaTGrey[sigmaTCount + c] = coarseSigmaT[c][0];
+        } else {
+            mSigmaT[sigmaTCount + c] = coarseSigmaT[c];
+        }
+    }
+    if (surface) {
+        mDistanceStart = blockStarts(
+            mFineLeaves, [&](std::size_t n) { return holdsDistance[n] ? std::size_t(kPaddedVoxels) : 0; }, kNone, distanceCount);
+        mShallowStart = blockStarts(
+            leaves, [&](std::size_t n) { return mDeep[n] ? 0 : std::size_t(kLeafVoxels); }, kNone, shallowCount);
+        mDistance.resize(distanceCount);
+        mInterior.resize(shallowCount);
+    }
+    eachFineLeaf([&](std::size_t n, const std::int64_t* index, const float* greyBlock, const openvdb::Vec3f* rgbBlock) {
+        // A uniform leaf's one σt: its block's first value (all are alike).
+        const std::ptrdiff_t sigmaTValues = mUniform[n] ? 1 : kPaddedVoxels, at = std::ptrdiff_t(mSigmaTStart[n]);
+        if (grey) {
+            std::copy(greyBlock, greyBlock + sigmaTValues, mSigmaTGrey.begin() + at);
+        } else {
+            std::copy(rgbBlock, rgbBlock + sigmaTValues, mSigmaT.begin() + at);
+        }
+        if (!surface) return;
+        if (holdsDistance[n]) gatherPadded(index, distance.data(), &mDistance[mDistanceStart[n]]);
+        if (!mDeep[n]) {
+            const float* own = interior.data() + n * kLeafVoxels;
+            std::copy(own, own + kLeafVoxels, mInterior.begin() + std::ptrdiff_t(mShallowStart[n]));
         }
     });
 }
@@ -523,24 +536,6 @@ SweepLattice::GridView::GridView(const SweepLattice& lattice, const openvdb::Vec
         }
     });
 }
-
-template <typename T>
-std::vector<T> SweepLattice::padded(const std::vector<T>& values) const
-{
-    std::vector<T> out(mFineLeaves * kPaddedVoxels);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mFineLeaves), [&](const tbb::blocked_range<std::size_t>& r) {
-        std::int64_t index[kPaddedVoxels];
-        for (std::size_t n = r.begin(); n != r.end(); ++n) {
-            T* block = &out[n * kPaddedVoxels];
-            paddedVoxels(n, index);
-            for (int q = 0; q < kPaddedVoxels; ++q) block[q] = index[q] < 0 ? T(0) : values[std::size_t(index[q])];
-        }
-    });
-    return out;
-}
-
-template std::vector<float> SweepLattice::padded(const std::vector<float>&) const;
-template std::vector<openvdb::Vec3f> SweepLattice::padded(const std::vector<openvdb::Vec3f>&) const;
 
 openvdb::Vec3SGrid::Ptr SweepLattice::write(const std::vector<openvdb::Vec3f>& values, const openvdb::Vec3SGrid& topology) const
 {
