@@ -356,7 +356,7 @@ private:
         // once a batch of directions (a few percent of the kernel; free with a moment, whose
         // J·RestPhase makes the block per direction anyway).
         using Layout = detail::SweepLattice::SweepSource::Layout;
-        const detail::SweepLattice::SweepSource sweepSource = lattice.sweepSource(sourceAt, Layout::PerVoxel);
+        sweepSource = lattice.sweepSource(sourceAt, Layout::PerVoxel, std::move(sweepSource));
         next.assign(count, openvdb::Vec3f(0.0f));
         const auto sweepStart = std::chrono::steady_clock::now();
         lattice.sweep(sweepSource, directions, weight, next, &skin, nullptr, moment ? &*moment : nullptr);
@@ -428,6 +428,7 @@ private:
                     report.iterations.empty() ? 0.0 : report.iterations.back().error);
         }
         // The solve's arrays go before the grids are made (φ itself becomes the output's values).
+        sweepSource = {};
         std::vector<openvdb::Vec3f>().swap(next);
         std::vector<openvdb::Vec3d>().swap(previousCellFlux);
         // The skin voxels hold the fluence on the surface, as the gathers give it.
@@ -491,6 +492,8 @@ private:
     // sweep's F and the correction's ΔF, a and β read padded a leaf at a time by the sweep).
     // docs/accuracy-notes.md (ab) has what each costs.
     std::vector<openvdb::Vec3f> phi, next, skin;
+    /// The last sweep's J, each sweep's made again in its memory (SweepLattice::sweepSource).
+    detail::SweepLattice::SweepSource sweepSource;
     std::vector<openvdb::Vec3f> firstFlight; ///< the gather's K J0 (the same every iteration)
     AndersonMixing mixing; ///< of the corrected gathers
     /// Whether the correction's sweeps take their diffusion correction: once dropped there (voxels

@@ -466,17 +466,24 @@ SweepLattice::SweepSource SweepLattice::sweepSource(std::vector<openvdb::Vec3f> 
 SweepLattice::SweepSource SweepLattice::sweepSource(
     const std::function<openvdb::Vec3f(std::size_t)>& sourceAt, SweepSource::Layout layout) const
 {
+    return sweepSource(sourceAt, layout, SweepSource());
+}
+
+SweepLattice::SweepSource SweepLattice::sweepSource(
+    const std::function<openvdb::Vec3f(std::size_t)>& sourceAt, SweepSource::Layout layout, SweepSource reuse) const
+{
     const auto inside = [&](std::size_t v) { return mInterior.empty() ? sourceAt(v) : sourceAt(v) * interiorOf(v); };
-    SweepSource out;
+    SweepSource out = std::move(reuse);
     out.layout = mFineLeaves == mOrigins.size() ? layout : SweepSource::Layout::PerVoxel; // (a coarse leaf has no padded block)
+    // Every value is written below, whatever the memory held.
+    const std::size_t size = out.layout == SweepSource::Layout::PerVoxel ? voxelCount() : mOrigins.size() * kPaddedVoxels;
+    if (out.values.size() != size) out.values = ScratchArray<openvdb::Vec3f>(size);
     if (out.layout == SweepSource::Layout::PerVoxel) {
-        out.values.resize(voxelCount());
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, voxelCount()), [&](const tbb::blocked_range<std::size_t>& r) {
             for (std::size_t v = r.begin(); v != r.end(); ++v) out.values[v] = inside(v);
         });
         return out;
     }
-    out.values.resize(mOrigins.size() * kPaddedVoxels);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mOrigins.size()), [&](const tbb::blocked_range<std::size_t>& r) {
         std::int64_t index[kPaddedVoxels];
         for (std::size_t n = r.begin(); n != r.end(); ++n) {
