@@ -170,7 +170,8 @@ void SweepLattice::readMedium(const Medium& medium, bool perVoxel)
     }
     const openvdb::FloatGrid::ConstAccessor densityAccessor = medium.density().getConstAccessor();
     const bool surface = medium.surface() != nullptr;
-    // Per voxel while the leaves are read (every voxel is written): the signed distance and 1/f.
+    // Per voxel while the leaves are read: the signed distance (every voxel's, a coarse cell's
+    // too) and 1/f (a fine leaf's voxels; a coarse cell is deep, f = 1).
     ScratchArray<float> distance(surface ? voxelCount() : 0), interior(surface ? voxelCount() : 0);
     // σt inside the surface, per voxel: one float where it is grey by construction (the
     // density's times a grey material's), three until known otherwise (the construction's peak:
@@ -198,18 +199,18 @@ void SweepLattice::readMedium(const Medium& medium, bool perVoxel)
                     mSigmaTVoxel[i] = openvdb::Vec3f(t);
                     mSigmaS[i] = openvdb::Vec3f(finiteCoefficient(sampler.sigmaS(c), false));
                 }
-                double fraction = 1.0;
+                double inverseFraction = 1.0;
                 if (surface) {
                     const double d = sampler.signedDistance(c.asVec3d());
                     distance[i] = float(d);
                     interior[i] = float(1.0 / std::max(std::clamp(0.5 - d, 0.0, 1.0), Medium::kMinFraction));
-                    fraction = double(interior[i]);
+                    inverseFraction = double(interior[i]);
                     openvdb::Vec3d point, normal;
                     // (skinPoint reads d again: only where it can find the skin.)
                     if (std::abs(d) < 0.5 && sampler.skinPoint(c, point, normal))
                         skin[n].emplace_back(std::uint16_t(v), openvdb::Vec3f(normal));
                 }
-                inside.set(i, openvdb::Vec3f(t * fraction));
+                inside.set(i, openvdb::Vec3f(t * inverseFraction));
             }
         }
     });
