@@ -83,19 +83,28 @@ Rim rimOf(const detail::SweepLattice& lattice, const Medium& medium)
 /// is the exit's, carried through vacuum.
 constexpr double kSweptReadBack = 4.0, kSweptReadOff = 1.0;
 /// A march from the rim along a direction grazing the surface hands the rest of its way to the
-/// sweep's depth once it lies this many voxels or more from the surface, either side: out of
-/// the smeared terminator, where the sweep is as right as anywhere. The accuracy bench's
-/// translucent bunny (dim 64): 1.707% with every grazing direction marched whole, 1.707%
-/// handing off from 2 voxels, 1.709% from 1; the sky of 64 directions at dim 256: the rim's
-/// light within 0.58% (L1) of the whole marches at 2 voxels, 1.1% at 1; 21.3 → 18.9 s (17.6 s at 1).
+/// sweep's depth once it lies this many voxels or more outside the surface (kInsideHandOff
+/// inside it): out of the smeared terminator, where the sweep is as right as anywhere. The
+/// accuracy bench's translucent bunny (dim 64): 1.707% with every grazing direction marched
+/// whole, 1.707% handing off from 2 voxels, 1.709% from 1; the sky of 64 directions at dim 256:
+/// the rim's light within 0.58% (L1) of the whole marches at 2 voxels, 1.1% at 1 (most of it
+/// the outside's); 21.3 → 18.9 s (17.6 s at 1).
 constexpr double kRimHandOff = 2.0;
+/// Inside the surface a march hands off a voxel deep: the sweep's depth a voxel under the
+/// surface is as right as two voxels under it, and a grazing ray reaches it in half the steps
+/// (bench/accuracy/probe's errors the same or lower: docs/accuracy-notes.md (ao)).
+constexpr double kInsideHandOff = 1.0;
 
-/// A march's hand-off to what @a swept holds, once kRimHandOff voxels or more from the surface
-/// on either side (the rim's grazing marches, and light entering the lattice across vacuum).
+/// Whether a march at signed distance @a distance (voxels) from the surface is clear of it:
+/// kInsideHandOff inside, kRimHandOff outside.
+bool clearOfSurface(double distance) { return distance < 0.0 ? -distance >= kInsideHandOff : distance >= kRimHandOff; }
+
+/// A march's hand-off to what @a swept holds, once clear of the surface (the rim's grazing
+/// marches, and light entering the lattice across vacuum).
 MarchHandOff sweptClearOfSurface(const detail::SweepLattice::SweptSoFar& swept)
 {
     return [&swept](const openvdb::Vec3d& at, double distance, openvdb::Vec3f& depth) {
-        return std::abs(distance) >= kRimHandOff && swept.sample(at, depth);
+        return clearOfSurface(distance) && swept.sample(at, depth);
     };
 }
 
@@ -150,11 +159,16 @@ openvdb::Vec3f depthThroughLeaves(Medium::Sampler& sampler, const Medium& medium
     return depth;
 }
 
-/// A sampler of @a medium whose marches take the surface's crossings on options.boundary.
+/// A sampler of @a medium whose marches take the surface's crossings on options.boundary, and
+/// do not ask the meshes for crossings the level set missed within a step: an Embree ray for
+/// every step near the surface, 0.66 of the light stage's 7.1 CPU seconds on the thick bunny at
+/// dim 256, for no measurable change in bench/accuracy/probe's errors (docs/accuracy-notes.md
+/// (ao)). The placing of the crossings is kept: without it the thick bunny at dim 64 came 4.51
+/// → 4.83% off.
 Medium::Sampler lightStageSampler(const Medium& medium, const DirectLightOptions& options)
 {
     Medium::Sampler sampler(medium);
-    sampler.snapCrossingsTo(options.boundary);
+    sampler.snapCrossingsTo(options.boundary, Medium::Sampler::MissedCrossings::Ignored);
     return sampler;
 }
 
@@ -232,7 +246,7 @@ void sweepLight(const LightSampler& light, const detail::SweepLattice& lattice, 
         // the medium where it meets it, and from there on through vacuum carries the depth the
         // sweep already holds (an earlier wavefront's), read kSweptReadOff voxels off the
         // surface; where the sweep has none there yet, marched from two voxels before the hit
-        // until kRimHandOff voxels from the surface, where the sweep's depth takes over as for
+        // until clear of the surface (clearOfSurface), where the sweep's depth takes over as for
         // the rim (these marches had run through the medium to the cutoff).
         const auto entering = [&](const openvdb::Coord& ijk, const detail::SweepLattice::SweptSoFar& swept) {
             openvdb::Vec3d from = ijk.asVec3d();
@@ -253,11 +267,11 @@ void sweepLight(const LightSampler& light, const detail::SweepLattice& lattice, 
             }
             if (spans) {
                 // Without meshes, through the lattice's leaves only (LatticeSpans). Without a
-                // surface either, handing off once kRimHandOff voxels of medium are marched, as a
-                // surface's marches do kRimHandOff voxels inside it (out of the smeared edge of
-                // the shadow the ray left; bench/accuracy's fog: the `direct` grid 3.18% off the
-                // marched one before, 3.22% so, 3.35% handing off at once; the light stage 12.5 →
-                // 7.9 s, 6.4 at once).
+                // surface either, handing off once kRimHandOff voxels of medium are marched (out
+                // of the smeared edge of the shadow the ray left, which a soft edge spreads over
+                // voxels; bench/accuracy's fog: the `direct` grid 3.18% off the marched one
+                // before, 3.22% so, 3.24% after one voxel, 3.35% handing off at once; the light
+                // stage 12.5 → 7.9 s, 6.4 at once).
                 int marchedInMedium = 0;
                 const MarchHandOff handOff =
                     surface ? sweptClearOfSurface(swept) : MarchHandOff([&](const openvdb::Vec3d& at, double, openvdb::Vec3f& rest) {
@@ -274,8 +288,8 @@ void sweepLight(const LightSampler& light, const detail::SweepLattice& lattice, 
         lattice.opticalDepthAlong(travel, tau, entering, float(depths.cutoff));
         addSweptSample(s, travel, lattice, tau, depths, rim, medium, options.occluders, phi, flux);
         // The rim along the directions grazing it: marched from the medium point toward the
-        // light until the ray lies kRimHandOff voxels from the surface (it left the medium, or
-        // went deep into it), and on from there with the sweep's depth. A ray leaving the
+        // light until the ray is clear of the surface (clearOfSurface: it left the medium, or
+        // went into it), and on from there with the sweep's depth. A ray leaving the
         // surface outward crosses vacuum up to the next of the medium's meshes ahead
         // (vacuumAhead): none, and the light arrives whole; else the march starts
         // kVacuumMargin voxels before it.
@@ -309,7 +323,7 @@ void sweepLight(const LightSampler& light, const detail::SweepLattice& lattice, 
 bool sweepableFromPoint(const Light& light) { return light.type == Light::Type::Point || light.type == Light::Type::Spot; }
 
 /// A point light's voxels within this many voxels of the surface (either side) are marched to
-/// the light (handing off to the sweep's depth once 2 voxels from the surface, kRimHandOff),
+/// the light (handing off to the sweep's depth once clear of the surface, clearOfSurface),
 /// the others swept (SweepLattice::opticalDepthFrom), their depth blended from voxels nearer the
 /// light. Near the surface the light falls steeply, and in a thick medium almost all of it is
 /// there: the thick bunny at dim 64 came out 6.1% off the reference swept whole, 3.9% marched.
@@ -325,7 +339,7 @@ constexpr float kVacuumSpread = 0.05f;
 /// medium point (Medium::Sampler::mediumPoint), as lightFluence gives it, the transmittance from
 /// one optical-depth sweep around the light (SweepLattice::opticalDepthFrom): voxels within
 /// kPointMarchedBand of the surface, and those the sweep cannot blend, marched to the light,
-/// handing the rest of the way to the sweep kRimHandOff voxels from the surface; the rim marched
+/// handing the rest of the way to the sweep once clear of the surface; the rim marched
 /// from its medium point the same way. Without a surface (a density grid's medium) every voxel
 /// the sweep can blend is swept. With @a flux, also the light's grey first moment per voxel.
 void sweepPointLight(const LightSampler& light, const detail::SweepLattice& lattice, const Medium& medium, const Rim& rim,
@@ -348,7 +362,7 @@ void sweepPointLight(const LightSampler& light, const detail::SweepLattice& latt
         if (!hit) return std::numeric_limits<double>::infinity();
         return (xform.worldToIndex(world + toLight * (hit->distance / length)) - fromIjk).length();
     };
-    // τ from @a from to the light, marched until kRimHandOff voxels from the surface and read
+    // τ from @a from to the light, marched until clear of the surface (clearOfSurface) and read
     // from what @a swept holds there on: inside the medium whatever it holds, outside only the
     // depths of marched voxels (or zeros) that agree to kVacuumSpread. The sweep smears the
     // shadows other parts of the medium cast across vacuum (τ is constant along a ray there, and
@@ -363,7 +377,7 @@ void sweepPointLight(const LightSampler& light, const detail::SweepLattice& latt
         bool askedMeshes = false;
         const MarchHandOff handOff = [&](const openvdb::Vec3d& at, double distance, openvdb::Vec3f& depth) {
             if (!surface) return swept.sample(at, depth);
-            if (std::abs(distance) < kRimHandOff) return false;
+            if (!clearOfSurface(distance)) return false;
             if (distance < 0.0) return swept.sample(at, depth);
             if (swept.sample(at, depth, true, kVacuumSpread)) return true;
             // Outside, where the sweep holds nothing to read (beyond the lattice, or across a

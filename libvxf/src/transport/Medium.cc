@@ -251,7 +251,7 @@ double Medium::Sampler::snapCrossing(
 bool Medium::Sampler::boundaryHit(
     const openvdb::Vec3d& origin, const openvdb::Vec3d& direction, double lo, double hi, double& t, bool& entering) const
 {
-    if (!mBoundary || !(hi > lo)) return false;
+    if (!mBoundary || !mFindMissed || !(hi > lo)) return false;
     const openvdb::math::Transform& xform = mMedium.transform();
     const openvdb::Vec3d p = xform.indexToWorld(origin + direction * lo);
     openvdb::Vec3d d = xform.indexToWorld(origin + direction * (lo + 1.0)) - p;

@@ -31,14 +31,14 @@ struct DirectLightOptions
     /// brings the depth it had where it left the medium upwind (other parts of the medium
     /// shadow across vacuum: the sweep's own depth there, or a march); the rim (centres outside
     /// the surface, whose light is taken at the surface) is marched along the directions that
-    /// graze the surface there (DirectLight.cc: kRimSweptCosine) until clear of the surface,
-    /// and takes the sweep's depth beyond (kRimHandOff); one leaving the surface outward
-    /// crosses the vacuum to the next of the medium's meshes in one go (kVacuumSkipped).
+    /// graze the surface there (LightSweeps.h: kRimSweptCosine) until clear of the surface,
+    /// and takes the sweep's depth beyond (LightSweeps.cc: clearOfSurface); one leaving the surface outward
+    /// crosses the vacuum to the next of the medium's meshes in one go (kVacuumMargin).
     /// Point and spot lights by one sweep around the light (SweepLattice::opticalDepthFrom, a
     /// short characteristic per voxel toward the light): the voxels within 3 of the surface are
     /// marched (swept whole, the thick bunny at dim 64 came out 6.1% off the reference against
     /// 3.9% marched: the light falls steeply there, over the surface's curvature), handing the
-    /// rest of the way to the sweep 2 voxels from the surface (past a shadow's edge in vacuum,
+    /// rest of the way to the sweep a voxel inside the surface or 2 outside it (past a shadow's edge in vacuum,
     /// to the next mesh ahead in one go); the deeper ones blended from them. Area lights (many
     /// points) are marched either way.
     /// Off: every light marched (the reference). The bunny at dim 256 with a point light and a
@@ -52,7 +52,8 @@ struct DirectLightOptions
     /// Meshes that block the light entirely (the scene's occluders); null: none.
     const RayScene* occluders = nullptr;
     /// The meshes the medium's level set was made from: shadow rays take their crossings of
-    /// the surface there (Medium::Sampler::snapCrossingsTo); null: on the level set.
+    /// the surface there (Medium::Sampler::snapCrossingsTo, missed crossings ignored), and
+    /// cross the vacuum up to them in one go; null: on the level set.
     const RayScene* boundary = nullptr;
 };
 
