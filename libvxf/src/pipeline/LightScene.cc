@@ -5,6 +5,7 @@
 #include <vxf/pipeline/SceneMedium.h>
 
 #include <fmt/format.h>
+#include <tbb/task_group.h>
 
 namespace vxf {
 
@@ -17,11 +18,18 @@ DirectLightReport lightScene(VoxelSet& set, const Scene& scene, DirectLightOptio
                                      "voxelize them together (vxf run, or the graph's voxelize with this scene)",
             scene.path, mediaCount(scene)));
     }
+    // The meshes are read and their ray scenes built (mostly on one thread) while the medium
+    // makes its dense copies (in parallel): the thick bunny at dim 256, 0.12 and 0.07 s.
+    RayScene occluders, boundary;
+    tbb::task_group meshes;
+    meshes.run([&] {
+        occluders = sceneGeometry(scene, SceneObject::Role::Occluder);
+        boundary = sceneGeometry(scene, SceneObject::Role::Medium);
+    });
     const Medium transport(set, material);
+    meshes.wait();
     const Medium medium = options.similarity ? transport.isotropic() : transport;
-    const RayScene occluders = sceneGeometry(scene, SceneObject::Role::Occluder);
     options.occluders = occluders.empty() ? nullptr : &occluders;
-    const RayScene boundary = sceneGeometry(scene, SceneObject::Role::Medium);
     options.boundary = boundary.empty() ? nullptr : &boundary;
     DirectLightReport report = computeDirectLight(set, medium, scene.lights, options, interrupter);
     recordMaterial(set, material);
