@@ -35,7 +35,7 @@ struct DirectLightOptions
     /// and takes the sweep's depth beyond (LightSweeps.cc: clearOfSurface); one leaving the surface outward
     /// crosses the vacuum to the next of the medium's meshes in one go (kVacuumMargin).
     /// Point and spot lights by one sweep around the light (SweepLattice::opticalDepthFrom, a
-    /// short characteristic per voxel toward the light): the voxels within 3 of the surface are
+    /// short characteristic per voxel toward the light): the voxels within 3 inside the surface (2 outside) are
     /// marched (swept whole, the thick bunny at dim 64 came out 6.1% off the reference against
     /// 3.9% marched: the light falls steeply there, over the surface's curvature), handing the
     /// rest of the way to the sweep a voxel inside the surface or 2 outside it (past a shadow's edge in vacuum,
