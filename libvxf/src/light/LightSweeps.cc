@@ -333,8 +333,9 @@ static_assert(kPointMarchedBand < detail::SweepLattice::kDistanceHeld, "the latt
 /// what the medium reads of the light (a point inside the surface interpolates voxels within √3
 /// of it); a march that left the surface and finds the voxels it would read not all marched asks
 /// the meshes once what lies ahead. Beyond the band the sweep's blend smears the edges of
-/// shadows cast across vacuum, as it did beyond 3 voxels. bench/accuracy/probe's thick bunny the same to its digits (4.488 / 3.720
-/// / 3.839%), the light stage at dim 256 5.73 → 5.57 CPU s (docs/accuracy-notes.md (ao)).
+/// shadows cast across vacuum, as it did beyond 3 voxels. bench/accuracy/probe's thick bunny
+/// the same to its digits (4.488 / 3.720 / 3.839%), the light stage at dim 256 5.73 → 5.53 CPU s
+/// (docs/accuracy-notes.md (ao)).
 constexpr double kPointMarchedOutside = 2.0;
 
 /// Whether a point light marches a voxel at signed distance @a distance (voxels) from the surface.
@@ -348,10 +349,11 @@ constexpr float kVacuumSpread = 0.05f;
 /// The fluence of a point or spot light at every voxel of @a lattice (per voxel), at its
 /// medium point (Medium::Sampler::mediumPoint), as lightFluence gives it, the transmittance from
 /// one optical-depth sweep around the light (SweepLattice::opticalDepthFrom): voxels within
-/// kPointMarchedBand inside the surface and kPointMarchedOutside outside it, and those the sweep cannot blend, marched to the light,
-/// handing the rest of the way to the sweep once clear of the surface; the rim marched
-/// from its medium point the same way. Without a surface (a density grid's medium) every voxel
-/// the sweep can blend is swept. With @a flux, also the light's grey first moment per voxel.
+/// kPointMarchedBand inside the surface and kPointMarchedOutside outside it, and those the sweep
+/// cannot blend, marched to the light, handing the rest of the way to the sweep once clear of
+/// the surface; the rim marched from its medium point the same way. Without a surface (a
+/// density grid's medium) every voxel the sweep can blend is swept. With @a flux, also the
+/// light's grey first moment per voxel.
 void sweepPointLight(const LightSampler& light, const detail::SweepLattice& lattice, const Medium& medium, const Rim& rim,
     const LatticeSpans* leaves, const DirectLightOptions& options, LeafBlocks<openvdb::Vec3f>& phi, LeafBlocks<openvdb::Vec3f>* flux)
 {

@@ -31,18 +31,19 @@ struct DirectLightOptions
     /// brings the depth it had where it left the medium upwind (other parts of the medium
     /// shadow across vacuum: the sweep's own depth there, or a march); the rim (centres outside
     /// the surface, whose light is taken at the surface) is marched along the directions that
-    /// graze the surface there (LightSweeps.h: kRimSweptCosine) until clear of the surface,
-    /// and takes the sweep's depth beyond (LightSweeps.cc: clearOfSurface); one leaving the surface outward
-    /// crosses the vacuum to the next of the medium's meshes in one go (kVacuumMargin).
+    /// graze the surface there (LightSweeps.h: kRimSweptCosine) until clear of the surface (a
+    /// voxel inside it, two outside: LightSweeps.cc, clearOfSurface), and takes the sweep's depth
+    /// beyond; one leaving the surface outward crosses the vacuum to the next of the medium's
+    /// meshes in one go (kVacuumMargin).
     /// Point and spot lights by one sweep around the light (SweepLattice::opticalDepthFrom, a
-    /// short characteristic per voxel toward the light): the voxels within 3 inside the surface (2 outside) are
-    /// marched (swept whole, the thick bunny at dim 64 came out 6.1% off the reference against
-    /// 3.9% marched: the light falls steeply there, over the surface's curvature), handing the
-    /// rest of the way to the sweep a voxel inside the surface or 2 outside it (past a shadow's edge in vacuum,
-    /// to the next mesh ahead in one go); the deeper ones blended from them. Area lights (many
-    /// points) are marched either way.
-    /// Off: every light marched (the reference). The bunny at dim 256 with a point light and a
-    /// 16-direction sky, steps of a voxel: 78 s marched, 5.1 s swept (docs/reports/performance.md).
+    /// short characteristic per voxel toward the light): the voxels within 3 inside the surface
+    /// (2 outside it) are marched (swept whole, the thick bunny at dim 64 came out 6.1% off the
+    /// reference against 3.9% marched: the light falls steeply there, over the surface's
+    /// curvature), handing the rest of the way to the sweep once clear of the surface (past a
+    /// shadow's edge in vacuum, to the next mesh ahead in one go); the deeper ones blended from
+    /// them. Area lights (many points) are marched either way.
+    /// Off: every light marched (the reference; docs/reports/performance.md times both on the
+    /// bunny with a point light and a 16-direction sky: about 20x at dim 256).
     bool sweep = true;
     /// Light the similarity relation's isotropic medium (Medium::isotropic()) rather than the
     /// transport's: for a scatter that will carry no angular moment (the gather kernel, plain
