@@ -87,8 +87,9 @@ constexpr double kSweptReadBack = 4.0, kSweptReadOff = 1.0;
 /// inside it): out of the smeared terminator, where the sweep is as right as anywhere. The
 /// accuracy bench's translucent bunny (dim 64): 1.707% with every grazing direction marched
 /// whole, 1.707% handing off from 2 voxels, 1.709% from 1; the sky of 64 directions at dim 256:
-/// the rim's light within 0.58% (L1) of the whole marches at 2 voxels, 1.1% at 1 (most of it
-/// the outside's); 21.3 → 18.9 s (17.6 s at 1).
+/// the rim's light within 0.58% (L1) of the whole marches at 2 voxels, 1.1% at 1, and within
+/// 0.006% handing off at 2 voxels inside only: the error is the outside's (accuracy-notes (n));
+/// 21.3 → 18.9 s (17.6 s at 1).
 constexpr double kRimHandOff = 2.0;
 /// Inside the surface a march hands off a voxel deep: the sweep's depth a voxel under the
 /// surface is as right as two voxels under it, and a grazing ray reaches it in half the steps
