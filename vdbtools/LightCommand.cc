@@ -83,7 +83,7 @@ private:
 
     /// The input set where the scene's medium lies. A volume object's own file is placed as
     /// vxf run places it (moved by the object's transform, its voxels where their writer puts
-    /// them: io/VoxelPlacement.h); a set vxf run voxelized from the
+    /// them: io/VoxelPlacement.h; coarsened when the scene's `voxelize` asks); a set vxf run voxelized from the
     /// scene already is; any other set is lit where its file places it, with a warning when the
     /// scene's medium has a transform that therefore does not apply.
     VoxelSet placedInput(const Scene& scene, Interrupter* interrupter) const
@@ -93,14 +93,19 @@ private:
             if (o.role == SceneObject::Role::Medium && o.objectToWorld != openvdb::Mat4d::identity()) moved = &o;
         }
         std::error_code error;
+        // The voxel size or dim the scene asks of its volume object (0: its own voxels).
+        VoxelizeOptions solve;
+        solve.voxelSize = scene.settings.voxelSize;
+        solve.dim = solve.voxelSize > 0.0 ? 0 : scene.settings.dim;
         if (moved && moved->isVolume() && std::filesystem::equivalent(moved->volume, mInput, error)) {
-            return voxelizeMedia(scene, VoxelizeOptions{}, interrupter); // reads the file once, placed
+            return voxelizeMedia(scene, solve, interrupter); // reads the file once, placed
         }
         VoxelSet set = readVoxelSet(mInput);
         for (const SceneObject& o : scene.objects) {
             if (o.isVolume() && std::filesystem::equivalent(o.volume, mInput, error) &&
-                resolvePlacement(o.placement, o.volume, set.metadata()).placement == VoxelPlacement::Cell) {
-                return voxelizeMedia(scene, VoxelizeOptions{}, interrupter); // its voxels moved half a voxel, as vxf run places them
+                (resolvePlacement(o.placement, o.volume, set.metadata()).placement == VoxelPlacement::Cell || solve.dim > 0 ||
+                    solve.voxelSize > 0.0)) {
+                return voxelizeMedia(scene, solve, interrupter); // placed (and coarsened) as vxf run does
             }
         }
         if (!moved) return set;

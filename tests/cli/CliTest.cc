@@ -823,6 +823,23 @@ TEST_CASE("vxf run lights and renders a fog volume made by vdb_tool (a volume ob
     exr.readPixels(window.min.y, window.max.y);
     CHECK(alpha[12 * 32 + 16] == Approx(1.0 - std::exp(-4.0)).epsilon(0.05));
     CHECK(alpha[0] == 0.0f);
+
+    // Asked for half its voxels: solved on them coarsened 2x (said so), the medium's mass kept, so
+    // the chord through its middle is as opaque.
+    std::string scene = vxf::test::slurp(dir.path("fog.json"));
+    scene.insert(scene.find("\"scatter\""), R"("voxelize": {"dim": 16}, )");
+    vxf::test::spit(dir.path("fog.json"), scene);
+    const auto coarse = run(fmt::format("{} run {} --out {}", binary("vxf"), dir.path("fog.json"), dir.path("coarse")));
+    INFO(coarse.out << coarse.err);
+    REQUIRE(coarse.status == 0);
+    CHECK_THAT(coarse.out, Catch::Contains("'fog' solved at voxel size") && Catch::Contains("coarsened 2x"));
+    const vxf::VoxelSet halved = vxf::readVoxelSet(cachedStage(dir.path("coarse/cache"), "voxelize-"));
+    CHECK(halved.transform().voxelSize()[0] == Approx(2.0 * voxels.transform().voxelSize()[0]));
+    Imf::InputFile coarseExr(dir.path("coarse/fog.exr").c_str());
+    coarseExr.setFrameBuffer(frame);
+    coarseExr.readPixels(window.min.y, window.max.y);
+    CHECK(alpha[12 * 32 + 16] == Approx(1.0 - std::exp(-4.0)).epsilon(0.05));
+    CHECK(alpha[0] == 0.0f);
 }
 
 TEST_CASE(
@@ -908,6 +925,21 @@ TEST_CASE("vxf light places a volume object's own file by the object's transform
     const vxf::VoxelSet set = vxf::readVoxelSet(dir.path("lit.vdb"));
     const openvdb::CoordBBox box = set.get<openvdb::Vec3SGrid>("direct")->evalActiveVoxelBoundingBox();
     CHECK(set.transform().indexToWorld(box.getCenter()).x() == Approx(2.0).margin(0.1)); // where the scene puts it
+    CHECK(set.transform().voxelSize()[0] == Approx(1.0 / 16.0));
+
+    // The scene's voxelize asks for half its voxels: lit on them, moved or not, as vxf run would.
+    const std::string moved = R"("transform": {"translate": [2, 0, 0]},)";
+    for (const std::string& transform : {moved, std::string()}) {
+        std::string scene = vxf::test::slurp(dir.path("smoke.json"));
+        scene.replace(scene.find(moved), moved.size(), transform);
+        scene.insert(scene.rfind('}'), R"(, "voxelize": {"dim": 8})");
+        vxf::test::spit(dir.path("half.json"), scene);
+        const auto half = run(fmt::format("{} light {} --scene {} -o {} -q", binary("vxf"), quoted(dir.path("smoke.vdb")),
+            quoted(dir.path("half.json")), quoted(dir.path("half.vdb"))));
+        INFO(scene << half.err);
+        REQUIRE(half.status == 0);
+        CHECK(vxf::readVoxelSet(dir.path("half.vdb")).transform().voxelSize()[0] == Approx(1.0 / 8.0));
+    }
 
     // A mesh medium voxelized on its own: lit where it lies, with a word about the transform.
     REQUIRE(run(fmt::format("{} voxelize builtin:sphere -o {} --dim 12 -q", binary("vxf"), quoted(dir.path("ball.vdb")))).status == 0);

@@ -4,10 +4,14 @@
 #include <vxf/core/Error.h>
 #include <vxf/pipeline/SceneFile.h>
 
+#include "TestSupport.h"
 #include "pipeline/QualityPreset.h"
 
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
+#include <openvdb/io/File.h>
+#include <openvdb/tools/LevelSetSphere.h>
+#include <openvdb/tools/LevelSetUtil.h>
 
 #include <algorithm>
 #include <optional>
@@ -58,7 +62,7 @@ TEST_CASE("quality: the levels name errors, other names are refused", "[quality]
 TEST_CASE("quality: the bench's table is whole (every scene a frontier of time against error)", "[quality]")
 {
     const json& scenes = vxf::detail::qualityTable().at("scenes");
-    for (const char* name : {"thick", "translucent", "smoke", "smoke_isotropic"}) {
+    for (const char* name : {"thick", "translucent", "smoke", "smoke_isotropic", "fog"}) {
         INFO(name);
         const json& rows = scenes.at(name).at("settings");
         REQUIRE(!rows.empty());
@@ -145,4 +149,31 @@ TEST_CASE("quality: an error no setting reached takes the most accurate and says
     CHECK(overridden.settings.quality->error == expectedRow("thick", 0.10).at("error").get<double>());
     // No quality asked: the defaults, nothing chosen.
     CHECK(!parse(sphereScene(0.99, 50)).settings.quality);
+}
+
+TEST_CASE("quality: a volume object takes the bench volume's coarsening, scaled by its optical size", "[quality][volume]")
+{
+    // A fog sphere 2 across on voxels of 0.02 (100 across), albedo 0.9, isotropic: the fog's table.
+    vxf::test::TempDir dir;
+    auto fog = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(1.0f, openvdb::Vec3f(0.0f), 0.02f);
+    openvdb::tools::sdfToFogVolume(*fog);
+    fog->setName("density");
+    openvdb::io::File(dir.path("fog.vdb")).write({fog});
+    const auto volumeScene = [&](double opticalSize, double error) {
+        const json scene = {{"objects", {{{"volume", "fog.vdb"}, {"material", {{"albedo", 0.9}, {"mean_free_path", 2.0 / opticalSize}}}}}},
+            {"lights", {{{"type", "directional"}, {"direction", {0, 0, -1}}}}},
+            {"camera", {{"position", {0, -5, 0}}, {"look_at", {0, 0, 0}}}}, {"quality", {{"error", error}}}};
+        return vxf::parseScene(scene.dump(), dir.path("fog.json"));
+    };
+    for (const double error : {0.10, 0.05, 0.02}) {
+        INFO("error " << error);
+        const int asked = expectedRow("fog", error).at("knobs").value("volume_dim", 0);
+        // Optically smaller than the bench's fog (40 mean free paths against 50): its volume_dim as
+        // it is (0: its own voxels).
+        const vxf::Scene scene = volumeScene(40.0, error);
+        CHECK(scene.settings.quality->benchScene == "fog");
+        CHECK(scene.settings.dim == asked);
+        // Ten times the bench's optical size: ten times the voxels, so each is as many mean free paths.
+        if (asked > 0) CHECK(volumeScene(500.0, error).settings.dim == Approx(std::min(10 * asked, 1024)).epsilon(0.03));
+    }
 }

@@ -10,6 +10,10 @@
 #include <openvdb/tools/LevelSetSphere.h>
 #include <openvdb/tools/LevelSetUtil.h>
 
+#include <cmath>
+#include <string>
+#include <tuple>
+
 namespace {
 
 vxf::Scene twoSpheres(const std::string& second)
@@ -133,8 +137,7 @@ TEST_CASE("a volume object's grid is the medium, on its own voxels, level sets a
             dir.path("scene.json"));
     };
     const std::string material = R"("material": {"sigma_a": [1, 1, 1], "sigma_s": [2, 2, 2]})";
-    vxf::VoxelizeOptions options;
-    options.dim = 16; // (does not apply: the grid's own voxels)
+    const vxf::VoxelizeOptions options; // no voxel size or dim: the grid's own voxels
 
     const vxf::VoxelSet set = vxf::voxelizeMedia(scene(R"({"volume": "smoke.vdb", )" + material + "}"), options);
     CHECK_FALSE(set.find("surface"));
@@ -177,4 +180,57 @@ TEST_CASE("a volume object's grid is the medium, on its own voxels, level sets a
     CHECK_THAT(refused(R"({"volume": "nothing.vdb", )" + material + "}"), Catch::Contains("nothing.vdb"));
     CHECK_THAT(refused(R"({"volume": "smoke.vdb", )" + material + R"(}, {"mesh": "builtin:sphere", )" + material + "}"),
         Catch::Contains("only medium"));
+}
+
+TEST_CASE(
+    "a volume object asked for a voxel size or dim is coarsened by halvings, its mass kept, never refined", "[scene][voxelize][volume]")
+{
+    // A fog sphere of radius 1 on voxels of 0.05 (about 40 across), off the origin.
+    vxf::test::TempDir dir;
+    auto fog = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(1.0f, openvdb::Vec3f(0.3f, -0.2f, 0.1f), 0.05f);
+    openvdb::tools::sdfToFogVolume(*fog);
+    fog->setName("density");
+    openvdb::io::File(dir.path("smoke.vdb")).write({fog});
+    const vxf::Scene scene = vxf::parseScene(R"({"objects": [{"volume": "smoke.vdb",
+          "material": {"sigma_a": [1, 1, 1], "sigma_s": [2, 2, 2]}}], "lights": [],
+          "camera": {"position": [0, -5, 0], "look_at": [0, 0, 0]}})",
+        dir.path("scene.json"));
+    CHECK(scene.settings.dim == 0); // no default dim applies to a volume
+    const auto moments = [](const openvdb::FloatGrid& g) { // mass Σ density·dx³ and its centroid
+        double mass = 0.0;
+        openvdb::Vec3d moment(0.0);
+        const double cell = std::pow(g.voxelSize()[0], 3);
+        for (auto it = g.cbeginValueOn(); it; ++it) {
+            const double m = double(*it) * cell * double(it.getVoxelCount());
+            mass += m;
+            moment += m * g.indexToWorld(it.getBoundingBox().getCenter());
+        }
+        return std::pair{mass, moment / mass};
+    };
+    const auto [mass, centroid] = moments(*fog);
+    CHECK(mass == Approx(4.0 / 3.0 * M_PI * std::pow(0.925, 3)).epsilon(0.02)); // its fog ramps to 1 over 3 voxels inside
+
+    const auto solved = [&](double voxelSize, int dim, std::string* note) {
+        vxf::VoxelizeOptions options;
+        options.voxelSize = voxelSize;
+        options.dim = dim;
+        return vxf::voxelizeMedia(scene, options, nullptr, note).get<openvdb::FloatGrid>("density");
+    };
+    std::string note;
+    for (const auto& [voxelSize, dim, expected] : {std::tuple{0.1, 0, 0.1}, {0.0, 20, 0.1}, {0.0, 12, 0.2}, {0.17, 0, 0.2}}) {
+        INFO("voxel_size " << voxelSize << ", dim " << dim);
+        const auto coarse = solved(voxelSize, dim, &note);
+        CHECK(coarse->voxelSize()[0] == Approx(expected));
+        CHECK(coarse->getGridClass() == openvdb::GRID_FOG_VOLUME);
+        const auto [m, c] = moments(*coarse);
+        CHECK(m == Approx(mass).epsilon(1e-4)); // full weighting keeps the mass
+        CHECK((c - centroid).length() < 1e-3 * expected); // and where it is
+        CHECK(openvdb::tools::BoxSampler::sample(coarse->tree(), coarse->worldToIndex({0.3, -0.2, 0.1})) == Approx(1.0f));
+        CHECK_THAT(note, Catch::Contains("coarsened " + std::to_string(int(std::lround(expected / 0.05))) + "x"));
+    }
+    // Asked finer than (or about) its own: its own voxels, and the note says a volume is not refined.
+    const auto own = solved(0.03, 0, &note);
+    CHECK(own->voxelSize()[0] == Approx(0.05));
+    CHECK(own->activeVoxelCount() == fog->activeVoxelCount());
+    CHECK_THAT(note, Catch::Contains("never refined"));
 }

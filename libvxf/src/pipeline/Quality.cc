@@ -118,14 +118,17 @@ QualityChoice applyQuality(const QualityRequest& request, const QualityMedium& m
         }
         field = knobs[name].get<std::decay_t<decltype(field)>>();
     };
-    if (!medium.volume && knobs.contains("dim")) {
+    // A mesh's voxels (dim), or a volume's own coarsened to about volume_dim along the bench
+    // volume's longest side (0: its own voxels; never refined: SceneMedium.h).
+    const char* dimKnob = medium.volume ? "volume_dim" : "dim";
+    if (knobs.contains(dimKnob) && knobs[dimKnob].get<int>() > 0) {
         if (sets(document, "voxelize", "dim") || sets(document, "voxelize", "voxel_size")) {
             choice.kept.push_back(sets(document, "voxelize", "dim") ? "/voxelize/dim" : "/voxelize/voxel_size");
         } else {
             // The bench's voxels per mean free path kept in a medium optically larger than its
             // scene's (the error follows the voxel's size in mean free paths); never fewer voxels
             // than the bench's (the silhouette's error follows those).
-            const int dim = knobs["dim"].get<int>();
+            const int dim = knobs[dimKnob].get<int>();
             const double scale = medium.opticalSize / bench.at("optical_size").get<double>();
             s.dim = scale > 1.0 ? int(std::min(std::ceil(dim * scale), double(kMaxQualityDim))) : dim;
             s.voxelSize = 0.0;

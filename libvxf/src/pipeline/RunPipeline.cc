@@ -195,6 +195,7 @@ struct PipelineRun
         const std::string voxelHash = hashOf(voxelInputs);
         const fs::path voxelFile = cache / ("voxelize-" + voxelHash + ".vdb");
         VoxelSet set;
+        std::string note; // what was done to a volume object's voxels
         if (inCache(voxelFile, lock, interrupter)) {
             record("voxelize", "reused", "mesh and voxel settings unchanged", voxelFile, 0.0);
         } else {
@@ -203,11 +204,11 @@ struct PipelineRun
                 options.voxelSize = s.voxelSize;
                 options.dim = s.voxelSize > 0.0 ? 0 : s.dim;
                 options.bandWidth = float(s.band);
-                set = voxelizeMedia(scene, options, interrupter);
+                set = voxelizeMedia(scene, options, interrupter, &note);
                 set.setProvenance("voxelize", voxelInputs.dump());
                 writeVoxelSet(voxelFile.string(), set);
             });
-            record("voxelize", "ran", "no cached voxel set for these inputs", voxelFile, seconds);
+            record("voxelize", "ran", "no cached voxel set for these inputs" + (note.empty() ? "" : "; " + note), voxelFile, seconds);
         }
         lock.reset();
         return {voxelFile, voxelHash, std::move(set)};

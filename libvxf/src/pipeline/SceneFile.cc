@@ -4,6 +4,7 @@
 #include "SceneAnimation.h"
 
 #include <vxf/pipeline/SceneGeometry.h>
+#include <vxf/pipeline/SceneMedium.h>
 
 #include <vxf/io/InputFile.h>
 #include <vxf/scatter/ScatterPass.h>
@@ -233,6 +234,9 @@ SceneSettings readSettings(
     const json& document, const SceneReader& reader, const detail::QualityMedium& medium, std::optional<QualityRequest> quality)
 {
     SceneSettings s;
+    // A volume object is solved on its own voxels unless the scene (or its quality) asks for a
+    // voxel size or dim (then coarsened by halvings: SceneMedium.h): no default dim applies to it.
+    if (medium.volume) s.dim = 0;
     const double phaseG = medium.phaseG;
     const bool anisotropic = phaseG != 0.0;
     // An anisotropic phase shows in single scattering marched to the lights; the direct grid's is isotropic.
@@ -281,14 +285,22 @@ SceneSettings readSettings(
     return s;
 }
 
-/// A mesh medium's size in mean free paths (for `quality`): the longest side of its media's joint
-/// bounds × σt (the mean of @a first's channels). Reads the meshes (objectMesh keeps them for the
-/// voxelize stage).
+/// A medium's size in mean free paths (for `quality`): the longest side of its media's joint
+/// bounds × σt (the mean of @a first's channels; a volume's at density 1). Reads the meshes
+/// (objectMesh keeps them for the voxelize stage), or a volume object's grid (volumeBounds; 0
+/// when it cannot be read).
 double opticalSize(const Scene& scene, const SceneObject& first)
 {
     openvdb::BBoxd bounds;
     for (const SceneObject& o : scene.objects) {
         if (o.role == SceneObject::Role::Medium && !o.isVolume()) bounds.expand(objectMesh(o).bounds());
+    }
+    if (first.isVolume()) {
+        try {
+            bounds = volumeBounds(first);
+        } catch (const Error&) {
+            return 0.0; // unknown: the voxelize stage reports the file's error when it reads it
+        }
     }
     const openvdb::Vec3d sigmaT = first.material->sigmaT();
     const openvdb::Vec3d extent = bounds.extents();
@@ -411,7 +423,7 @@ Scene parseScene(const std::string& text, const std::string& path, std::optional
     if (firstMedium) {
         const openvdb::Vec3d albedo = firstMedium->material->albedo();
         medium = {firstMedium->isVolume(), (albedo[0] + albedo[1] + albedo[2]) / 3.0, firstMedium->material->phaseG, 0.0};
-        if (!medium.volume && (quality || document.contains("quality"))) medium.opticalSize = opticalSize(scene, *firstMedium);
+        if (quality || document.contains("quality")) medium.opticalSize = opticalSize(scene, *firstMedium);
     }
     scene.settings = readSettings(document, reader, medium, quality);
     // The environment lights' samples the quality's setting names, where a light sets none.

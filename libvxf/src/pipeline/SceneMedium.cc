@@ -7,6 +7,8 @@
 
 #include <openvdb/tools/Composite.h>
 #include <openvdb/tools/GridTransformer.h>
+#include <openvdb/tools/MultiResGrid.h>
+#include <openvdb/tools/Prune.h>
 
 #include <fmt/format.h>
 
@@ -68,11 +70,38 @@ void attachMaterialGrids(VoxelSet& set, const Material& material)
 
 namespace {
 
+/// How many halvings of a volume's voxels (@a dx wide, @a widest along its longest side) @a options
+/// ask for: the power of two nearest the asked voxel size (voxel_size, or the longest side over
+/// dim), never finer than the grid's own and never below two voxels across.
+int volumeHalvings(const VoxelizeOptions& options, double dx, int widest)
+{
+    const double ratio = options.voxelSize > 0.0 ? options.voxelSize / dx : options.dim > 0 ? double(widest) / options.dim : 1.0;
+    if (!(ratio > 1.0)) return 0;
+    const int most = std::max(0, int(std::floor(std::log2(std::max(widest, 1)))) - 1);
+    return std::min(int(std::lround(std::log2(ratio))), most);
+}
+
+/// @a density coarsened @a halvings times by OpenVDB's MultiResGrid (full-weighting restriction:
+/// each coarse voxel the tent-weighted mean of the 3³ fine ones around it, so the medium's mass,
+/// Σ density·dx³, is kept), on the transform whose voxel 0 is the fine voxel 0 and whose voxels are
+/// 2^halvings as wide. Its tree is taken (@a density is left empty); uniform regions become tiles.
+openvdb::FloatGrid::Ptr coarsened(openvdb::FloatGrid::Ptr density, int halvings)
+{
+    openvdb::math::Transform::Ptr transform = density->transform().copy();
+    transform->preScale(double(1 << halvings));
+    openvdb::tools::MultiResGrid<openvdb::FloatTree> pyramid(std::size_t(halvings) + 1, density);
+    auto coarse = openvdb::FloatGrid::create(pyramid.treePtr(std::size_t(halvings)));
+    coarse->setTransform(transform);
+    openvdb::tools::prune(coarse->tree());
+    return coarse;
+}
+
 /// A volume object's medium: its grid as `density`, on its own voxels moved by the object's
 /// transform (resampled trilinearly onto axis-aligned cubic voxels of the same volume when
 /// that turns or stretches them), negative values (simulations leave some after advection)
-/// clamped to 0, without a `surface`. Throws vxf::InputError naming the file and grid.
-VoxelSet volumeMedium(const SceneObject& object)
+/// clamped to 0, without a `surface`; coarsened by halvings (coarsened()) when @a options ask for
+/// a voxel size or dim, and @a note then says so. Throws vxf::InputError naming the file and grid.
+VoxelSet volumeMedium(const SceneObject& object, const VoxelizeOptions& options, std::string* note)
 {
     const VoxelSet file = readGrids(object.volume, {object.grid}); // not the file's other grids (velocities)
     const auto fail = [&](const std::string& what) { throw InputError(object.volume, 0, 0, what); };
@@ -119,6 +148,22 @@ VoxelSet volumeMedium(const SceneObject& object)
         openvdb::tools::resampleToMatch<openvdb::tools::BoxSampler>(*density, *target);
         density = target;
     }
+    const openvdb::CoordBBox box = density->evalActiveVoxelBoundingBox();
+    const int widest = box.empty() ? 0 : std::max({box.dim().x(), box.dim().y(), box.dim().z()});
+    const double dx = density->voxelSize()[0];
+    if (const int halvings = volumeHalvings(options, dx, widest); halvings > 0) {
+        density = coarsened(density, halvings);
+        if (note) {
+            *note = fmt::format("'{}' solved at voxel size {:.4g}, its own {:.4g} coarsened {}x ({} voxels along its longest "
+                                "side, {} asked)",
+                object.name, dx * (1 << halvings), dx, 1 << halvings, (widest + (1 << halvings) - 1) >> halvings,
+                options.voxelSize > 0.0 ? fmt::format("voxel size {:.4g}", options.voxelSize) : fmt::format("dim {}", options.dim));
+        }
+    } else if (note && (options.dim > 0 || options.voxelSize > 0.0)) {
+        *note = fmt::format("'{}' solved on its own voxels ({:.4g} wide, {} along its longest side): a volume is coarsened by "
+                            "halvings, never refined",
+            object.name, dx, widest);
+    }
     density->setName(grids::kDensity);
     density->setGridClass(openvdb::GRID_FOG_VOLUME);
     VoxelSet set(density->transformPtr());
@@ -128,7 +173,15 @@ VoxelSet volumeMedium(const SceneObject& object)
 
 } // namespace
 
-VoxelSet voxelizeMedia(const Scene& scene, const VoxelizeOptions& options, Interrupter* interrupter)
+openvdb::BBoxd volumeBounds(const SceneObject& object)
+{
+    const VoxelSet set = volumeMedium(object, VoxelizeOptions{}, nullptr);
+    const auto density = set.get<openvdb::FloatGrid>(grids::kDensity);
+    const openvdb::CoordBBox box = density->evalActiveVoxelBoundingBox();
+    return box.empty() ? openvdb::BBoxd() : density->transform().indexToWorld(box);
+}
+
+VoxelSet voxelizeMedia(const Scene& scene, const VoxelizeOptions& options, Interrupter* interrupter, std::string* note)
 {
     std::vector<const SceneObject*> media;
     for (const auto& o : scene.objects) {
@@ -142,7 +195,7 @@ VoxelSet voxelizeMedia(const Scene& scene, const VoxelizeOptions& options, Inter
         }
     }
     if (media.size() == 1 && media.front()->isVolume()) {
-        VoxelSet set = volumeMedium(*media.front());
+        VoxelSet set = volumeMedium(*media.front(), options, note);
         attachMaterialGrids(set, *media.front()->material);
         return set;
     }
