@@ -80,7 +80,12 @@ def recorded_ops(page):
 def wait_status(page, prefix):
     """Waits for the status line to start with prefix and returns it, then blanks it: the next wait
     needs a status its own action wrote, not one left from the action before."""
-    page.wait_for_function(f"document.querySelector('#status').textContent.startsWith({json.dumps(prefix)})", timeout=30000)
+    # 90 s: a render under a loaded CI machine once took longer than 30 (2026-12-07, beside the farm test).
+    try:
+        page.wait_for_function(f"document.querySelector('#status').textContent.startsWith({json.dumps(prefix)})", timeout=90000)
+    except Exception:
+        status = page.evaluate("document.querySelector('#status').textContent")
+        sys.exit(f"view_test: waited 90 s for a status starting '{prefix}'; the status line says: {status!r}")
     return page.evaluate("(() => { const s = document.querySelector('#status'); const t = s.textContent; s.textContent = ''; return t; })()")
 
 
