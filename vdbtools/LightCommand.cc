@@ -93,20 +93,17 @@ private:
             if (o.role == SceneObject::Role::Medium && o.objectToWorld != openvdb::Mat4d::identity()) moved = &o;
         }
         std::error_code error;
-        // The voxel size or dim the scene asks of its volume object (0: its own voxels).
-        VoxelizeOptions solve;
-        solve.voxelSize = scene.settings.voxelSize;
-        solve.dim = solve.voxelSize > 0.0 ? 0 : scene.settings.dim;
-        if (moved && moved->isVolume() && std::filesystem::equivalent(moved->volume, mInput, error)) {
-            return voxelizeMedia(scene, solve, interrupter); // reads the file once, placed
-        }
-        VoxelSet set = readVoxelSet(mInput);
+        const SceneObject* volume = nullptr; // the scene's volume object whose file is the input
         for (const SceneObject& o : scene.objects) {
-            if (o.isVolume() && std::filesystem::equivalent(o.volume, mInput, error) &&
-                (resolvePlacement(o.placement, o.volume, set.metadata()).placement == VoxelPlacement::Cell || solve.dim > 0 ||
-                    solve.voxelSize > 0.0)) {
-                return voxelizeMedia(scene, solve, interrupter); // placed (and coarsened) as vxf run does
-            }
+            if (o.isVolume() && std::filesystem::equivalent(o.volume, mInput, error)) volume = &o;
+        }
+        // Moved, or asked for other voxels (the scene's voxelize): placed and coarsened as vxf
+        // run does, the file read once.
+        const VoxelizeOptions solve = sceneVoxelizeOptions(scene.settings);
+        if (volume && (volume == moved || solve.dim > 0 || solve.voxelSize > 0.0)) return voxelizeMedia(scene, solve, interrupter);
+        VoxelSet set = readVoxelSet(mInput);
+        if (volume && resolvePlacement(volume->placement, volume->volume, set.metadata()).placement == VoxelPlacement::Cell) {
+            return voxelizeMedia(scene, solve, interrupter); // its voxels moved half a voxel, as vxf run places them
         }
         if (!moved) return set;
         const std::string params = set.paramsJson();

@@ -200,11 +200,7 @@ struct PipelineRun
             record("voxelize", "reused", "mesh and voxel settings unchanged", voxelFile, 0.0);
         } else {
             const double seconds = timed([&] {
-                VoxelizeOptions options;
-                options.voxelSize = s.voxelSize;
-                options.dim = s.voxelSize > 0.0 ? 0 : s.dim;
-                options.bandWidth = float(s.band);
-                set = voxelizeMedia(scene, options, interrupter, &note);
+                set = voxelizeMedia(scene, sceneVoxelizeOptions(s), interrupter, &note);
                 set.setProvenance("voxelize", voxelInputs.dump());
                 writeVoxelSet(voxelFile.string(), set);
             });

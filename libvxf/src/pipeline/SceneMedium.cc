@@ -173,6 +173,15 @@ VoxelSet volumeMedium(const SceneObject& object, const VoxelizeOptions& options,
 
 } // namespace
 
+VoxelizeOptions sceneVoxelizeOptions(const SceneSettings& settings)
+{
+    VoxelizeOptions options;
+    options.voxelSize = settings.voxelSize;
+    options.dim = settings.voxelSize > 0.0 ? 0 : settings.dim;
+    options.bandWidth = float(settings.band);
+    return options;
+}
+
 openvdb::BBoxd volumeBounds(const SceneObject& object)
 {
     const VoxelSet set = volumeMedium(object, VoxelizeOptions{}, nullptr);

@@ -25,6 +25,10 @@ namespace vxf {
 /// medium, or per-voxel grids are given with several media.
 VoxelSet voxelizeMedia(const Scene& scene, const VoxelizeOptions& options, Interrupter* interrupter = nullptr, std::string* note = nullptr);
 
+/// The voxelize options @a settings ask for (voxel_size over dim, the band); a volume object's
+/// are 0 unless its scene gives them (its own voxels).
+VoxelizeOptions sceneVoxelizeOptions(const SceneSettings& settings);
+
 /// The world bounds of volume object @a object's active voxels, placed and moved as
 /// voxelizeMedia places them (its grid read in full; throws as voxelizeMedia does).
 openvdb::BBoxd volumeBounds(const SceneObject& object);
