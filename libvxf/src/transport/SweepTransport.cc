@@ -34,6 +34,26 @@ void forUpwindBlock(int octant, F&& f)
     }
 }
 
+/// @a f(start, count) for runs of padded indices covering forUpwindBlock's: the 9 slabs of x
+/// the sweep reads, each whole (100 indices, of which 81 are read), for loops the compiler
+/// vectorizes.
+template <typename F>
+void forUpwindSlabs(int octant, F&& f)
+{
+    const int lo = octant & 1 ? 0 : -1;
+    for (int x = lo; x < lo + 9; ++x) f(SweepLattice::paddedIndex(x, -1, -1), 100);
+}
+
+/// A leaf's source toward ω over its upwind block: @a toward = @a j·RestPhase(a, ω, β·ω), a by
+/// component (@a ax, @a ay, @a az), the factors made in @a rest by slabs (restFactors).
+void towardOmega(int octant, const RestPhase& restPhase, const openvdb::Vec3f& omega, const QuadratureCorrection* beta,
+    const openvdb::Vec3f* j, const float* ax, const float* ay, const float* az, float* rest, openvdb::Vec3f* toward)
+{
+    forUpwindSlabs(octant,
+        [&](int start, int count) { restFactors(restPhase, omega, beta, ax + start, ay + start, az + start, count, rest + start); });
+    forUpwindBlock(octant, [&](int q) { toward[q] = j[q] * rest[q]; });
+}
+
 /// A leaf's upwind ghosts in its padded @a buffer: what its @a neighbours (27) handed on, a
 /// fine one's downwind faces (@a faces, at its place @a facePlace), a coarse one's light through
 /// the face the ghost lies across (@a leaving, null: no coarse leaves, the loop without their
@@ -132,14 +152,17 @@ void SweepLattice::sweep(const SweepSource& source, const std::vector<openvdb::V
     {
         std::vector<openvdb::Vec3f> buffer, toward;
         /// Gathered once a leaf and batch (a moment's, or a source per voxel): the leaf's padded
-        /// block's voxels (paddedVoxels), J and a over it (0 where no voxel is).
+        /// block's voxels (paddedVoxels), J and a over it (0 where no voxel is; a by component).
         std::vector<std::int64_t> index;
-        std::vector<openvdb::Vec3f> block, anisotropy;
+        std::vector<openvdb::Vec3f> block;
+        std::vector<float> ax, ay, az;
+        std::vector<float> rest; ///< RestPhase over the block, a direction's
         CoarseWeights coarse; ///< the last coarse cell's weights
     };
     tbb::enumerable_thread_specific<Scratch> scratches([] {
         const std::vector<openvdb::Vec3f> zeros(kPaddedVoxels, openvdb::Vec3f(0.0f));
-        return Scratch{zeros, zeros, std::vector<std::int64_t>(kPaddedVoxels), zeros, zeros, CoarseWeights{}};
+        const std::vector<float> scalars(kPaddedVoxels, 0.0f);
+        return Scratch{zeros, zeros, std::vector<std::int64_t>(kPaddedVoxels), zeros, scalars, scalars, scalars, scalars, CoarseWeights{}};
     });
     std::size_t swept = 0;
     for (const std::vector<std::size_t>& batch : batches) {
@@ -173,22 +196,21 @@ void SweepLattice::sweep(const SweepSource& source, const std::vector<openvdb::V
                     forUpwindBlock(octant, [&](int q) {
                         const std::int64_t v = scratch.index[std::size_t(q)];
                         scratch.block[std::size_t(q)] = v < 0 ? openvdb::Vec3f(0.0f) : padded ? j[q] : source.values[std::size_t(v)];
-                        if (a) scratch.anisotropy[std::size_t(q)] = v < 0 ? openvdb::Vec3f(0.0f) : a[v];
+                        if (!a) return;
+                        const openvdb::Vec3f here = v < 0 ? openvdb::Vec3f(0.0f) : a[v];
+                        scratch.ax[std::size_t(q)] = here[0];
+                        scratch.ay[std::size_t(q)] = here[1];
+                        scratch.az[std::size_t(q)] = here[2];
                     });
                 }
                 if (moment || !padded) j = scratch.block.data();
                 openvdb::Vec3f worldOmega(0.0f);
                 if (moment) {
                     worldOmega = openvdb::Vec3f(moment->worldDirections[d]);
-                    const openvdb::Vec3f* a = scratch.anisotropy.data();
-                    openvdb::Vec3f* toward = scratch.toward.data();
-                    if (moment->corrections.empty()) {
-                        forUpwindBlock(octant, [&](int q) { toward[q] = j[q] * moment->rest(a[q], worldOmega); });
-                    } else {
-                        const QuadratureCorrection& beta = moment->corrections[d];
-                        forUpwindBlock(octant, [&](int q) { toward[q] = j[q] * moment->rest(a[q], worldOmega, beta.betaDotOmega(a[q])); });
-                    }
-                    j = toward;
+                    const QuadratureCorrection* beta = moment->corrections.empty() ? nullptr : &moment->corrections[d];
+                    towardOmega(octant, moment->rest, worldOmega, beta, j, scratch.ax.data(), scratch.ay.data(), scratch.az.data(),
+                        scratch.rest.data(), scratch.toward.data());
+                    j = scratch.toward.data();
                 }
                 openvdb::Vec3f* fluxHere = flux ? &(*flux)[n * kLeafVoxels] : nullptr;
                 std::vector<openvdb::Vec3f>* skinHere = skins ? skinFluence : nullptr;
