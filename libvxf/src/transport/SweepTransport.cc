@@ -98,7 +98,7 @@ void sweepUniformLeaf(const openvdb::Vec3d& omega, const float (&transmittance)[
             const int q = v + kLocal * k;
             buffer[p + kPadded * k] = result;
             phi[q] += w * result;
-            if (fluxHere) fluxHere[q] += (w * (result[0] + result[1] + result[2]) / 3.0f) * worldOmega;
+            if (fluxHere) fluxHere[q] += (w * (result[0] + result[1] + result[2]) * (1.0f / 3.0f)) * worldOmega;
         }
     });
 }
@@ -427,7 +427,7 @@ void SweepLattice::sweepLeaf(std::size_t n, const Sigma* leafSigmaT, const openv
         }
         buffer[p] = result;
         phi[v] += w * result;
-        if (fluxHere) fluxHere[v] += (w * (result[0] + result[1] + result[2]) / 3.0f) * worldOmega;
+        if (fluxHere) fluxHere[v] += (w * (result[0] + result[1] + result[2]) * (1.0f / 3.0f)) * worldOmega;
         const std::int32_t s = skinIndex ? skinIndex[v] : -1;
         if (s >= 0) {
             // On from the centre to the surface along ω, if ω leaves it.
