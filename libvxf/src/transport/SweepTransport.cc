@@ -344,7 +344,7 @@ void SweepLattice::sweepCoarseCell(std::size_t n, const CubeChords& cube, const 
         }
     }
     phi += weight * mean;
-    if (flux) *flux += (weight * (mean[0] + mean[1] + mean[2]) / 3.0f) * worldOmega;
+    if (flux) *flux += (weight * (mean[0] + mean[1] + mean[2]) * (1.0f / 3.0f)) * worldOmega;
 }
 
 template <typename Sigma>
