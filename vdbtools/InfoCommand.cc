@@ -90,7 +90,7 @@ public:
     {
         for (const auto& path : mFiles) {
             std::vector<std::string> damaged, skipped;
-            const VoxelSet set = readVoxelSet(path, VoxelSetReadOptions{mForce, &damaged, &skipped, nullptr});
+            const VoxelSet set = readVoxelSet(path, VoxelSetReadOptions{mForce, &damaged, &skipped, nullptr, nullptr});
             for (const auto& name : damaged) warn(fmt::format("{}: grid '{}' is damaged (its checksum does not match)", path, name));
             for (const auto& grid : skipped) warn(fmt::format("{}: grid {} skipped: not a voxel grid vxf reads", path, grid));
             nlohmann::json info = describe(set);

@@ -52,7 +52,7 @@ public:
         const Material material = mScene.empty() ? recordedMaterial(set) : sceneMaterial(loadScene(mScene));
         const ScatterOptions options = scatterOptions(args, material);
         const ScatterReport report = scatter(set, scatterMedium(set, material, options), options, &progress);
-        readGridsInto(set, mInput, {grids::kDirect});
+        readGridsInto(set, mInput, {grids::kDirect}, scatterInputRead());
         putIllumination(set);
         nlohmann::json params = args.json();
         params.update({{"command", "scatter"}, {"input", mInput},

@@ -17,6 +17,7 @@
 #include <cstring>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 
 #include <unistd.h>
 
@@ -47,6 +48,22 @@ std::string trimmed(std::string s)
     while (!s.empty() && (s.back() == '\n' || s.back() == '\r')) s.pop_back();
     return s;
 }
+/// builtin:sphere voxelized at @a dim (DIR/s.vdb) in a scene of @a material (JSON) lit by a
+/// point light above it (DIR/scene.json), and lit (DIR/l.vdb).
+void litSphere(const TempDir& dir, int dim, const std::string& material)
+{
+    REQUIRE(run(fmt::format("{} voxelize builtin:sphere -o {} --dim {} -q", binary("vxf"), dir.path("s.vdb"), dim)).status == 0);
+    vxf::test::spit(dir.path("scene.json"),
+        fmt::format(R"({{
+  "objects": [{{"mesh": "builtin:sphere", "material": {}}}],
+  "lights": [{{"type": "point", "position": [0, 0, 2], "intensity": 4}}],
+  "camera": {{"position": [0, -4, 0], "look_at": [0, 0, 0]}}
+}})",
+            material));
+    REQUIRE(run(fmt::format("{} light {} --scene {} -o {} -q", binary("vxf"), dir.path("s.vdb"), dir.path("scene.json"), dir.path("l.vdb")))
+                .status == 0);
+}
+
 } // namespace
 
 TEST_CASE("every bad input in tests/regress gives its error and no output", "[cli][regress]")
@@ -344,14 +361,7 @@ TEST_CASE(
     "SIGINT, SIGTERM and SIGHUP stop a long scatter: exit 128+N, the previous output intact, no temporary file left", "[cli][interrupt]")
 {
     TempDir dir;
-    REQUIRE(run(fmt::format("{} voxelize builtin:sphere -o {} --dim 32 -q", binary("vxf"), dir.path("s.vdb"))).status == 0);
-    vxf::test::spit(dir.path("scene.json"), R"({
-  "objects": [{"mesh": "builtin:sphere", "material": {"albedo": 0.999, "mean_free_path": 0.05}}],
-  "lights": [{"type": "point", "position": [0, 0, 2], "intensity": 4}],
-  "camera": {"position": [0, -4, 0], "look_at": [0, 0, 0]}
-})");
-    REQUIRE(run(fmt::format("{} light {} --scene {} -o {} -q", binary("vxf"), dir.path("s.vdb"), dir.path("scene.json"), dir.path("l.vdb")))
-                .status == 0);
+    litSphere(dir, 32, R"({"albedo": 0.999, "mean_free_path": 0.05})");
     fs::copy_file(dir.path("l.vdb"), dir.path("out.vdb")); // a previous result the interrupted run must not touch
     const std::string before = slurp(dir.path("out.vdb"));
     // Ctrl-C, what `timeout`, schedulers and farms send, and a closed terminal: the same.
@@ -368,6 +378,34 @@ TEST_CASE(
         for (const auto& entry : fs::directory_iterator(dir.root())) left.push_back(entry.path().filename().string());
         std::sort(left.begin(), left.end());
         CHECK(left == std::vector<std::string>{"l.vdb", "out.vdb", "s.vdb", "scene.json"});
+    }
+}
+
+TEST_CASE("a scatter refuses light that is not finite, naming the file, grid and voxel, and writes nothing", "[cli][scatter]")
+{
+    // One NaN in the source spread downwind through every sweep: the whole scatter came out NaN
+    // and was written as zeros, exit 0. Files from other tools or edited by hand can hold them.
+    TempDir dir;
+    litSphere(dir, 16, R"({"albedo": 0.9, "mean_free_path": 0.2})");
+    REQUIRE(run(fmt::format("{} scatter {} -o {} -q", binary("vxf"), dir.path("l.vdb"), dir.path("ok.vdb"))).status == 0);
+    const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+    for (const auto& [grid, value] : {std::pair<std::string, openvdb::Vec3f>{"scatter_source", openvdb::Vec3f(nan, 1.0f, 1.0f)},
+             {"direct", openvdb::Vec3f(1.0f, inf, 1.0f)}}) {
+        CAPTURE(grid);
+        vxf::VoxelSet set = vxf::readVoxelSet(dir.path("l.vdb"));
+        auto poisoned = set.get<openvdb::Vec3SGrid>(grid)->deepCopy();
+        const openvdb::Coord first = poisoned->cbeginValueOn().getCoord();
+        poisoned->tree().setValue(first, value);
+        poisoned->tree().setValue(first.offsetBy(0, 0, 1), value);
+        set.put(poisoned);
+        vxf::writeVoxelSet(dir.path("bad.vdb"), set);
+        const auto refused = run(fmt::format("{} scatter {} -o {} -q", binary("vxf"), dir.path("bad.vdb"), dir.path("x.vdb")));
+        INFO(refused.err);
+        CHECK(refused.status == 1);
+        CHECK_THAT(refused.err,
+            Catch::Contains(fmt::format("vxf: scatter: {}: grid '{}' holds 2 NaN or infinite values (the first at voxel ({}, {}, {}))",
+                dir.path("bad.vdb"), grid, first.x(), first.y(), first.z())));
+        CHECK_FALSE(fs::exists(dir.path("x.vdb")));
     }
 }
 

@@ -3,6 +3,7 @@
 #include <vxf/core/GridLookup.h>
 
 #include <openvdb/openvdb.h>
+#include <openvdb/tools/Diagnostics.h>
 
 #include <fmt/format.h>
 
@@ -102,6 +103,25 @@ ValueRange valueRange(const openvdb::GridBase& grid)
     if (const auto* g = dynamic_cast<const openvdb::Vec3DGrid*>(&grid)) return rangeOf(*g, 3);
     if (const auto* g = dynamic_cast<const openvdb::Vec3IGrid*>(&grid)) return rangeOf(*g, 3);
     return {};
+}
+
+NonFiniteValues nonFiniteValues(const openvdb::GridBase& grid)
+{
+    NonFiniteValues found;
+    grid.apply<openvdb::TypeList<openvdb::FloatGrid, openvdb::DoubleGrid, openvdb::Vec3SGrid, openvdb::Vec3DGrid>>([&found](const auto& g) {
+        using GridT = std::decay_t<decltype(g)>;
+        openvdb::tools::Diagnose<GridT> diagnose(g);
+        diagnose.check(openvdb::tools::CheckFinite<GridT, typename GridT::ValueOnCIter>(), /*updateMask=*/true, /*checkVoxels=*/true,
+            /*checkTiles=*/true, /*checkBackground=*/false);
+        found.count = diagnose.failureCount();
+        if (found.count > 0) {
+            openvdb::CoordBBox box;
+            auto first = diagnose.mask()->cbeginValueOn();
+            first.getBoundingBox(box);
+            found.first = box.min();
+        }
+    });
+    return found;
 }
 
 std::string formatBytes(std::uint64_t bytes)

@@ -126,6 +126,19 @@ detail::VdbArchive readArchive(const std::string& path, const std::function<bool
     return archive;
 }
 
+/// VoxelSetReadOptions::finite: @a set's grids that @a finite names hold no NaN or infinite value.
+void requireFinite(const VoxelSet& set, const std::string& path, const std::function<bool(const std::string&)>& finite)
+{
+    for (const auto& grid : set.grids()) {
+        if (!finite(grid->getName())) continue;
+        const NonFiniteValues bad = nonFiniteValues(*grid);
+        if (bad.count == 0) continue;
+        throw Error(fmt::format("{}: grid '{}' holds {} NaN or infinite value{} (the first at voxel ({}, {}, {})); the light a stage "
+                                "carries must be finite (one such voxel spreads to every voxel downwind)",
+            path, grid->getName(), bad.count, bad.count == 1 ? "" : "s", bad.first.x(), bad.first.y(), bad.first.z()));
+    }
+}
+
 } // namespace
 
 VoxelSet readVoxelSet(const std::string& path, const VoxelSetReadOptions& options)
@@ -165,6 +178,7 @@ VoxelSet readVoxelSet(const std::string& path, const VoxelSetReadOptions& option
         if (!options.acceptDamaged) throw Error(message);
         if (options.damaged) *options.damaged = damaged;
     }
+    if (options.finite) requireFinite(set, path, options.finite);
     return set;
 }
 
@@ -175,9 +189,11 @@ VoxelSet readGrids(const std::string& path, const std::vector<std::string>& name
     return readVoxelSet(path, options);
 }
 
-void readGridsInto(VoxelSet& set, const std::string& path, const std::vector<std::string>& names)
+void readGridsInto(VoxelSet& set, const std::string& path, const std::vector<std::string>& names, const VoxelSetReadOptions& options)
 {
-    const VoxelSet read = readGrids(path, names);
+    VoxelSetReadOptions only = options;
+    only.wanted = [&names](const std::string& name) { return std::find(names.begin(), names.end(), name) != names.end(); };
+    const VoxelSet read = readVoxelSet(path, only);
     for (const openvdb::GridBase::Ptr& grid : read.grids()) set.put(grid);
 }
 

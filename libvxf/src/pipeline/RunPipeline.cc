@@ -293,7 +293,7 @@ struct PipelineRun
                     ScatterOptions scatterOptions = scatterOptionsFrom(s);
                     if (warm) scatterOptions.warmStart = readCacheEntry(warmFile).get<openvdb::Vec3SGrid>(grids::kScatter);
                     scattered = scatter(lit, scatterMedium(lit, material, scatterOptions), scatterOptions, interrupter);
-                    readGridsInto(lit, lightFile.string(), {grids::kDirect});
+                    readGridsInto(lit, lightFile.string(), {grids::kDirect}, scatterInputRead());
                     putIllumination(lit);
                     lit.setProvenance("scatter", scatterInputs.dump());
                     writeVoxelSet(volumeFile.string(), lit);

@@ -227,6 +227,11 @@ VoxelSetReadOptions scatterInputRead()
 {
     VoxelSetReadOptions options;
     options.wanted = [](const std::string& name) { return name != grids::kDirect; };
+    // The light the solve and `illumination` carry (a pass's fluence too, when it goes on from one).
+    options.finite = [](const std::string& name) {
+        return name == grids::kScatterSource || name == grids::kSourceAnisotropy || name == grids::kDirect ||
+            name.rfind("scatter_pass_", 0) == 0;
+    };
     return options;
 }
 

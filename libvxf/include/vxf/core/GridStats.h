@@ -41,6 +41,18 @@ struct ValueRange
 /// other types (bool, points) have none. Reads only, O(active values).
 ValueRange valueRange(const openvdb::GridBase& grid);
 
+/// A grid's active values that are NaN or infinite (tiles counted once each, as OpenVDB's
+/// tools::Diagnose counts them): how many, and the first of them in the tree's order.
+struct NonFiniteValues
+{
+    openvdb::Index64 count = 0;
+    openvdb::Coord first; ///< (a tile's first voxel)
+};
+
+/// @a grid's NaN or infinite active values (tools::Diagnose with tools::CheckFinite, in
+/// parallel): float and double grids and their vec3 grids; other types have none.
+NonFiniteValues nonFiniteValues(const openvdb::GridBase& grid);
+
 /// "12.3 MiB"-style byte count.
 std::string formatBytes(std::uint64_t bytes);
 

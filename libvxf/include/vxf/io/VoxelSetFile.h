@@ -31,6 +31,11 @@ struct VoxelSetReadOptions
     /// are skipped on disk, not read and dropped. A stage that needs a grid only when it
     /// writes reads it then (readGridsInto), and holds its memory for none of the work.
     std::function<bool(const std::string& name)> wanted;
+    /// Grids whose names this accepts must hold finite values: one NaN or infinite value is
+    /// refused, naming the file, the grid, how many there are and the first voxel. For the
+    /// light a stage carries through its sums, where one such voxel spreads downwind to every
+    /// voxel (a scatter_source with a few NaN made a scatter of zeros, written as if solved).
+    std::function<bool(const std::string& name)> finite;
 };
 
 /// Read every voxel grid and the file metadata of the .vdb at @a path, every size the file
@@ -44,9 +49,10 @@ struct VoxelSetReadOptions
 VoxelSet readVoxelSet(const std::string& path);
 VoxelSet readVoxelSet(const std::string& path, const VoxelSetReadOptions& options);
 
-/// The grids named @a names of the .vdb at @a path (those it holds; read as readVoxelSet does)
+/// The grids named @a names of the .vdb at @a path (those it holds; read as readVoxelSet does,
+/// with @a options but for `wanted`)
 /// put into @a set, replacing grids of the same names.
-void readGridsInto(VoxelSet& set, const std::string& path, const std::vector<std::string>& names);
+void readGridsInto(VoxelSet& set, const std::string& path, const std::vector<std::string>& names, const VoxelSetReadOptions& options = {});
 
 /// A set of the grids named @a names of the .vdb at @a path (those it holds) and its file
 /// metadata; the others' data stay on disk (a DCC file's velocities beside the density a scene

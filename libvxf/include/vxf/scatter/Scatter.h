@@ -152,8 +152,10 @@ ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions&
 void putIllumination(VoxelSet& set);
 
 /// How a scatter stage reads its input from a file: every grid but `direct`, which only
-/// `illumination` needs, at the end; read it then (readGridsInto(set, path, {grids::kDirect}))
-/// and call putIllumination. The solve holds none of its 12 bytes a voxel (`vxf scatter`, `vxf run`).
+/// `illumination` needs, at the end; read it then (readGridsInto(set, path, {grids::kDirect},
+/// scatterInputRead())) and call putIllumination. The solve holds none of its 12 bytes a voxel
+/// (`vxf scatter`, `vxf run`). The light it carries (the source, its anisotropy, `direct`, the
+/// passes) must be finite: a NaN is refused with the file, grid and voxel.
 VoxelSetReadOptions scatterInputRead();
 
 } // namespace vxf
