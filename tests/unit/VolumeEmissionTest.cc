@@ -10,6 +10,8 @@
 
 #include <catch2/catch.hpp>
 
+#include <limits>
+
 TEST_CASE("a volume light reads its grid times its power where its transform places it", "[light][emission]")
 {
     vxf::test::TempDir dir;
@@ -46,4 +48,12 @@ TEST_CASE("a volume light reads its grid times its power where its transform pla
 
     light.grid = "temperature";
     CHECK_THROWS_WITH(vxf::VolumeEmission(light), Catch::Contains("light 'fire': no grid 'temperature'") && Catch::Contains("flame"));
+
+    // A NaN in the emission is refused where it is read, naming this file (it would spread
+    // through the scatter's sweeps and be found only in the light stage's output).
+    flame->tree().setValueOn(openvdb::Coord(3, 4, 5), std::numeric_limits<float>::quiet_NaN());
+    vxf::writeVoxelSet(dir.path("fire.vdb"), set);
+    light.grid = "flame";
+    CHECK_THROWS_WITH(vxf::VolumeEmission(light),
+        Catch::Contains(dir.path("fire.vdb") + ": grid 'flame' holds 1 NaN or infinite value (the first at voxel (3, 4, 5))"));
 }

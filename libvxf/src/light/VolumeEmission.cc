@@ -14,7 +14,12 @@ VolumeEmission::VolumeEmission(const Light& light)
     : mPower(light.power())
     , mKelvin(light.blackbodyKelvin)
 {
-    const VoxelSet source = readGrids(light.file, {light.grid}); // not the file's other grids
+    // Not the file's other grids; a NaN or infinite emission refused here, naming this file (it
+    // would spread through the scatter's sweeps).
+    VoxelSetReadOptions only;
+    only.wanted = [&light](const std::string& name) { return name == light.grid; };
+    only.finite = only.wanted;
+    const VoxelSet source = readVoxelSet(light.file, only);
     const openvdb::GridBase::Ptr grid = source.find(light.grid);
     if (!grid) {
         std::string names;
