@@ -182,18 +182,16 @@ VoxelSet readVoxelSet(const std::string& path, const VoxelSetReadOptions& option
     return set;
 }
 
-VoxelSet readGrids(const std::string& path, const std::vector<std::string>& names)
+VoxelSet readGrids(const std::string& path, const std::vector<std::string>& names, const VoxelSetReadOptions& options)
 {
-    VoxelSetReadOptions options;
-    options.wanted = [&names](const std::string& name) { return std::find(names.begin(), names.end(), name) != names.end(); };
-    return readVoxelSet(path, options);
+    VoxelSetReadOptions only = options;
+    only.wanted = [&names](const std::string& name) { return std::find(names.begin(), names.end(), name) != names.end(); };
+    return readVoxelSet(path, only);
 }
 
 void readGridsInto(VoxelSet& set, const std::string& path, const std::vector<std::string>& names, const VoxelSetReadOptions& options)
 {
-    VoxelSetReadOptions only = options;
-    only.wanted = [&names](const std::string& name) { return std::find(names.begin(), names.end(), name) != names.end(); };
-    const VoxelSet read = readVoxelSet(path, only);
+    const VoxelSet read = readGrids(path, names, options);
     for (const openvdb::GridBase::Ptr& grid : read.grids()) set.put(grid);
 }
 

@@ -16,10 +16,9 @@ VolumeEmission::VolumeEmission(const Light& light)
 {
     // Not the file's other grids; a NaN or infinite emission refused here, naming this file (it
     // would spread through the scatter's sweeps).
-    VoxelSetReadOptions only;
-    only.wanted = [&light](const std::string& name) { return name == light.grid; };
-    only.finite = only.wanted;
-    const VoxelSet source = readVoxelSet(light.file, only);
+    VoxelSetReadOptions finite;
+    finite.finite = [](const std::string&) { return true; };
+    const VoxelSet source = readGrids(light.file, {light.grid}, finite);
     const openvdb::GridBase::Ptr grid = source.find(light.grid);
     if (!grid) {
         std::string names;

@@ -56,8 +56,8 @@ void readGridsInto(VoxelSet& set, const std::string& path, const std::vector<std
 
 /// A set of the grids named @a names of the .vdb at @a path (those it holds) and its file
 /// metadata; the others' data stay on disk (a DCC file's velocities beside the density a scene
-/// object names).
-VoxelSet readGrids(const std::string& path, const std::vector<std::string>& names);
+/// object names); read with @a options but for `wanted`.
+VoxelSet readGrids(const std::string& path, const std::vector<std::string>& names, const VoxelSetReadOptions& options = {});
 
 /// The active voxels the .vdb at @a path declares for its grid @a grid (`file_voxel_count`, which
 /// OpenVDB writes with every grid), its data not read: what a stage's memory estimate needs
