@@ -45,8 +45,15 @@ OperatorOptions::OperatorOptions(CLI::App& app, const ops::Operator& op, bool da
         const std::string help = p.type == ops::ParamType::Boolean ? summary : fmt::format("{} ({}){}", summary, ops::describeType(p), def);
         const std::string name = spelt != mSpelling.end() ? spelt->second : "--" + optionName(p);
         if (p.type == ops::ParamType::Boolean) {
+            // A flag that is on by default, or the scene's unless given, can be turned off: --no-NAME.
+            const bool negatable = p.defaultValue != false && spelt == mSpelling.end();
+            const std::string off = "--no-" + optionName(p);
             app.add_flag_function(
-                name, [this, key = p.name](std::int64_t) { mValues[key] = "true"; }, help);
+                negatable ? name + ",!" + off : name,
+                [this, key = p.name](std::int64_t count) { mValues[key] = count > 0 ? "true" : "false"; },
+                !negatable                   ? summary
+                    : p.defaultValue == true ? fmt::format("{} (on by default; {} turns it off)", summary, off)
+                                             : fmt::format("{}; {} turns it off", summary, off));
             continue;
         }
         // Required ones are not CLI11-required: args() names what is missing with its type.

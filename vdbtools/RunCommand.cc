@@ -4,6 +4,7 @@
 #include "Commands.h"
 
 #include <vxf/core/Frames.h>
+#include <vxf/pipeline/Knobs.h>
 #include <vxf/pipeline/RunPipeline.h>
 #include <vxf/pipeline/SceneFile.h>
 #include <vxf/pipeline/SceneGeometry.h>
@@ -29,7 +30,9 @@ public:
             "are cached by a hash of their inputs (OUT/cache), so changing only the camera re-renders only. An animated "
             "scene (keyframes, frame tokens $F4 or #### in its paths: schemas/scene.schema.json) renders frame by frame "
             "with --frames into OUT/NAME.0001.exr ...; each frame re-runs only the stages whose inputs changed.");
-        mApp->add_option("scene", mScene, "Scene file")->required();
+        mApp->add_option("scene", mScene, "Scene file");
+        mApp->add_flag("--schema", mSchema,
+            "Print schemas/scene.schema.json (its voxelize, scatter and render blocks generated from the stages' knobs) and exit");
         mApp->add_option("--out", mOut, "Output folder (default: out)");
         mApp->add_option("--frames", mFrames,
             "Frames to render: N, A-B, A-B:STEP or a comma-separated list of those (1-240, 1-240:2, 1,5,10-20). Every "
@@ -55,6 +58,11 @@ public:
 
     void run() override
     {
+        if (mSchema) {
+            std::cout << sceneSchemaDocument().dump(2) << "\n";
+            return;
+        }
+        if (mScene.empty()) throw UsageError("name a scene file (vxf run SCENE)");
         if (mFrames.empty()) {
             if (mWarmStart || mPrune) throw UsageError(fmt::format("{} needs --frames", mWarmStart ? "--warm-start" : "--prune-cache"));
             const Scene scene = loadScene(mScene, std::nullopt, qualityAsked());
@@ -160,7 +168,7 @@ private:
 
     std::string mScene, mOut = "out", mFrames, mLevel;
     double mError = 0.0;
-    bool mWarmStart = false, mDryRun = false, mPrune = false;
+    bool mWarmStart = false, mDryRun = false, mPrune = false, mSchema = false;
     std::set<std::string> mToldMeshes;
 };
 

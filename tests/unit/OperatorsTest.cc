@@ -65,7 +65,7 @@ TEST_CASE("the scatter stage picks its kernel by the phase unless named", "[pipe
     CHECK(vxf::scatterOptions(defaultsOf("scatter", {{"kernel", "gather"}}), forward).pass.kernel == vxf::ScatterKernel::Gather);
     // Given parameters reach the options.
     const auto o = vxf::scatterOptions(
-        defaultsOf("scatter", {{"passes", 3}, {"from_pass", 2}, {"fixed_directions", true}, {"no_accelerate", true}}), forward);
+        defaultsOf("scatter", {{"passes", 3}, {"from_pass", 2}, {"fixed_directions", true}, {"accelerate", false}}), forward);
     CHECK(o.passes == 3);
     CHECK(o.fromPass == 2);
     CHECK_FALSE(o.pass.rotatePerVoxel);

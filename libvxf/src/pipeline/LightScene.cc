@@ -3,11 +3,21 @@
 #include <vxf/core/GridRoles.h>
 #include <vxf/pipeline/SceneGeometry.h>
 #include <vxf/pipeline/SceneMedium.h>
+#include <vxf/scatter/Scatter.h>
 
 #include <fmt/format.h>
 #include <tbb/task_group.h>
 
 namespace vxf {
+
+DirectLightOptions lightOptionsFrom(const SceneSettings& settings)
+{
+    DirectLightOptions o;
+    o.march.step = settings.step;
+    o.band = settings.scatterBand;
+    o.similarity = !carriesFirstMoment(scatterOptionsFrom(settings));
+    return o;
+}
 
 DirectLightReport lightScene(VoxelSet& set, const Scene& scene, DirectLightOptions options, Interrupter* interrupter)
 {

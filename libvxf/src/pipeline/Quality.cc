@@ -2,6 +2,7 @@
 #include "QualityPreset.h"
 
 #include <vxf/core/Error.h>
+#include <vxf/pipeline/Knobs.h>
 
 #include <fmt/format.h>
 
@@ -72,7 +73,8 @@ std::string describe(bool volume, double albedo, double g, double opticalSize)
         opticalSize > 0.0 ? fmt::format(", {:.3g} mean free paths across", opticalSize) : std::string());
 }
 
-bool sets(const json& document, const char* block, const char* key) { return document.contains(block) && document[block].contains(key); }
+/// Whether the scene gives the knob /@a block/@a key itself (findKnob: a name not declared is a bug).
+bool sets(const json& document, const char* block, const char* key) { return givesKnob(document, findKnob(block, key)); }
 
 } // namespace
 
@@ -110,14 +112,6 @@ QualityChoice applyQuality(const QualityRequest& request, const QualityMedium& m
     choice.seconds = row.at("seconds").get<double>();
 
     const json& knobs = row.at("knobs");
-    const auto knob = [&](const char* name, auto& field, const char* block, const char* key) {
-        if (!knobs.contains(name)) return;
-        if (sets(document, block, key)) {
-            choice.kept.push_back(fmt::format("/{}/{}", block, key));
-            return;
-        }
-        field = knobs[name].get<std::decay_t<decltype(field)>>();
-    };
     // A mesh's voxels (dim), or a volume's own coarsened to about volume_dim along the bench
     // volume's longest side (0: its own voxels; never refined: SceneMedium.h).
     const char* dimKnob = medium.volume ? "volume_dim" : "dim";
@@ -137,28 +131,25 @@ QualityChoice applyQuality(const QualityRequest& request, const QualityMedium& m
                     " (dim {} here, for the bench's {} voxels per mean free path)", s.dim, dim / bench.at("optical_size").get<double>());
         }
     }
-    knob("passes", s.passes, "scatter", "passes");
-    knob("directions", s.directions, "scatter", "directions");
-    knob("step", s.step, "scatter", "step");
-    knob("cutoff", s.cutoff, "scatter", "cutoff");
-    knob("tolerance", s.tolerance, "scatter", "tolerance");
-    knob("extrapolate", s.extrapolate, "scatter", "extrapolate");
-    knob("fine_passes", s.finePasses, "scatter", "fine_passes");
-    knob("coarse_factor", s.coarseFactor, "scatter", "coarse_factor");
-    knob("accelerate", s.accelerate, "scatter", "accelerate");
-    knob("samples", s.samples, "render", "samples");
-    knob("noise_level", s.noiseLevel, "render", "noise_level");
+    // The bench's knobs that are the scene's own by name (Knob::quality), where the scene does not
+    // set them itself. A knob whose default the medium chooses (the kernel, single scattering)
+    // keeps the anisotropic phase's when the bench scene's phase is isotropic.
+    for (const Knob& k : vxf::knobs()) {
+        if (!k.quality || !knobs.contains(k.param.name)) continue;
+        if (givesKnob(document, k)) {
+            choice.kept.push_back(k.path());
+        } else if (!(keepPhaseDefaults && k.param.defaultValue.is_null())) {
+            k.set(s, knobs[k.param.name]);
+        }
+    }
     if (knobs.contains("max_samples")) {
         // The bench leaves adaptive sampling off unless it asks for more rays than `samples`.
-        int maxSamples = knobs["max_samples"].get<int>();
-        knob("max_samples", maxSamples, "render", "max_samples");
-        if (!sets(document, "render", "max_samples")) s.maxSamples = maxSamples > s.samples ? maxSamples : 0;
-    }
-    if (!keepPhaseDefaults) {
-        knob("kernel", s.kernel, "scatter", "kernel");
-        std::string direct = s.directFromLights ? "lights" : "grid";
-        knob("direct", direct, "render", "direct");
-        s.directFromLights = direct == "lights";
+        if (sets(document, "render", "max_samples")) {
+            choice.kept.push_back("/render/max_samples");
+        } else {
+            const int maxSamples = knobs["max_samples"].get<int>();
+            s.maxSamples = maxSamples > s.samples ? maxSamples : 0;
+        }
     }
     // A band in voxels of the bench's lattice (0 in every setting it has taken so far) is not
     // carried: the scene's voxel size is not known before its mesh is read, and a band only

@@ -8,6 +8,7 @@
 #include <vxf/io/ContentHash.h>
 #include <vxf/io/ImageFile.h>
 #include <vxf/io/VoxelSetFile.h>
+#include <vxf/pipeline/Knobs.h>
 #include <vxf/pipeline/LightScene.h>
 #include <vxf/pipeline/SceneGeometry.h>
 #include <vxf/pipeline/SceneMedium.h>
@@ -190,8 +191,7 @@ struct PipelineRun
                 {"grids", m.gridsFile.empty() ? json() : json{fileFingerprint(m.gridsFile), m.sigmaAGrid, m.sigmaSGrid}}});
         }
         // The program too: the light and scatter stages' keys chain from this one.
-        const json voxelInputs = {
-            {"media", media}, {"dim", s.dim}, {"voxel_size", s.voxelSize}, {"band", s.band}, {"program", programFingerprint()}};
+        const json voxelInputs = {{"media", media}, {"settings", stageSettingsKey(s, Stage::Voxelize)}, {"program", programFingerprint()}};
         const std::string voxelHash = hashOf(voxelInputs);
         const fs::path voxelFile = cache / ("voxelize-" + voxelHash + ".vdb");
         VoxelSet set;
@@ -227,12 +227,11 @@ struct PipelineRun
             if (!l.file.empty()) lights.push_back(fileFingerprint(l.file)); // environment map, emission grid: their bytes
         }
         json lightInputs = {{"voxels", voxelHash}, {"sigma_a", vecJson(material.sigmaA)}, {"sigma_s", vecJson(material.sigmaS)},
-            {"lights", lights}, {"occluders", occluders}, {"step", s.step}, {"sweep", true}};
+            {"lights", lights}, {"occluders", occluders}, {"settings", stageSettingsKey(s, Stage::Light)}};
         // A forward phase's first moment is carried by the accelerated sweeps alone (Scatter.h);
         // for any other scatter the light stage lights the similarity relation's medium too.
-        const bool carriesMoment = s.kernel == "sweep" && s.accelerate && !wants("scatter_passes") && s.finePasses == 0;
-        if (s.scatterBand > 0.0) lightInputs["band"] = s.scatterBand; // (scenes without one keep their cached stages)
-        if (material.phaseG != 0.0) { // isotropic scenes keep their cached stages
+        const bool carriesMoment = !lightOptionsFrom(s).similarity;
+        if (material.phaseG != 0.0) { // an isotropic medium is lit alike either way
             lightInputs["phase_g"] = material.phaseG;
             lightInputs["phase_scaling"] = carriesMoment ? "delta-M 3, Henyey-Greenstein lobe" : "similarity";
         }
@@ -243,10 +242,7 @@ struct PipelineRun
         } else {
             const double seconds = timed([&] {
                 if (set.empty()) set = readCacheEntry(voxelFile);
-                DirectLightOptions options;
-                options.march.step = s.step;
-                options.similarity = !carriesMoment;
-                options.band = s.scatterBand; // the deep leaves as tiles, which the scatter's band takes them as
+                const DirectLightOptions options = lightOptionsFrom(s);
                 const DirectLightReport lit = lightScene(set, scene, options, interrupter);
                 report.warnings.insert(report.warnings.end(), lit.warnings.begin(), lit.warnings.end());
                 set.setProvenance("light", lightInputs.dump());
@@ -274,11 +270,7 @@ struct PipelineRun
         } else if (!needScatter) {
             record("scatter", "skipped", "no requested output needs it", "", 0.0);
         } else {
-            json scatterInputs = {{"lit", lightHash}, {"passes", s.passes}, {"directions", s.directions}, {"step", s.step},
-                {"cutoff", s.cutoff}, {"tolerance", s.tolerance}, {"extrapolate", s.extrapolate}, {"band", s.scatterBand},
-                {"keep", wants("scatter_passes")}, {"fine_passes", s.finePasses}, {"coarse_factor", s.coarseFactor}, {"kernel", s.kernel},
-                {"accelerate", s.accelerate}};
-            // (every field scatterOptionsFrom reads)
+            json scatterInputs = {{"lit", lightHash}, {"settings", stageSettingsKey(s, Stage::Scatter)}, {"keep", wants("scatter_passes")}};
             const fs::path warmFile = pipelineOptions.warmStart;
             const bool warm = !warmFile.empty() && fs::exists(warmFile);
             if (warm) scatterInputs["warm_start"] = warmFile.filename().string();

@@ -3,6 +3,7 @@
 #include "QualityPreset.h"
 #include "SceneAnimation.h"
 
+#include <vxf/pipeline/Knobs.h>
 #include <vxf/pipeline/SceneGeometry.h>
 #include <vxf/pipeline/SceneMedium.h>
 
@@ -33,7 +34,7 @@ using nlohmann::json;
 
 const JsonSchema& sceneSchema()
 {
-    static const JsonSchema schema(json::parse(sceneSchemaText()), "schemas/scene.schema.json");
+    static const JsonSchema schema(sceneSchemaDocument(), "schemas/scene.schema.json");
     return schema;
 }
 
@@ -230,8 +231,7 @@ public:
 /// anisotropic phase (@a medium's g ≠ 0) changes two of them, as schemas/scene.schema.json says.
 /// An error asked for (@a quality, else the document's `quality`) puts the setting the accuracy
 /// bench chose for it between the defaults and the scene's own blocks.
-SceneSettings readSettings(
-    const json& document, const SceneReader& reader, const detail::QualityMedium& medium, std::optional<QualityRequest> quality)
+SceneSettings readSettings(const json& document, const detail::QualityMedium& medium, std::optional<QualityRequest> quality)
 {
     SceneSettings s;
     // A volume object is solved on its own voxels unless the scene (or its quality) asks for a
@@ -248,39 +248,7 @@ SceneSettings readSettings(
         quality = q.is_string() ? qualityRequestForLevel(q.get<std::string>()) : QualityRequest{q["error"].get<double>(), ""};
     }
     if (quality) s.quality = detail::applyQuality(*quality, medium, document, s);
-    if (document.contains("voxelize")) {
-        const json& v = document["voxelize"];
-        s.dim = v.value("dim", s.dim);
-        s.voxelSize = v.value("voxel_size", 0.0);
-        s.band = v.value("band", s.band);
-    }
-    if (document.contains("scatter")) {
-        const json& v = document["scatter"];
-        s.passes = v.value("passes", s.passes);
-        s.directions = v.value("directions", s.directions);
-        s.step = v.value("step", s.step);
-        s.cutoff = v.value("cutoff", s.cutoff);
-        s.tolerance = v.value("tolerance", s.tolerance);
-        s.extrapolate = v.value("extrapolate", s.extrapolate);
-        s.scatterBand = v.value("band", s.scatterBand);
-        s.finePasses = v.value("fine_passes", s.finePasses);
-        s.coarseFactor = v.value("coarse_factor", s.coarseFactor);
-        s.kernel = v.value("kernel", s.kernel);
-        s.accelerate = v.value("accelerate", s.accelerate);
-    }
-    if (document.contains("render")) {
-        const json& v = document["render"];
-        s.width = v.value("width", s.width);
-        s.height = v.value("height", s.height);
-        s.samples = v.value("samples", s.samples);
-        s.maxSamples = v.value("max_samples", s.maxSamples);
-        s.noiseLevel = v.value("noise_level", s.noiseLevel);
-        s.gather = v.value("mode", std::string("view")) == "gather";
-        s.gatherDirections = v.value("gather_directions", s.gatherDirections);
-        if (v.contains("direct")) s.directFromLights = v["direct"].get<std::string>() == "lights";
-        s.surface = v.value("surface", s.surface);
-        if (v.contains("background")) s.background = reader.rgb(v["background"]);
-    }
+    readKnobs(document, s); // the scene's own blocks win over the quality's setting
     if (document.contains("outputs")) s.outputs = document["outputs"].get<std::vector<std::string>>();
     return s;
 }
@@ -425,7 +393,7 @@ Scene parseScene(const std::string& text, const std::string& path, std::optional
         medium = {firstMedium->isVolume(), (albedo[0] + albedo[1] + albedo[2]) / 3.0, firstMedium->material->phaseG, 0.0};
         if (quality || document.contains("quality")) medium.opticalSize = opticalSize(scene, *firstMedium);
     }
-    scene.settings = readSettings(document, reader, medium, quality);
+    scene.settings = readSettings(document, medium, quality);
     // The environment lights' samples the quality's setting names, where a light sets none.
     if (scene.settings.quality && scene.settings.quality->environmentSamples > 0) {
         for (std::size_t i = 0; i < document["lights"].size(); ++i) {

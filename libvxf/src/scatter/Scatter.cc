@@ -95,9 +95,11 @@ bool solvesWhole(const ScatterOptions& options)
 
 } // namespace
 
+bool carriesFirstMoment(const ScatterOptions& options) { return solvesWhole(options) && options.pass.kernel == ScatterKernel::Sweep; }
+
 Medium scatterMedium(const VoxelSet& set, const Material& material, const ScatterOptions& options)
 {
-    const bool latticeOnly = solvesWhole(options) && options.pass.kernel == ScatterKernel::Sweep;
+    const bool latticeOnly = carriesFirstMoment(options); // (the same rule: the lattice alone serves the whole solve's sweeps)
     return Medium(set, material, latticeOnly ? Medium::Lookups::Trees : Medium::Lookups::Dense);
 }
 
@@ -116,7 +118,7 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
     // volume light's emission scaled alike).
     const double restG = transport.material().phaseG;
     const bool litWithMoment = restG != 0.0 && set.find(grids::kSourceAnisotropy);
-    const bool carriesMoment = solveWhole && sweeps && litWithMoment;
+    const bool carriesMoment = carriesFirstMoment(options) && litWithMoment;
     const Medium medium = carriesMoment ? transport : transport.isotropic();
     const float sourceScale = litWithMoment && !carriesMoment ? float(1.0 - restG) : 1.0f;
     openvdb::Vec3SGrid::Ptr sum, j;

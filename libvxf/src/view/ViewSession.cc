@@ -736,11 +736,10 @@ ViewSession::Rendered ViewSession::render(
             nlohmann::json params = nlohmann::json::object();
             const nlohmann::json recorded = nlohmann::json::parse(mOriginal.paramsJson(), nullptr, false);
             if (mOriginal.stage() == "scatter" && recorded.is_object()) {
-                for (const char* key : {"passes", "directions", "step", "cutoff", "tolerance", "band", "extrapolate", "fine_passes",
-                         "coarse_factor", "kernel", "no_accelerate", "fixed_directions"}) {
-                    if (recorded.contains(key)) params[key] = recorded[key];
+                for (const ops::Param& p : findOperator("scatter").params) {
+                    if (recorded.contains(p.name) && p.name != "keep_passes" && p.name != "from_pass") params[p.name] = recorded[p.name];
                 }
-                if (recorded.value("accelerate", true) == false) params["no_accelerate"] = true; // written before 2026-12
+                if (recorded.value("no_accelerate", false) == true) params["accelerate"] = false; // written before the knob table
             }
             if (params.empty()) params = {{"kernel", "sweep"}};
             const VoxelSet edited = replay(std::vector<Step>(steps.begin(), steps.begin() + std::ptrdiff_t(rescatterAfter)));

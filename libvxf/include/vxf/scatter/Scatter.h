@@ -87,6 +87,11 @@ struct ScatterReport
 /// Scatter options from a scene's settings (keepPasses when "scatter_passes" is an output).
 ScatterOptions scatterOptionsFrom(const SceneSettings& settings);
 
+/// Whether scatter() with @a options carries an anisotropic phase's first moment: only the
+/// accelerated sweeps solving the whole sum do. For any other scatter the light stage lights the
+/// similarity relation's isotropic medium (DirectLightOptions::similarity).
+bool carriesFirstMoment(const ScatterOptions& options);
+
 /// Σ over active values of a Vec3f grid, active tiles weighted by their voxel count.
 openvdb::Vec3d gridEnergy(const openvdb::Vec3SGrid& grid);
 
