@@ -4,6 +4,7 @@
 #include "../transport/SweepLattice.h"
 
 #include <vxf/core/GridRoles.h>
+#include <vxf/core/GridStats.h>
 #include <vxf/core/MemoryBudget.h>
 #include <vxf/transport/Phase.h>
 
@@ -91,6 +92,44 @@ double sweptWithCoarseCells(const openvdb::Vec3SGrid& source, const Medium& medi
 bool solvesWhole(const ScatterOptions& options)
 {
     return options.accelerate && options.fromPass == 0 && !options.keepPasses && options.finePasses == 0;
+}
+
+/// The accelerated solve's iterations as the report's passes.
+std::vector<ScatterReport::Pass> passesOf(const SweepSolveReport& solved)
+{
+    std::vector<ScatterReport::Pass> passes;
+    for (const auto& it : solved.iterations) {
+        ScatterReport::Pass info;
+        info.index = it.index;
+        info.energy = it.energy;
+        info.ratio = it.ratio;
+        info.seconds = it.seconds;
+        info.change = it.change;
+        info.diffusionIterations = it.diffusionIterations;
+        info.correctionSweeps = it.correctionSweeps;
+        info.sweepSeconds = it.sweepSeconds;
+        passes.push_back(info);
+    }
+    return passes;
+}
+
+/// The scattered light of a source that is nowhere negative is nowhere negative (each term of
+/// the series K S … K J ≥ 0): a value of @a sum below zero is an overshoot of an accelerated
+/// solve's correction (the diffusion correction or the gathers' sweeps, in voxels many mean free
+/// paths thick), set to zero here; what was set is said ("" when nothing was). A source an
+/// artist made negative somewhere scatters as the linear operator has it, negative light kept.
+std::string clampedBelowZero(openvdb::Vec3SGrid& sum, const openvdb::Vec3SGrid& source)
+{
+    const ValueRange given = valueRange(source), made = valueRange(sum);
+    const double lowest = std::min({made.min[0], made.min[1], made.min[2]});
+    if (given.channels != 3 || std::min({given.min[0], given.min[1], given.min[2]}) < 0.0 || !(lowest < 0.0)) return {};
+    openvdb::tools::foreach (sum.beginValueOn(), [](const openvdb::Vec3SGrid::ValueOnIter& it) {
+        const openvdb::Vec3f v = *it;
+        it.setValue(openvdb::Vec3f(std::max(v[0], 0.0f), std::max(v[1], 0.0f), std::max(v[2], 0.0f)));
+    });
+    const double largest = std::max({made.max[0], made.max[1], made.max[2]});
+    return fmt::format(
+        "; values below zero (down to {:.3g}, {:.2g} of the largest) set to zero", lowest, largest > 0.0 ? -lowest / largest : 0.0);
 }
 
 } // namespace
@@ -190,18 +229,7 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
             }
         }
         sum = sweepSolve(medium, *j, solve, solved, interrupter, &moments);
-        for (const auto& it : solved.iterations) {
-            ScatterReport::Pass info;
-            info.index = it.index;
-            info.energy = it.energy;
-            info.ratio = it.ratio;
-            info.seconds = it.seconds;
-            info.change = it.change;
-            info.diffusionIterations = it.diffusionIterations;
-            info.correctionSweeps = it.correctionSweeps;
-            info.sweepSeconds = it.sweepSeconds;
-            report.passes.push_back(info);
-        }
+        report.passes = passesOf(solved);
         report.accelerated = true;
         report.sweptVoxels = solved.voxels;
         report.diffusionUnknowns = solved.diffusionUnknowns;
@@ -214,6 +242,7 @@ ScatterReport scatter(VoxelSet& set, const Medium& transport, const ScatterOptio
         detail::iterateSources(set, medium, options, report, interrupter, sum, j, k);
     }
 
+    report.stopReason += clampedBelowZero(*sum, *j);
     sum->setName(grids::kScatter);
     set.put(sum);
     if (moments.scattered) {

@@ -41,6 +41,14 @@ constexpr double kDiffusionTolerance = 1e-2;
 constexpr double kDampedCorrection = 0.5;
 constexpr int kDampAfter = 5;
 
+/// A correction that more than doubles the change it should damp amplifies the error instead:
+/// in voxels many mean free paths thick the diffusion correction (and the gathers' sweeps) can
+/// overshoot by a factor of tens, the iterates alternating in sign and growing while the change
+/// relative to the sum stays near 1 (a sphere of albedo 0.99 at 20 mean free paths a voxel:
+/// −36x a sweep, the sum 1e26 after 16). The correction is then dropped at once and the
+/// iteration restarts from zero: what it built is lost.
+constexpr double kDivergentGrowth = 2.0;
+
 /// The gather's correction (transport synthetic acceleration): each gather's change is
 /// corrected by the sweeps' own accelerated solve of its scattered light, to this fraction of
 /// that solve's sum. The correction's error carries into the gathers' rate, which the sweeps'
@@ -243,13 +251,18 @@ private:
         it.index = l;
         if (accelerate) correct(it);
         if (accelerate && gather) mixing.mix(phi, next);
-        // How far this sweep moved the sum, per channel relative to it.
+        // How far this sweep moved the sum, per channel relative to it, and how much more (or
+        // less) than the sweep before it did.
         const openvdb::Vec3d moved = l1Change(lattice, next, phi);
         const openvdb::Vec3d size = l1(lattice, next);
         it.change = 0.0;
         for (int ch = 0; ch < 3; ++ch) {
             if (size[ch] > 0.0) it.change = std::max(it.change, moved[ch] / size[ch]);
         }
+        const double movedLargest = std::max({moved[0], moved[1], moved[2]});
+        const double growth = previousAbsolute > 0.0 ? movedLargest / previousAbsolute : 0.0;
+        previousAbsolute = movedLargest;
+        lastGrowth = growth;
         phi.swap(next);
         it.energy = latticeSum(lattice, count, [&](std::size_t v) { return openvdb::Vec3d(phi[v]); });
         it.ratio = previousChange > 0.0 ? it.change / previousChange : 0.0;
@@ -262,6 +275,10 @@ private:
             report.stopReason = "the source is zero";
             report.converged = true;
             return true;
+        }
+        if (accelerate && growth > kDivergentGrowth) {
+            restartWithoutCorrection(l, growth);
+            return false;
         }
         const bool rateKnown = l >= 3 || (l == 2 && !options.accelerate); // (kSecondIterationStop)
         if (l == 2 && options.accelerate && it.change <= kSecondIterationStop * options.tolerance) {
@@ -301,6 +318,42 @@ private:
             }
         }
         return false;
+    }
+
+    /// The correction amplified the error (kDivergentGrowth) at iteration @a l: dropped, and the
+    /// plain iteration restarted from φ = 0 (every array that carried the amplified iterate
+    /// cleared).
+    void restartWithoutCorrection(int l, double growth)
+    {
+        accelerate = false;
+        restarted = true;
+        report.accelerated = false;
+        correctionNote += fmt::format("{} diverged at {} {} (the change grew {:.3g}x) and was dropped, the {} restarted from zero; ",
+            correctionNote.empty() ? correctionName : "it", iteration, l, growth, iterations);
+        std::fill(phi.begin(), phi.end(), openvdb::Vec3f(0.0f));
+        std::fill(flux.begin(), flux.end(), openvdb::Vec3f(0.0f));
+        previousCellFlux.clear();
+        mixing = AndersonMixing();
+        corrected = false;
+        damping = 1.0;
+        previousChange = 0.0;
+        previousAbsolute = 0.0;
+        previousMoved = 0.0;
+    }
+
+    /// After a restart without the correction, stopped before converging: the plain iteration's
+    /// changes are the series' terms, each the one before times the rate r (the slowest mode's,
+    /// near the albedo in a thick medium), so the rest of the series, the last change × r/(1−r)
+    /// per voxel, is added (as the plain passes' tolerance adds it, Scatter.h). Nothing when the
+    /// changes did not fall (r ≥ 1: no rate to trust).
+    void addTail()
+    {
+        if (!(lastGrowth > 0.0 && lastGrowth < 1.0)) return;
+        const float factor = float(lastGrowth / (1.0 - lastGrowth));
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t v = r.begin(); v != r.end(); ++v) phi[v] += (phi[v] - next[v]) * factor; // (next: the iterate before)
+        });
+        report.stopReason += fmt::format("; the rest of the series, the last change x r/(1-r) with r = {:.4f}, added", lastGrowth);
     }
 
     /// φ_{l+½} = K J0 + K(Sφ_l): J0 read fraction-weighted, Sφ_l continued (SourceField).
@@ -426,6 +479,7 @@ private:
             report.stopReason = correctionNote +
                 fmt::format("stopped after {} {}, estimated error {:.2g} of the sum", report.iterations.size(), iterations,
                     report.iterations.empty() ? 0.0 : report.iterations.back().error);
+            if (restarted) addTail();
         }
         // The solve's arrays go before the grids are made (φ itself becomes the output's values).
         sweepSource = {};
@@ -503,6 +557,9 @@ private:
     bool corrected = false; ///< the last sweep added the diffusion correction (it holds it)
     double previousChange = 0.0;
     double previousMoved = 0.0; ///< |φ_{l+½} − φ_l|₁ of the last accelerated sweep, largest channel
+    double previousAbsolute = 0.0; ///< |φ_{l+1} − φ_l|₁ of the last iteration, largest channel (after its correction)
+    double lastGrowth = 0.0; ///< that change over the one before it
+    bool restarted = false; ///< the correction diverged: dropped, the plain iteration restarted from zero
     std::string correctionNote; ///< whether and why the correction was halved or dropped
     bool accelerate;
     double damping = 1.0; ///< of the correction: kDampedCorrection once it stalled
