@@ -55,3 +55,21 @@ TEST_CASE("a scene's occluder shadows its medium, several media need their own c
     vxf::VoxelSet justOne = vxf::voxelizeMedia(vxf::loadScene(dir.path("open.json")), vxf::VoxelizeOptions{0.0, 24, 3.0f, nullptr});
     CHECK_THROWS_WITH(vxf::lightScene(justOne, two), Catch::Contains("two.json") && Catch::Contains("2 media"));
 }
+
+TEST_CASE("a medium whose mean free path is under half a voxel is said to be unresolved", "[pipeline][light]")
+{
+    // The ball at dim 24: a voxel 2/24. sigma_t 2.5 (a mean free path of 5 voxels) is resolved;
+    // sigma_t 50 (0.24 of a voxel) is not, and the warning names both sizes and the cure.
+    const auto warnings = [](const char* material) {
+        const std::string text = R"({"objects": [{"name": "ball", "mesh": "builtin:sphere", "material": )" + std::string(material) +
+            R"(}], "lights": [{"type": "directional", "direction": [0, 0, -1]}], "camera": {"position": [0, -5, 0], "look_at": [0, 0, 0]}})";
+        const vxf::Scene scene = vxf::parseScene(text, "/scenes/ball.json");
+        vxf::VoxelSet set = vxf::voxelizeMedia(scene, vxf::VoxelizeOptions{0.0, 24, 3.0f, nullptr});
+        return vxf::lightScene(set, scene).warnings;
+    };
+    CHECK(warnings(R"({"sigma_a": 0.5, "sigma_s": 2.0})").empty());
+    const auto dense = warnings(R"({"sigma_a": 10.0, "sigma_s": 40.0})");
+    REQUIRE(dense.size() == 1);
+    CHECK_THAT(dense[0],
+        Catch::Contains("mean free path (0.02 at density 1) is 0.24 of a voxel (0.0833)") && Catch::Contains("voxelize.voxel_size 0.04"));
+}

@@ -12,7 +12,7 @@
 // linkage table (R_X86_64_JUMP_SLOT relocations, checked with readelf), and a definition in the
 // executable comes first in the dynamic linker's search, so the library's own tree readers use
 // these. Each checks a chunk's declared lengths against the buffer before reading a byte of it.
-// tests/unit/VdbReaderTest.cc reads the crafted files through readVoxelSet and expects an error.
+// tests/unit/VdbArchiveReaderTest.cc reads the crafted files through readVoxelSet and expects an error.
 
 #include <openvdb/Exceptions.h>
 #include <openvdb/io/Compression.h>

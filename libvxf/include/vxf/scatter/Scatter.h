@@ -1,4 +1,5 @@
-// vxf — the scatter stage: source iteration over passes, with early stopping.
+// vxf — the scatter stage: the multiple scattering solved whole by accelerated sweeps or gathers
+// (the default), or by plain source iteration over passes, with early stopping.
 #pragma once
 
 #include <vxf/transport/AdaptiveBand.h>
@@ -148,7 +149,9 @@ Medium scatterMedium(const VoxelSet& set, const Material& material, const Scatte
 /// J_N + σs·(Σ coarse φ)/4π, which resolves the light near the surface at full resolution,
 /// and correction cycles (conjugate-gradient steps of two fine gathers each, until what is
 /// left is below the tolerance, at least 0.3%, of the sum) solve for what the coarse
-/// lattice's slightly different operator left out; see Scatter.cc.
+/// lattice's slightly different operator left out; see SourceIteration.cc.
+/// A source nowhere negative gives a sum nowhere negative: what an accelerated solve's correction
+/// leaves below zero is set to zero, and the stop reason says how low it was.
 /// Throws vxf::Error naming a missing grid, vxf::UsageError for a bad coarseFactor.
 ScatterReport scatter(VoxelSet& set, const Medium& medium, const ScatterOptions& options = {}, Interrupter* interrupter = nullptr);
 
