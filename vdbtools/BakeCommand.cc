@@ -59,8 +59,8 @@ public:
                 manifestPath, mScene,
                 (std::filesystem::path(mOutput).parent_path() / (std::filesystem::path(mOutput).stem().string() + "-baked.vdb")).string()));
         }
-        refuseOutputOverInput(mScene, mOutput);
         const Scene scene = loadScene(mScene, mFrame);
+        refuseOverwrites(sceneFiles(scene), {{"-o", mOutput}, {"the manifest", manifestPath}});
         mOptions.scattering = mScattering == "multiple" ? BakedScattering::Multiple
             : mScattering == "none"                     ? BakedScattering::None
                                                         : BakedScattering::All;

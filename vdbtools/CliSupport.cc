@@ -53,12 +53,55 @@ const CLI::Validator OutputFile(
     },
     "FILE");
 
+bool sameFile(const std::string& a, const std::string& b)
+{
+    namespace fs = std::filesystem;
+    std::error_code error;
+    if (fs::equivalent(a, b, error)) return true;
+    const fs::path first = fs::weakly_canonical(fs::absolute(a, error), error);
+    const fs::path second = fs::weakly_canonical(fs::absolute(b, error), error);
+    return !error && first == second;
+}
+
+void refuseOverwrites(const std::vector<NamedFile>& inputs, const std::vector<NamedFile>& outputs)
+{
+    const auto isFile = [](const NamedFile& f) { return !f.path.empty() && f.path.rfind("builtin:", 0) != 0; };
+    for (std::size_t o = 0; o < outputs.size(); ++o) {
+        const NamedFile& out = outputs[o];
+        if (!isFile(out)) continue;
+        for (const NamedFile& in : inputs) {
+            if (isFile(in) && sameFile(in.path, out.path)) {
+                throw UsageError(fmt::format("{} {} is {} {}: it would be replaced by what this command writes; write the output "
+                                             "elsewhere",
+                    out.label, out.path, in.label, in.path));
+            }
+        }
+        for (std::size_t other = 0; other < o; ++other) {
+            if (isFile(outputs[other]) && sameFile(outputs[other].path, out.path)) {
+                throw UsageError(fmt::format("{} {} is also {} {}: give each output a file of its own", out.label, out.path,
+                    outputs[other].label, outputs[other].path));
+            }
+        }
+    }
+}
+
+std::vector<NamedFile> sceneFiles(const Scene& scene)
+{
+    std::vector<NamedFile> files{{"the scene", scene.path}};
+    for (const SceneObject& o : scene.objects) {
+        files.push_back({fmt::format("object '{}''s {}", o.name, o.isVolume() ? "volume" : "mesh"), o.isVolume() ? o.volume : o.mesh});
+        if (o.material && !o.material->gridsFile.empty())
+            files.push_back({fmt::format("object '{}''s coefficient grids", o.name), o.material->gridsFile});
+    }
+    for (const Light& l : scene.lights) {
+        if (!l.file.empty()) files.push_back({fmt::format("light '{}''s file", l.name), l.file});
+    }
+    return files;
+}
+
 void refuseOutputOverInput(const std::string& input, const std::string& output)
 {
-    std::error_code error;
-    if (std::filesystem::equivalent(input, output, error)) {
-        throw UsageError(fmt::format("output {} is the input {}: write the converted file beside it", output, input));
-    }
+    refuseOverwrites({{"the input", input}}, {{"the output", output}});
 }
 
 namespace {

@@ -2,12 +2,14 @@
 #pragma once
 
 #include <vxf/core/Interrupter.h>
+#include <vxf/core/Scene.h>
 
 #include <CLI/CLI.hpp>
 
 #include <chrono>
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace vxf::cli {
 
@@ -54,8 +56,28 @@ extern const CLI::Validator OutputFile;
 /// operator's own subcommand under `op`), into @a value: the budget each stage checks its
 /// estimated peak against (core/MemoryBudget.h).
 void addMaxMemoryOption(CLI::App& app, std::string& value);
-/// A usage error when @a output is the file @a input (a converter would replace its own input
-/// with another format).
+/// A file a command reads or writes, as its user named it: @a label the option or argument
+/// ("-o", "--png", "the scene", "object 'ball''s mesh"), @a path the file.
+struct NamedFile
+{
+    std::string label, path;
+};
+
+/// Whether @a a and @a b are one file: the same device and inode where both exist (hard links,
+/// symbolic links, `./x` and `x`), else the same path once every link of it is resolved.
+bool sameFile(const std::string& a, const std::string& b);
+
+/// Refuses, before any work, a command whose output is one of its inputs or another of its
+/// outputs (`vxf voxelize m.off -o m.off` turned the mesh into a VDB; `--png x.exr -o x.exr`
+/// left a PNG in the EXR): a vxf::UsageError naming both. Empty paths and builtin: meshes are
+/// no files.
+void refuseOverwrites(const std::vector<NamedFile>& inputs, const std::vector<NamedFile>& outputs);
+
+/// The files @a scene reads beside itself (meshes, volumes, coefficient grids, lights' maps and
+/// grids), each named by the object or light that reads it; the scene's own file first.
+std::vector<NamedFile> sceneFiles(const Scene& scene);
+
+/// refuseOverwrites for a converter: @a output must not be @a input.
 void refuseOutputOverInput(const std::string& input, const std::string& output);
 
 /// Seconds since @a start.

@@ -45,6 +45,9 @@ public:
         const ops::Args args = mParams->args();
         mScene = args.text("scene");
         const Scene scene = stageScene(args);
+        std::vector<NamedFile> inputs = sceneFiles(scene);
+        inputs.push_back({"the input", mInput});
+        refuseOverwrites(inputs, {{"-o", mOutput}});
         const DirectLightOptions options = lightOptions(args, scene.settings);
         // Refused before the read when the file's own count says the volume will not fit.
         if (const std::uint64_t voxels = declaredVoxels(mInput, inputDensity(scene))) requireMemory("light", lightMemory(double(voxels)));

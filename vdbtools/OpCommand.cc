@@ -77,7 +77,10 @@ private:
             throw UsageError(
                 fmt::format("{}: unknown parameter or extra argument '{}' (it takes: {})", op.name, call.app->remaining().front(), known));
         }
-        if (!call.record.empty() && std::filesystem::weakly_canonical(call.input) == std::filesystem::weakly_canonical(call.output)) {
+        // (-o may be the input: an operator edits a file in place, read whole before it is replaced.)
+        refuseOverwrites({{"the input", call.input}}, {{"--record", call.record}});
+        refuseOverwrites({}, {{"-o", call.output}, {"--record", call.record}});
+        if (!call.record.empty() && sameFile(call.input, call.output)) {
             throw UsageError(fmt::format("{}: --record needs an output file other than the input (a graph replaying it would "
                                          "read its own output)",
                 op.name));

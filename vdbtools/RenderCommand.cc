@@ -45,6 +45,9 @@ public:
         const auto start = std::chrono::steady_clock::now();
         const ops::Args args = mParams->args();
         const Scene scene = stageScene(args);
+        std::vector<NamedFile> inputs = sceneFiles(scene);
+        inputs.push_back({"--volume", mVolume});
+        refuseOverwrites(inputs, {{"-o", args.text("image")}, {"--png", args.has("png") ? args.text("png") : std::string()}});
         const RenderOptions options = renderOptions(args, scene.settings);
         // Refused before the read when the bytes the file declares for its grids will not fit.
         if (const auto footprints = declaredFootprints(mVolume, renderGrids(options)); !footprints.empty())

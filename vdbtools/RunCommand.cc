@@ -66,6 +66,7 @@ public:
         if (mFrames.empty()) {
             if (mWarmStart || mPrune) throw UsageError(fmt::format("{} needs --frames", mWarmStart ? "--warm-start" : "--prune-cache"));
             const Scene scene = loadScene(mScene, std::nullopt, qualityAsked());
+            refuseImagesOverInputs(scene);
             sayQuality(scene);
             if (mDryRun) {
                 requireSceneInputs(scene);
@@ -82,6 +83,7 @@ public:
         for (int frame : frames) {
             scenes.push_back(loadScene(mScene, frame, qualityAsked()));
             requireSceneInputs(scenes.back());
+            refuseImagesOverInputs(scenes.back());
         }
         sayQuality(scenes.front());
         if (mDryRun) {
@@ -115,6 +117,14 @@ private:
         if (mError > 0.0) return QualityRequest{mError, ""};
         if (!mLevel.empty()) return qualityRequestForLevel(mLevel);
         return std::nullopt;
+    }
+
+    /// The image and preview vxf run writes for @a scene must not be files the scene reads.
+    void refuseImagesOverInputs(const Scene& scene) const
+    {
+        const std::string image = sceneImagePath(scene, mOut);
+        refuseOverwrites(
+            sceneFiles(scene), {{"the image", image}, {"the preview", std::filesystem::path(image).replace_extension(".png").string()}});
     }
 
     static void sayQuality(const Scene& scene)

@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include <iostream>
+#include <optional>
 
 namespace vxf::cli {
 
@@ -42,6 +43,11 @@ public:
         TerminalProgress progress;
         const auto start = std::chrono::steady_clock::now();
         const ops::Args args = mParams->args();
+        std::optional<Scene> scene;
+        if (!mScene.empty()) scene = loadScene(mScene);
+        std::vector<NamedFile> inputs = scene ? sceneFiles(*scene) : std::vector<NamedFile>{};
+        inputs.push_back({"the input", mInput});
+        refuseOverwrites(inputs, {{"-o", mOutput}});
         // Refused before the read when the file's own count says the volume will not fit (with a
         // band, what the sweeps hold is known once its tiles are made: scatter() checks then).
         const bool banded = args.number("band") > 0.0;
@@ -49,7 +55,7 @@ public:
             requireMemory("scatter", scatterMemory(double(voxels)));
         }
         VoxelSet set = readVoxelSet(mInput, scatterInputRead()); // `direct` after the solve
-        const Material material = mScene.empty() ? recordedMaterial(set) : sceneMaterial(loadScene(mScene));
+        const Material material = scene ? sceneMaterial(*scene) : recordedMaterial(set);
         const ScatterOptions options = scatterOptions(args, material);
         const ScatterReport report = scatter(set, scatterMedium(set, material, options), options, &progress);
         readGridsInto(set, mInput, {grids::kDirect}, scatterInputRead());

@@ -126,6 +126,7 @@ public:
         if (mParams->has("voxel_size") && mParams->has("dim")) throw UsageError("give --voxel-size or --dim, not both");
         const ops::Args args = mParams->args();
         mRequest.mesh = args.text("mesh");
+        refuseOverwrites({{"the mesh", mRequest.mesh}}, {{"-o", mRequest.output}});
         mRequest.voxelize = voxelizeOptions(args);
         voxelizeToFile(mRequest);
     }

@@ -18,6 +18,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <map>
 
 #include <unistd.h>
 
@@ -819,6 +820,37 @@ TEST_CASE("the operator table of docs/cli.md and the pipeline schema are what th
     CHECK(help.out.find("one of add|subtract|multiply|darker|lighter|mix") != std::string::npos);
 }
 
+TEST_CASE("the stage commands take the scene's knobs: flags on by default turn off with --no-NAME, overrides win", "[cli][knobs]")
+{
+    TempDir dir;
+    litSphere(dir, 16, R"({"albedo": 0.8, "mean_free_path": 0.5})");
+    // --no-accelerate: plain source iteration, one order a pass (its report says passes, not sweeps).
+    const auto plain = run(fmt::format("{} scatter {} -o {} --kernel sweep --directions 8 --passes 3 --no-accelerate", binary("vxf"),
+        dir.path("l.vdb"), dir.path("p.vdb")));
+    INFO(plain.out << plain.err);
+    REQUIRE(plain.status == 0);
+    CHECK(plain.out.find("accelerated") == std::string::npos);
+    CHECK(plain.out.find("3 passes") != std::string::npos);
+    const auto help = run(fmt::format("{} scatter --help", binary("vxf")));
+    CHECK(help.out.find("--no-accelerate") != std::string::npos);
+    CHECK(help.out.find("on by default") != std::string::npos);
+    // The render's knobs override the scene's: --direct lights, --no-surface, the size.
+    const auto render = run(fmt::format("{} render {} --volume {} -o {} --direct lights --no-surface --width 20 --height 10 --samples 1",
+        binary("vxf"), dir.path("scene.json"), dir.path("p.vdb"), dir.path("i.exr")));
+    INFO(render.out << render.err);
+    REQUIRE(render.status == 0);
+    CHECK(render.out.find("20x10") != std::string::npos);
+    const auto bad = run(fmt::format(
+        "{} render {} --volume {} -o {} --direct sideways", binary("vxf"), dir.path("scene.json"), dir.path("p.vdb"), dir.path("j.exr")));
+    CHECK(bad.status == 2);
+    CHECK(bad.err.find("--direct") != std::string::npos);
+    CHECK_FALSE(fs::exists(dir.path("j.exr")));
+    // The scene schema vxf checks scenes against, its settings made from the knobs, is the committed one.
+    const auto schema = run(fmt::format("{} run --schema", binary("vxf")));
+    REQUIRE(schema.status == 0);
+    CHECK(nlohmann::json::parse(schema.out) == nlohmann::json::parse(slurp(source("schemas/scene.schema.json"))));
+}
+
 TEST_CASE("vxf run lights and renders a fog volume made by vdb_tool (a volume object, no mesh)", "[cli][run][volume]")
 {
     TempDir dir;
@@ -1019,6 +1051,54 @@ TEST_CASE("an output that cannot be written is refused before any work, and a co
         CHECK_THAT(over.err, Catch::Contains("is the input"));
         CHECK(slurp(dir.path("s.vdb")) == before);
     }
+}
+
+TEST_CASE("no command writes over one of its inputs or another of its outputs: refused before any work, every file kept", "[cli][output]")
+{
+    // Each command with each of its outputs set to each file it reads (the input, the scene, the
+    // scene's mesh, by another spelling or through a link) and to another of its outputs.
+    TempDir dir;
+    const std::string vxf = binary("vxf");
+    vxf::test::spit(dir.path("m.obj"), "v -1 -1 -1\nv 1 -1 -1\nv 0 1 -1\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n");
+    vxf::test::spit(
+        dir.path("s.json"), R"({"objects": [{"name": "tet", "mesh": "m.obj", "material": {"albedo": 0.8, "mean_free_path": 0.5}}],
+      "lights": [{"type": "point", "position": [0, 0, 3]}], "camera": {"position": [0, -4, 0], "look_at": [0, 0, 0]},
+      "voxelize": {"dim": 12}, "render": {"width": 8, "height": 6, "samples": 1}})");
+    REQUIRE(run(fmt::format("{} voxelize {} -o {} --dim 12 -q", vxf, dir.path("m.obj"), dir.path("v.vdb"))).status == 0);
+    REQUIRE(run(fmt::format("{} light {} --scene {} -o {} -q", vxf, dir.path("v.vdb"), dir.path("s.json"), dir.path("l.vdb"))).status == 0);
+    fs::create_symlink(dir.path("m.obj"), dir.path("link.obj"));
+    std::map<std::string, std::string> before;
+    for (const char* f : {"m.obj", "s.json", "v.vdb", "l.vdb"}) before[f] = slurp(dir.path(f));
+    const auto p = [&](const char* f) { return dir.path(f); };
+    const std::vector<std::pair<std::string, std::string>> cases = {
+        {fmt::format("voxelize {} -o {}", p("m.obj"), p("m.obj")), "is the mesh"},
+        {fmt::format("voxelize {} -o {}/./m.obj", p("m.obj"), dir.root().string()), "is the mesh"},
+        {fmt::format("voxelize {} -o {}", p("link.obj"), p("m.obj")), "is the mesh"},
+        {fmt::format("light {} --scene {} -o {}", p("v.vdb"), p("s.json"), p("v.vdb")), "is the input"},
+        {fmt::format("light {} --scene {} -o {}", p("v.vdb"), p("s.json"), p("s.json")), "is the scene"},
+        {fmt::format("light {} --scene {} -o {}", p("v.vdb"), p("s.json"), p("m.obj")), "is object 'tet''s mesh"},
+        {fmt::format("scatter {} --scene {} -o {}", p("l.vdb"), p("s.json"), p("s.json")), "is the scene"},
+        {fmt::format("scatter {} -o {}", p("l.vdb"), p("l.vdb")), "is the input"},
+        {fmt::format("render {} --volume {} -o {}", p("s.json"), p("l.vdb"), p("l.vdb")), "is --volume"},
+        {fmt::format("render {} --volume {} -o {}", p("s.json"), p("l.vdb"), p("s.json")), "is the scene"},
+        {fmt::format("render {} --volume {} -o {} --png {}", p("s.json"), p("l.vdb"), p("x.exr"), p("m.obj")), "is object 'tet''s mesh"},
+        {fmt::format("render {} --volume {} -o {} --png {}", p("s.json"), p("l.vdb"), p("x.exr"), p("x.exr")), "is also -o"},
+        {fmt::format("bake {} -o {}", p("s.json"), p("m.obj")), "is object 'tet''s mesh"},
+        {fmt::format("op mul {} -o {} --grid direct --value 2 --record {}", p("l.vdb"), p("y.vdb"), p("l.vdb")), "is the input"},
+        {fmt::format("op mul {} -o {} --grid direct --value 2 --record {}", p("l.vdb"), p("y.vdb"), p("y.vdb")), "is also -o"},
+    };
+    for (const auto& [args, message] : cases) {
+        INFO(args);
+        const auto refused = run(vxf + " " + args);
+        INFO(refused.err);
+        CHECK(refused.status == 2);
+        CHECK_THAT(refused.err, Catch::Contains(message) && Catch::Contains(dir.root().string()));
+        for (const auto& [file, bytes] : before) CHECK(slurp(dir.path(file)) == bytes);
+        CHECK_FALSE(fs::exists(dir.path("x.exr")));
+        CHECK_FALSE(fs::exists(dir.path("y.vdb")));
+    }
+    // An operator may still edit a file in place (read whole, then replaced atomically).
+    CHECK(run(fmt::format("{} op mul {} -o {} --grid direct --value 2", vxf, p("l.vdb"), p("l.vdb"))).status == 0);
 }
 
 TEST_CASE("vxf run recomputes a cache entry it cannot read (truncated or damaged) with a warning", "[cli][run][cache]")
