@@ -1,7 +1,7 @@
-// The lattice the sweeps run on (src/transport/SweepLattice.h, private to light and scatter): a
+// The lattice the sweeps run on (src/transport/lattice/SweepLattice.h, private to light and scatter): a
 // grid's values read and written back, optical depth along a direction, and the transport
 // sweep's fixed point deep in a homogeneous medium; dark leaves skipped, the distance held near the surface only.
-#include "transport/SweepLattice.h"
+#include "transport/lattice/SweepLattice.h"
 
 #include <vxf/transport/AdaptiveBand.h>
 #include <vxf/scatter/SweepPass.h>

@@ -1,6 +1,6 @@
-// The sweeps' step arithmetic (src/transport/SweepSteps.h, private to transport/): the weights of
+// The sweeps' step arithmetic (src/transport/lattice/SweepSteps.h, private to transport/): the weights of
 // a step's linear source against their integrals, and the varying step against the uniform one.
-#include "transport/SweepSteps.h"
+#include "transport/lattice/SweepSteps.h"
 
 #include <catch2/catch.hpp>
 

@@ -1,6 +1,6 @@
 #include <vxf/view/ViewServer.h>
 
-#include "../TestSupport.h"
+#include "TestSupport.h"
 
 #include <vxf/io/VoxelSetFile.h>
 

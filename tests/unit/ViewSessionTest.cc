@@ -1,6 +1,6 @@
 #include <vxf/view/ViewSession.h>
 
-#include "../TestSupport.h"
+#include "TestSupport.h"
 
 #include <vxf/io/ImageFile.h>
 #include <vxf/io/VoxelSetFile.h>

@@ -3,7 +3,7 @@
 // leaf by leaf as the output grids' leaves are made from them.
 #pragma once
 
-#include "../transport/SweepLattice.h"
+#include "transport/lattice/SweepLattice.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

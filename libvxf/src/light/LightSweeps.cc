@@ -6,7 +6,7 @@
 #include <vxf/light/VolumeEmission.h>
 #include <vxf/transport/Phase.h>
 
-#include "../transport/SweepLattice.h"
+#include "transport/lattice/SweepLattice.h"
 
 #include <vxf/core/Hash.h>
 

@@ -8,7 +8,7 @@
 #include <vxf/light/LightSampler.h>
 #include <vxf/core/RayScene.h>
 
-#include "../transport/SweepLattice.h"
+#include "transport/lattice/SweepLattice.h"
 #include "LeafBlocks.h"
 
 #include <openvdb/tools/RayIntersector.h>

@@ -1,7 +1,7 @@
 // vxf — diffusion synthetic acceleration's correction on a sweep lattice (private to libvxf).
 #pragma once
 
-#include "../transport/SweepLattice.h"
+#include "transport/lattice/SweepLattice.h"
 #include "DiffusionMultigrid.h"
 
 #include <openvdb/math/ConjGradient.h>

@@ -1,7 +1,7 @@
 // vxf — a scatter pass's source as the sweeps read it (private to libvxf's scatter module).
 #pragma once
 
-#include "../transport/SweepLattice.h"
+#include "transport/lattice/SweepLattice.h"
 
 #include <vxf/scatter/SourceField.h>
 

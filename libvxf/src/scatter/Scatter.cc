@@ -1,7 +1,7 @@
 #include <vxf/scatter/Scatter.h>
 
 #include "SourceIteration.h"
-#include "../transport/SweepLattice.h"
+#include "transport/lattice/SweepLattice.h"
 
 #include <vxf/core/GridRoles.h>
 #include <vxf/core/GridStats.h>

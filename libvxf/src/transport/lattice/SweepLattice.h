@@ -6,7 +6,7 @@
 #include <vxf/transport/Medium.h>
 #include <vxf/transport/Phase.h>
 
-#include "../core/ScratchArray.h"
+#include "core/ScratchArray.h"
 
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Interpolation.h>

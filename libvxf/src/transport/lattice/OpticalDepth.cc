@@ -1,3 +1,5 @@
+// vxf — the lattice's optical-depth sweeps: along a direction (directional and environment
+// lights) and from a point (point and spot lights), for the light stage.
 #include "SweepSteps.h"
 
 #include <vxf/core/Error.h>

@@ -1,3 +1,5 @@
+// vxf — the lattice's transport sweep (SweepLattice::sweep): one upwind pass over the leaves a
+// direction, fine leaves and coarse cells, with the first moment a phase carries.
 #include "SweepSteps.h"
 
 #include <vxf/core/Error.h>

@@ -1,3 +1,5 @@
+// vxf — the sweep lattice built (SweepLattice.h): the medium's leaves indexed, coarse cells
+// chosen, its coefficients read padded, grids read onto it and written from it.
 #include "SweepSteps.h"
 
 #include <vxf/core/Error.h>
