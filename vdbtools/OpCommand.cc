@@ -37,7 +37,7 @@ public:
             call.app = sub;
             sub->add_option("input", call.input, "Input .vdb")->required();
             sub->add_option("-o,--output", call.output, "Output .vdb (may be the input)")->required()->check(OutputFile);
-            sub->add_option("--record", call.record, "Append this command as a node to a pipeline graph (vxf graph)");
+            sub->add_option("--record", call.record, "Append this command as a node to a pipeline graph (vxf graph)")->check(OutputFile);
             sub->add_flag("--half", call.write.half, "Store floats as 16-bit halves");
             call.params = std::make_unique<OperatorOptions>(*sub, op, false);
         }

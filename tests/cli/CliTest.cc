@@ -1193,6 +1193,26 @@ TEST_CASE("two scenes of one file name in one --out: the second is refused befor
     CHECK_THAT(other.err, Catch::Contains("is rendered there from " + fs::weakly_canonical(dir.path("a/s.json")).string()));
     CHECK(other.out.find("ran") == std::string::npos); // nothing computed
     CHECK(slurp(dir.path("out/s.exr")) == image);
+
+    // A run that fails claims nothing: the next scene of that name renders there.
+    fs::create_directories(dir.path("c"));
+    fs::create_directories(dir.path("d"));
+    vxf::test::spit(dir.path("c/broken.obj"), "v 0 0 0\nf 1 2 3 x\n");
+    vxf::test::spit(dir.path("c/t.json"), R"({"objects": [{"mesh": "broken.obj", "material": {"albedo": 0.5, "mean_free_path": 1}}],
+      "lights": [{"type": "point", "position": [0, 0, 3]}], "camera": {"position": [0, -4, 0], "look_at": [0, 0, 0]}})");
+    const auto failed = run(fmt::format("{} run {} --out {}", binary("vxf"), quoted(dir.path("c/t.json")), quoted(dir.path("out"))));
+    INFO(failed.err);
+    CHECK(failed.status == 1);
+    CHECK_FALSE(fs::exists(dir.path("out/.t.scene")));
+    vxf::test::spit(dir.path("d/t.json"), scene);
+    CHECK(run(fmt::format("{} run {} --out {}", binary("vxf"), quoted(dir.path("d/t.json")), quoted(dir.path("out")))).status == 0);
+    // A graph to record into, in a folder that does not exist: refused before the operator runs.
+    const auto record = run(fmt::format("{} op mul {} -o {} --grid density --value 2 --record {}", binary("vxf"),
+        quoted(dir.path("out/cache") + "/" + fs::path(cachedStage(dir.path("out/cache"), "voxelize-")).filename().string()),
+        quoted(dir.path("x.vdb")), quoted(dir.path("nodir/p.json"))));
+    CHECK(record.status == 2);
+    CHECK_THAT(record.err, Catch::Contains("nodir") && Catch::Contains("does not exist"));
+    CHECK_FALSE(fs::exists(dir.path("x.vdb")));
 }
 
 TEST_CASE("every crafted .vdb that overflowed OpenVDB 10.0.1's reader is a clear error through every command that reads a .vdb",

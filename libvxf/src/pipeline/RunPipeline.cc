@@ -109,7 +109,9 @@ private:
 /// Claim OUT/STEM.exr for the scene at @a scenePath: a hidden `.STEM.scene` beside it names the
 /// scene that renders there, and another scene of the same file stem is refused before any work
 /// (two scenes named s.json in one --out both printed "wrote out/s.exr", and one image was lost).
-void claimImageName(const fs::path& out, const std::string& stem, const std::string& scenePath)
+/// Returns the claim's file when this call made it (a run that then fails removes it: a failed
+/// run claims nothing), else "".
+fs::path claimImageName(const fs::path& out, const std::string& stem, const std::string& scenePath)
 {
     const fs::path claim = out / ("." + stem + ".scene");
     const std::string mine = fs::weakly_canonical(fs::absolute(scenePath)).string();
@@ -119,13 +121,13 @@ void claimImageName(const fs::path& out, const std::string& stem, const std::str
         throw UsageError(fmt::format("{}: {} is rendered there from {}; give this scene another --out (or rename it)", out.string(),
             (out / (stem + ".exr")).string(), theirs));
     }
-    if (theirs != mine) {
-        writeAtomically(claim.string(), [&](const std::string& tmp) {
-            std::ofstream file(tmp);
-            file << mine << "\n";
-            if (!file) throw Error(fmt::format("{}: cannot write", claim.string()));
-        });
-    }
+    if (theirs == mine) return {};
+    writeAtomically(claim.string(), [&](const std::string& tmp) {
+        std::ofstream file(tmp);
+        file << mine << "\n";
+        if (!file) throw Error(fmt::format("{}: cannot write", claim.string()));
+    });
+    return claim;
 }
 
 /// Whether @a entry is in the cache: when it is not, after waiting for a run that computes it
@@ -340,9 +342,6 @@ PipelineReport runPipelineOnce(const Scene& scene, const std::string& outDir, In
 
     const fs::path out(outDir), cache = out / "cache";
     fs::create_directories(cache);
-    const std::string stem = sceneStem(scene);
-    if (std::find(s.outputs.begin(), s.outputs.end(), "image") != s.outputs.end() && !scene.path.empty())
-        claimImageName(out, stem, scene.path);
     PipelineRun run{scene, s, material, out, cache, interrupter, options, report, std::nullopt};
     const PipelineRun::Entry lit = run.lightStage(run.voxelizeStage());
     const PipelineRun::Entry volume = run.scatterStage(lit);
@@ -356,16 +355,27 @@ PipelineReport runPipelineOnce(const Scene& scene, const std::string& outDir, In
 PipelineReport runPipeline(const Scene& scene, const std::string& outDir, Interrupter* interrupter, const PipelineOptions& options)
 {
     std::vector<std::string> warnings;
-    // Each pass over an unreadable entry removes it; the chain has three entries to lose.
-    for (int attempt = 0;; ++attempt) {
-        try {
-            PipelineReport report = runPipelineOnce(scene, outDir, interrupter, options);
-            report.warnings.insert(report.warnings.begin(), warnings.begin(), warnings.end());
-            return report;
-        } catch (const UnreadableCacheEntry& stale) {
-            if (attempt >= 3) throw Error(stale.warning);
-            warnings.push_back(stale.warning);
+    const SceneSettings& s = scene.settings;
+    fs::create_directories(outDir);
+    fs::path claim; // made by this run: removed when it fails
+    if (std::find(s.outputs.begin(), s.outputs.end(), "image") != s.outputs.end() && !scene.path.empty())
+        claim = claimImageName(outDir, sceneStem(scene), scene.path);
+    try {
+        // Each pass over an unreadable entry removes it; the chain has three entries to lose.
+        for (int attempt = 0;; ++attempt) {
+            try {
+                PipelineReport report = runPipelineOnce(scene, outDir, interrupter, options);
+                report.warnings.insert(report.warnings.begin(), warnings.begin(), warnings.end());
+                return report;
+            } catch (const UnreadableCacheEntry& stale) {
+                if (attempt >= 3) throw Error(stale.warning);
+                warnings.push_back(stale.warning);
+            }
         }
+    } catch (...) {
+        std::error_code ignored;
+        if (!claim.empty()) fs::remove(claim, ignored);
+        throw;
     }
 }
 
