@@ -4,7 +4,6 @@
 #include "transport/lattice/SweepLattice.h"
 
 #include <vxf/core/GridRoles.h>
-#include <vxf/core/GridStats.h>
 #include <vxf/core/MemoryBudget.h>
 #include <vxf/transport/Phase.h>
 
@@ -20,6 +19,7 @@
 #include <openvdb/tree/LeafManager.h>
 
 #include <fmt/format.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <chrono>
@@ -113,6 +113,34 @@ std::vector<ScatterReport::Pass> passesOf(const SweepSolveReport& solved)
     return passes;
 }
 
+/// The lowest channel of @a grid's active values and the highest (tiles and voxels), in parallel
+/// over its leaves: no serial pass over a solve's hundred million voxels.
+std::pair<float, float> channelRange(const openvdb::Vec3SGrid& grid)
+{
+    using Range = std::pair<float, float>;
+    const auto widen = [](Range r, const openvdb::Vec3f& v) {
+        return Range{std::min({r.first, v[0], v[1], v[2]}), std::max({r.second, v[0], v[1], v[2]})};
+    };
+    const Range none{std::numeric_limits<float>::max(), std::numeric_limits<float>::lowest()};
+    Range range = none;
+    for (auto it = grid.tree().cbeginValueOn(); it; ++it) {
+        if (!it.isVoxelValue()) range = widen(range, *it); // the tiles (few)
+    }
+    openvdb::tree::LeafManager<const openvdb::Vec3STree> leaves(grid.tree());
+    const Range voxels = tbb::parallel_reduce(
+        leaves.leafRange(), none,
+        [&](const auto& r, Range found) {
+            for (auto leaf = r.begin(); leaf; ++leaf) {
+                for (auto v = leaf->cbeginValueOn(); v; ++v) found = widen(found, *v);
+            }
+            return found;
+        },
+        [](const Range& a, const Range& b) {
+            return Range{std::min(a.first, b.first), std::max(a.second, b.second)};
+        });
+    return {std::min(range.first, voxels.first), std::max(range.second, voxels.second)};
+}
+
 /// The scattered light of a source that is nowhere negative is nowhere negative (each term of
 /// the series K S … K J ≥ 0): a value of @a sum below zero is an overshoot of an accelerated
 /// solve's correction (the diffusion correction or the gathers' sweeps, in voxels many mean free
@@ -120,16 +148,14 @@ std::vector<ScatterReport::Pass> passesOf(const SweepSolveReport& solved)
 /// artist made negative somewhere scatters as the linear operator has it, negative light kept.
 std::string clampedBelowZero(openvdb::Vec3SGrid& sum, const openvdb::Vec3SGrid& source)
 {
-    const ValueRange given = valueRange(source), made = valueRange(sum);
-    const double lowest = std::min({made.min[0], made.min[1], made.min[2]});
-    if (given.channels != 3 || std::min({given.min[0], given.min[1], given.min[2]}) < 0.0 || !(lowest < 0.0)) return {};
+    const auto [lowest, largest] = channelRange(sum);
+    if (!(lowest < 0.0f) || channelRange(source).first < 0.0f) return {};
     openvdb::tools::foreach (sum.beginValueOn(), [](const openvdb::Vec3SGrid::ValueOnIter& it) {
         const openvdb::Vec3f v = *it;
         it.setValue(openvdb::Vec3f(std::max(v[0], 0.0f), std::max(v[1], 0.0f), std::max(v[2], 0.0f)));
     });
-    const double largest = std::max({made.max[0], made.max[1], made.max[2]});
-    return fmt::format(
-        "; values below zero (down to {:.3g}, {:.2g} of the largest) set to zero", lowest, largest > 0.0 ? -lowest / largest : 0.0);
+    return fmt::format("; values below zero (down to {:.3g}, {:.2g} of the largest) set to zero", lowest,
+        largest > 0.0f ? -double(lowest) / double(largest) : 0.0);
 }
 
 } // namespace
