@@ -85,20 +85,6 @@ void refuseOverwrites(const std::vector<NamedFile>& inputs, const std::vector<Na
     }
 }
 
-std::vector<NamedFile> sceneFiles(const Scene& scene)
-{
-    std::vector<NamedFile> files{{"the scene", scene.path}};
-    for (const SceneObject& o : scene.objects) {
-        files.push_back({fmt::format("object '{}''s {}", o.name, o.isVolume() ? "volume" : "mesh"), o.isVolume() ? o.volume : o.mesh});
-        if (o.material && !o.material->gridsFile.empty())
-            files.push_back({fmt::format("object '{}''s coefficient grids", o.name), o.material->gridsFile});
-    }
-    for (const Light& l : scene.lights) {
-        if (!l.file.empty()) files.push_back({fmt::format("light '{}''s file", l.name), l.file});
-    }
-    return files;
-}
-
 void refuseOutputOverInput(const std::string& input, const std::string& output)
 {
     refuseOverwrites({{"the input", input}}, {{"the output", output}});

@@ -2,7 +2,6 @@
 #pragma once
 
 #include <vxf/core/Interrupter.h>
-#include <vxf/core/Scene.h>
 
 #include <CLI/CLI.hpp>
 
@@ -72,10 +71,6 @@ bool sameFile(const std::string& a, const std::string& b);
 /// left a PNG in the EXR): a vxf::UsageError naming both. Empty paths and builtin: meshes are
 /// no files.
 void refuseOverwrites(const std::vector<NamedFile>& inputs, const std::vector<NamedFile>& outputs);
-
-/// The files @a scene reads beside itself (meshes, volumes, coefficient grids, lights' maps and
-/// grids), each named by the object or light that reads it; the scene's own file first.
-std::vector<NamedFile> sceneFiles(const Scene& scene);
 
 /// refuseOverwrites for a converter: @a output must not be @a input.
 void refuseOutputOverInput(const std::string& input, const std::string& output);

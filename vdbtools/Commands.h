@@ -1,11 +1,26 @@
 // vxf — the subcommands of the `vxf` tool.
 #pragma once
 
+#include "CliSupport.h"
+
+#include <vxf/pipeline/RunPipeline.h>
+
 #include <CLI/CLI.hpp>
 
 #include <memory>
+#include <vector>
 
 namespace vxf::cli {
+
+/// The scene's own file, then the files it reads beside itself (sceneInputFiles), each named by
+/// the object or light that reads it: what a command's outputs must not be (refuseOverwrites).
+/// (Here, not in CliSupport: the converters link that, and need no scene.)
+inline std::vector<NamedFile> sceneFiles(const Scene& scene)
+{
+    std::vector<NamedFile> files{{"the scene", scene.path}};
+    for (const SceneInputFile& f : sceneInputFiles(scene)) files.push_back({f.owner + "'s " + f.kind, f.path});
+    return files;
+}
 
 /// A subcommand: registers its options on construction, runs after a successful parse.
 class Command

@@ -25,8 +25,7 @@ namespace {
 
 /// A warning when the medium's mean free path at density 1 (its shortest channel's) is under
 /// half a voxel: the light that leaves a surface comes from within about a mean free path of it,
-/// which such voxels cannot hold, and the image comes out dark (a sphere of albedo 0.9 went 10%,
-/// 35% and 60% dark at 0.64, 0.32 and 0.16 voxels a mean free path: docs/accuracy-notes.md
+/// which such voxels cannot hold, and the image comes out dark (measured: docs/accuracy-notes.md
 /// (at)). "" when it is resolved, or its coefficients are per-voxel grids.
 std::string unresolvedMedium(const Material& material, double voxelSize)
 {

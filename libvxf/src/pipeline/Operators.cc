@@ -26,22 +26,15 @@ namespace {
 
 std::string count(const openvdb::GridBase& g) { return fmt::format("{} active voxels", g.activeVoxelCount()); }
 
-/// @a first, then the knobs of the scene's @a block as parameters (declared once: Knobs.h), then @a after.
-std::vector<Param> withKnobs(std::vector<Param> first, const std::string& block, std::vector<Param> after = {})
+/// @a first, then the knobs of the scene's @a block as parameters (declared once: Knobs.h) —
+/// as optional overrides of the scene's values when @a overrides (a stage that reads a scene) —
+/// then @a after.
+std::vector<Param> withKnobs(std::vector<Param> first, const std::string& block, bool overrides, std::vector<Param> after = {})
 {
     for (const Knob& k : knobs()) {
-        if (k.block == block) first.push_back(k.param);
+        if (k.block == block) first.push_back(overrides ? sceneOverride(k) : k.param);
     }
     first.insert(first.end(), after.begin(), after.end());
-    return first;
-}
-
-/// @a first, then the knobs of the scene's @a block as optional overrides of the scene's values.
-std::vector<Param> sceneOverrides(std::vector<Param> first, const std::string& block)
-{
-    for (const Knob& k : knobs()) {
-        if (k.block == block) first.push_back(sceneOverride(k));
-    }
     return first;
 }
 
@@ -62,7 +55,7 @@ Operator voxelizeOperator()
     Operator op{"voxelize", "a mesh (file or builtin:NAME) to `surface` and `density` (a source node: no input)",
         withKnobs(
             {text("mesh", fmt::format("mesh file (.obj .ply .off .stl) or a built-in mesh: {}", fmt::join(builtinMeshNames(), ", ")))},
-            "voxelize"),
+            "voxelize", false),
         [](OpContext& ctx) {
             const std::string mesh = ctx.args.text("mesh");
             SceneObject object;
@@ -111,7 +104,7 @@ Operator scatterOperator()
     Operator op{"scatter",
         "the scatter stage: passes of source iteration into `scatter` (their sum) and `illumination` (direct + scatter); reads "
         "`scatter_source` (or a kept pass), so edited grids are honoured; the material from the file",
-        withKnobs({}, "scatter",
+        withKnobs({}, "scatter", false,
             {flag("keep_passes", "keep each pass as scatter_pass_K"),
                 integer("from_pass", "(optional) continue from scatter_pass_K (as edited) instead of scatter_source", nullptr, 1, 10000),
                 flag("fixed_directions", "the same direction set at every voxel (banding instead of noise)")}),
@@ -137,11 +130,11 @@ Operator renderOperator()
 {
     Operator op{"render",
         "the renderer: writes an OpenEXR image (and a PNG preview) of the voxel set with a scene's camera; the set passes on unchanged",
-        sceneOverrides(
+        withKnobs(
             {text("scene", "scene file (camera, lights, objects, render settings)"), sceneFrame(), text("image", "the .exr to write"),
                 text("png", "(optional) an sRGB PNG preview to write"), number("exposure", "the PNG's exposure in stops", 0.0, -64.0, 64.0),
                 flag("level_set", "hit the voxel set's `surface` level set instead of the scene's meshes")},
-            "render"),
+            "render", true),
         [](OpContext& ctx) {
             const Scene scene = stageScene(ctx.args);
             const RenderOptions o = renderOptions(ctx.args, scene.settings);
@@ -166,6 +159,7 @@ VoxelizeOptions voxelizeOptions(const Args& args) { return sceneVoxelizeOptions(
 
 DirectLightOptions lightOptions(const Args& args, const SceneSettings& settings)
 {
+    // The scatter block's step and band (the light's own `cutoff` is not scatter.cutoff).
     SceneSettings s = settings;
     for (const char* name : {"step", "band"}) {
         if (args.has(name)) findKnob("scatter", name).set(s, args.json()[name]);

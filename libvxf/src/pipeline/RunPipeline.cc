@@ -384,23 +384,33 @@ std::string sceneImagePath(const Scene& scene, const std::string& outDir)
     return (fs::path(outDir) / (sceneStem(scene) + (scene.frame ? "." + paddedFrame(*scene.frame) : std::string()) + ".exr")).string();
 }
 
-void requireSceneInputs(const Scene& scene)
+std::vector<SceneInputFile> sceneInputFiles(const Scene& scene)
 {
-    const auto require = [&](const std::string& file, const std::string& what) {
-        if (file.empty() || file.rfind("builtin:", 0) == 0) return;
-        std::error_code error;
-        if (!fs::exists(file, error)) {
-            throw InputError(scene.path, 0, 0,
-                fmt::format(
-                    "{}{}: {} does not exist", scene.frame ? fmt::format("at frame {}: ", *scene.frame) : std::string(), what, file));
-        }
+    std::vector<SceneInputFile> files;
+    const auto add = [&](std::string owner, const char* kind, const std::string& path) {
+        if (!path.empty() && path.rfind("builtin:", 0) != 0) files.push_back({std::move(owner), kind, path});
     };
     for (const SceneObject& o : scene.objects) {
-        const std::string what = fmt::format("object '{}'", o.name);
-        require(o.isVolume() ? o.volume : o.mesh, what);
-        if (o.material) require(o.material->gridsFile, what + "'s coefficient grids");
+        const std::string owner = fmt::format("object '{}'", o.name);
+        add(owner, o.isVolume() ? "volume" : "mesh", o.isVolume() ? o.volume : o.mesh);
+        if (o.material) add(owner, "coefficient grids", o.material->gridsFile);
     }
-    for (const Light& l : scene.lights) require(l.file, fmt::format("light '{}'", l.name));
+    for (const Light& l : scene.lights) add(fmt::format("light '{}'", l.name), "file", l.file);
+    return files;
+}
+
+void requireSceneInputs(const Scene& scene)
+{
+    for (const SceneInputFile& f : sceneInputFiles(scene)) {
+        std::error_code error;
+        if (!fs::exists(f.path, error)) {
+            // (An object's own file and a light's go by their owner's name alone.)
+            const std::string what = f.kind == std::string("coefficient grids") ? f.owner + "'s " + f.kind : f.owner;
+            throw InputError(scene.path, 0, 0,
+                fmt::format(
+                    "{}{}: {} does not exist", scene.frame ? fmt::format("at frame {}: ", *scene.frame) : std::string(), what, f.path));
+        }
+    }
 }
 
 } // namespace vxf

@@ -44,9 +44,9 @@ constexpr int kDampAfter = 5;
 /// A correction that more than doubles the change it should damp amplifies the error instead:
 /// in voxels many mean free paths thick the diffusion correction (and the gathers' sweeps) can
 /// overshoot by a factor of tens, the iterates alternating in sign and growing while the change
-/// relative to the sum stays near 1 (a sphere of albedo 0.99 at 20 mean free paths a voxel:
-/// −36x a sweep, the sum 1e26 after 16). The correction is then dropped at once and the
-/// iteration restarts from zero: what it built is lost.
+/// relative to the sum stays near 1 (docs/accuracy-notes.md, "Behind the code: SweepSolve: a
+/// correction that amplifies"). The correction is then dropped at once and the iteration
+/// restarts from zero: what it built is lost.
 constexpr double kDivergentGrowth = 2.0;
 
 /// The gather's correction (transport synthetic acceleration): each gather's change is

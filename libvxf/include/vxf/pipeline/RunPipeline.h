@@ -60,6 +60,17 @@ PipelineReport runPipeline(
 /// file's stem ("scene" for none), OUT/NAME.0001.exr for a scene read at frame 1.
 std::string sceneImagePath(const Scene& scene, const std::string& outDir);
 
+/// A file a scene reads beside itself: who reads it ("object 'ball'", "light 'sky'"), as what
+/// ("mesh", "volume", "coefficient grids", "file"), and its path.
+struct SceneInputFile
+{
+    std::string owner, kind, path;
+};
+
+/// The files @a scene reads beside itself (meshes, volumes, coefficient grids, lights' maps and
+/// grids), builtin: meshes left out.
+std::vector<SceneInputFile> sceneInputFiles(const Scene& scene);
+
 /// Every input file @a scene reads exists (its meshes, volumes, coefficient grids, light files):
 /// InputError naming the scene, the object or light and the missing file otherwise (a sequence's
 /// missing frame is found before any frame is rendered).
